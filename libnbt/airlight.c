@@ -1,0 +1,445 @@
+/* libnbt/airlight.c: H_k, fixed-phase H, airlight three ways, H tables. */
+#include <config.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/airlight.h>
+#include "internal.h"
+
+#define SEG_MAX_INTERVALS 2000
+/* exp(-y) beyond this y is below 1e-34 of the segment's leading value */
+#define Y_TAIL 80.0
+
+double nbt__s_of_t(double t)
+{
+    /* tan(pi/4 + t/2) = (1 + sin t)/cos t = cos t/(1 - sin t) */
+    if (t >= NBT_PI_2)
+        return INFINITY;
+    if (t <= -NBT_PI_2)
+        return 0.0; /* cos of the double nearest -pi/2 is 6e-17, not 0 */
+    return t < 0 ? cos(t) / (1.0 - sin(t)) : (1.0 + sin(t)) / cos(t);
+}
+
+/* Legendre orders or 4 pi p at mu = c. */
+static void weights_at(const nbt__weights *w, double c, double *f)
+{
+    if (w->phase)
+        f[0] = 4.0 * NBT_PI * nbt_phase_eval(w->phase, c);
+    else
+        nbt_legendre_p(w->kmax, c, f);
+}
+
+typedef struct {
+    const nbt__weights *w;
+    double u, base;
+} seg_ctx;
+
+/* In t: exp(-u (s(t) - base)) w(-sin t). Used for u < 1. */
+static int seg_t(double t, void *vp, unsigned fdim, double *f)
+{
+    const seg_ctx *c = vp;
+    double e = 1.0;
+    if (c->u > 0) {
+        double s = nbt__s_of_t(t);
+        e = isinf(s) ? 0.0 : exp(-c->u * (s - c->base));
+    }
+    weights_at(c->w, -sin(t), f);
+    for (unsigned k = 0; k < fdim; k++)
+        f[k] *= e;
+    return 0;
+}
+
+/* In y = u (s - base): exp(-y) w(c(s)) 2/(1+s^2) / u. Used for u >= 1,
+ * where the exponential, not the angle, sets the scale. */
+static int seg_y(double y, void *vp, unsigned fdim, double *f)
+{
+    const seg_ctx *c = vp;
+    double s = c->base + y / c->u;
+    double mu, jac;
+    if (s <= 1.0) {
+        double s2 = s * s;
+        mu = (1.0 - s2) / (1.0 + s2);
+        jac = 2.0 / (1.0 + s2);
+    } else {
+        double r = 1.0 / s, r2 = r * r;
+        mu = (r2 - 1.0) / (r2 + 1.0);
+        jac = 2.0 * r2 / (1.0 + r2);
+    }
+    weights_at(c->w, mu, f);
+    double e = exp(-y) * jac / c->u;
+    for (unsigned k = 0; k < fdim; k++)
+        f[k] *= e;
+    return 0;
+}
+
+nbt_status nbt__airlight_segment(nbt_quad_ws *ws, const nbt__weights *w, double u,
+                                 double v1, double v2, int shifted, double tol,
+                                 double *out, double *err)
+{
+    unsigned fdim = nbt__fdim(w);
+    double s1 = nbt__s_of_t(v1);
+    seg_ctx c = {w, u, shifted ? s1 : 0.0};
+    if (u < 1.0)
+        return nbt_quad_gk(ws, seg_t, &c, fdim, v1, v2, 0.0, tol, out, err);
+    double y1 = u * (s1 - c.base);
+    double y2 = v2 >= NBT_PI_2 ? INFINITY : u * (nbt__s_of_t(v2) - c.base);
+    double cap = fmax(y1, 0.0) + Y_TAIL;
+    if (y2 > cap)
+        y2 = cap;
+    if (y1 > 700.0) { /* exp(-y) underflows: the segment is 0 in double */
+        for (unsigned k = 0; k < fdim; k++)
+            out[k] = err[k] = 0.0;
+        return NBT_OK;
+    }
+    return nbt_quad_gk(ws, seg_y, &c, fdim, y1, y2, 0.0, tol, out, err);
+}
+
+static nbt_status check_uv(double u, double v, double tol)
+{
+    if (!(u >= 0.0) || isinf(u))
+        NBT_FAIL(NBT_EDOM, "H: u must be finite and >= 0");
+    if (!(v >= -NBT_PI_2 && v <= NBT_PI_2))
+        NBT_FAIL(NBT_EDOM, "H: v must lie in [-pi/2, pi/2]");
+    if (!(tol > 0.0 && tol < 1.0))
+        NBT_FAIL(NBT_EDOM, "H: tol must lie in (0, 1)");
+    return NBT_OK;
+}
+
+static nbt_status h_eval(const nbt__weights *w, double u, double v, double tol, double *H, double *err)
+{
+    nbt_status st = check_uv(u, v, tol);
+    if (st != NBT_OK)
+        return st;
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(nbt__fdim(w), SEG_MAX_INTERVALS);
+    if (!ws)
+        NBT_FAIL(NBT_ENOMEM, "H: out of memory");
+    st = nbt__airlight_segment(ws, w, u, -NBT_PI_2, v, 0, tol, H, err);
+    nbt_quad_ws_free(ws);
+    return st;
+}
+
+nbt_status nbt_hk(size_t kmax, double u, double v, double tol, double *H, double *abserr)
+{
+    nbt__weights w = {kmax, NULL};
+    return h_eval(&w, u, v, tol, H, abserr);
+}
+
+nbt_status nbt_h_phase(const nbt_phase *p, double u, double v, double tol, double *H, double *abserr)
+{
+    nbt__weights w = {0, p};
+    return h_eval(&w, u, v, tol, H, abserr);
+}
+
+/* ---- airlight along a ray ---- */
+
+nbt_status nbt_airlight_check(const nbt_airlight_geom *g)
+{
+    if (!(g->kappa_s >= 0.0) || !isfinite(g->kappa_s))
+        NBT_FAIL(NBT_EDOM, "airlight: kappa_s must be finite and >= 0");
+    if (!(g->kappa_t >= g->kappa_s) || !isfinite(g->kappa_t))
+        NBT_FAIL(NBT_EDOM, "airlight: kappa_t must be finite and >= kappa_s");
+    if (!(g->I0 >= 0.0) || !isfinite(g->I0))
+        NBT_FAIL(NBT_EDOM, "airlight: I0 must be finite and >= 0");
+    if (!(g->dsv > 0.0) || !isfinite(g->dsv))
+        NBT_FAIL(NBT_EDOM, "airlight: dsv must be finite and > 0");
+    if (!(g->gamma >= 0.0 && g->gamma <= NBT_PI))
+        NBT_FAIL(NBT_EDOM, "airlight: gamma must lie in [0, pi]");
+    if (!(g->dvp > 0.0))
+        NBT_FAIL(NBT_EDOM, "airlight: dvp must be > 0 (INFINITY allowed)");
+    if (g->gamma == 0.0 && g->dvp >= g->dsv)
+        NBT_FAIL(NBT_EDOM, "airlight: the ray runs through the source (gamma = 0, dvp >= dsv): infinite");
+    return NBT_OK;
+}
+
+/* Nishita's integrand in the distance x along the ray, with exp(-kappa_t dsv)
+ * taken out (x + d(x) >= dsv, so the rest never overflows). */
+typedef struct {
+    const nbt_phase *p;        /* phase, or NULL: Legendre series b[0..nterms-1] */
+    const double *b;
+    size_t nterms;
+    double *P;
+    double kt, t, h, dsv;
+    double x0, L;              /* tail map x = x0 + L y/(1-y) when L > 0 */
+} ray_ctx;
+
+static double ray_phase(const ray_ctx *c, double mu)
+{
+    if (c->p)
+        return nbt_phase_eval(c->p, mu);
+    nbt_legendre_p(c->nterms - 1, mu, c->P);
+    double s = 0;
+    for (size_t k = 0; k < c->nterms; k++)
+        s += (2.0 * (double)k + 1.0) * c->b[k] * c->P[k];
+    return s / (4.0 * NBT_PI);
+}
+
+static double ray_value(const ray_ctx *c, double x)
+{
+    double dx = x - c->t, d = hypot(dx, c->h);
+    double mu = d > 0 ? -dx / d : 1.0;
+    double ex = c->kt > 0 ? exp(-c->kt * (x + d - c->dsv)) : 1.0;
+    return ray_phase(c, mu) * ex / (d * d);
+}
+
+static int ray_f(double x, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    f[0] = ray_value(vp, x);
+    return 0;
+}
+
+static int ray_tail_f(double y, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    const ray_ctx *c = vp;
+    double om = 1.0 - y;
+    f[0] = ray_value(c, c->x0 + c->L * y / om) * c->L / (om * om);
+    return 0;
+}
+
+/* int_0^dvp of the ray integrand (without kappa_s I0 exp(-kt dsv)). */
+static nbt_status ray_integral(ray_ctx *c, double dvp, double tol, double *val, double *err)
+{
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 4000);
+    if (!ws)
+        NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
+    double end = isinf(dvp) ? fmax(c->t, 0.0) + c->dsv : dvp;
+    double pts[1];
+    size_t np = 0;
+    if (c->t > 0 && c->t < end)
+        pts[np++] = c->t;
+    nbt_status st = nbt_quad_gk_pts(ws, ray_f, c, 1, 0.0, end, pts, np, 0.0, tol, val, err);
+    if (st == NBT_OK && isinf(dvp)) {
+        double v2, e2;
+        c->x0 = end;
+        c->L = c->dsv;
+        st = nbt_quad_gk(ws, ray_tail_f, c, 1, 0.0, 1.0, 0.0, tol, &v2, &e2);
+        *val += v2;
+        *err += e2;
+    }
+    nbt_quad_ws_free(ws);
+    return st;
+}
+
+nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
+                             const void *geom, double tol, double *La, double *err)
+{
+    const nbt_airlight_geom *g = geom;
+    double *P = NULL;
+    if (!p && !(P = malloc(nterms * sizeof(double))))
+        NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
+    ray_ctx c = {p, b, nterms, P, g->kappa_t, g->dsv * cos(g->gamma), g->dsv * sin(g->gamma),
+                 g->dsv, 0.0, 0.0};
+    double v = 0, e = 0;
+    nbt_status st = ray_integral(&c, g->dvp, tol, &v, &e);
+    free(P);
+    double pre = g->kappa_s * g->I0 * exp(-g->kappa_t * g->dsv);
+    *La = pre * v;
+    *err = pre * e;
+    return st;
+}
+
+nbt_status nbt_airlight_direct(const nbt_phase *p, const nbt_airlight_geom *g, double tol,
+                               double *La, double *abserr)
+{
+    nbt_status st = nbt_airlight_check(g);
+    if (st != NBT_OK)
+        return st;
+    return nbt__airlight_ray(p, NULL, 0, g, tol, La, abserr);
+}
+
+nbt_status nbt_airlight_series(const double *b, size_t nterms, const nbt_airlight_geom *g,
+                               double tol, double *La, double *abserr)
+{
+    nbt_status st = nbt_airlight_check(g);
+    if (st != NBT_OK)
+        return st;
+    if (nterms == 0)
+        NBT_FAIL(NBT_EINVAL, "airlight: need at least one Legendre term");
+    double h = g->dsv * sin(g->gamma), t = g->dsv * cos(g->gamma);
+    /* Nearly on the source axis theta_0 and theta_d are too close to -pi/2 or
+     * pi/2 to be resolved in angle: the same series in distance is exact. */
+    if (sin(g->gamma) < 1e-4)
+        return nbt__airlight_ray(NULL, b, nterms, g, tol, La, abserr);
+    nbt__weights w = {nterms - 1, NULL};
+    double *D = malloc(2 * nterms * sizeof(double));
+    nbt_quad_ws *ws = nbt_quad_ws_alloc((unsigned)nterms, SEG_MAX_INTERVALS);
+    if (!D || !ws) {
+        free(D);
+        nbt_quad_ws_free(ws);
+        NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
+    }
+    double th0 = g->gamma - NBT_PI_2;
+    double thd = isinf(g->dvp) ? NBT_PI_2 : atan2(g->dvp - t, h);
+    st = nbt__airlight_segment(ws, &w, g->kappa_t * h, th0, thd, 1, tol, D, D + nterms);
+    double s = 0, e = 0;
+    for (size_t k = 0; k < nterms; k++) {
+        double c = (2.0 * (double)k + 1.0) * b[k];
+        s += c * D[k];
+        e += fabs(c) * D[nterms + k];
+    }
+    double pre = g->kappa_s * g->I0 * exp(-g->kappa_t * g->dsv) / (4.0 * NBT_PI * h);
+    *La = pre * s;
+    *abserr = pre * e;
+    free(D);
+    nbt_quad_ws_free(ws);
+    return st;
+}
+
+int nbt__table_series_diff(const nbt_table *const *tables, size_t ntables, const double *b,
+                           size_t nterms, double x0, double y0, double y1, double *sum)
+{
+    int outside = 0;
+    *sum = 0;
+    for (size_t i = 0; i < ntables; i++) {
+        const nbt_table *T = tables[i];
+        double a[NBT_TABLE_MAX_CH], c[NBT_TABLE_MAX_CH] = {0};
+        if (x0 < T->axis[0].lo || x0 > T->axis[0].hi)
+            outside = 1;
+        nbt_table_lookup(T, x0, y1, a);
+        if (!isnan(y0))
+            nbt_table_lookup(T, x0, y0, c);
+        for (size_t ch = 0; ch < T->nch; ch++) {
+            int k = T->k[ch];
+            double wk = k < 0 ? 1.0 : ((size_t)k < nterms ? (2.0 * k + 1.0) * b[k] : 0.0);
+            *sum += wk * (a[ch] - c[ch]);
+        }
+    }
+    return outside;
+}
+
+nbt_status nbt_airlight_table(const nbt_table *const *tables, size_t ntables, const double *b,
+                              size_t nterms, const nbt_airlight_geom *g, double *La)
+{
+    nbt_status st = nbt_airlight_check(g);
+    if (st != NBT_OK)
+        return st;
+    if (ntables == 0)
+        NBT_FAIL(NBT_EINVAL, "airlight: no tables given");
+    for (size_t i = 0; i < ntables; i++)
+        if (tables[i]->kind != NBT_TABLE_H)
+            NBT_FAIL(NBT_EINVAL, "airlight: table is not an H table");
+    double h = g->dsv * sin(g->gamma), t = g->dsv * cos(g->gamma);
+    if (!(h > 0.0))
+        NBT_FAIL(NBT_EDOM, "airlight: the table method needs gamma strictly inside (0, pi)");
+    double th0 = g->gamma - NBT_PI_2;
+    double thd = isinf(g->dvp) ? NBT_PI_2 : atan2(g->dvp - t, h);
+    double s;
+    int outside = nbt__table_series_diff(tables, ntables, b, nterms, g->kappa_t * h, th0, thd, &s);
+    /* e^{-kt t} may overflow where t < 0 while s is tiny: combine in logs */
+    double lp = -g->kappa_t * t + log(g->kappa_s * g->I0 / (4.0 * NBT_PI * h));
+    *La = s == 0.0 || g->kappa_s == 0.0 || g->I0 == 0.0 ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
+    return outside ? NBT_ETOL : NBT_OK;
+}
+
+/* ---- H tables: cumulative quadrature in v, one u column per task ---- */
+
+#include "tablefill.h"
+
+typedef struct {
+    const nbt_table *t;
+    nbt__weights w;
+    double tol;
+    const double *xs, *ys;
+    size_t nx, ny;
+    double *F;
+    double *colerr;       /* per column: largest accumulated error over channels */
+    nbt_quad_ws **ws;     /* one per thread */
+    double **buf;         /* one per thread: 4 fdim doubles */
+    unsigned nt;
+} hfill_ctx;
+
+static nbt_status h_column(size_t i, unsigned thread, void *vp)
+{
+    hfill_ctx *c = vp;
+    unsigned fdim = nbt__fdim(&c->w);
+    double *acc = c->buf[thread], *aerr = acc + fdim, *seg = aerr + fdim, *serr = seg + fdim;
+    for (unsigned k = 0; k < fdim; k++)
+        acc[k] = aerr[k] = 0.0;
+    double u = c->xs[i], prev = -NBT_PI_2;
+    size_t nc = c->t->nch;
+    for (size_t j = 0; j < c->ny; j++) {
+        nbt_status st = nbt__airlight_segment(c->ws[thread], &c->w, u, prev, c->ys[j], 0, c->tol, seg, serr);
+        if (st != NBT_OK)
+            return st;
+        for (unsigned k = 0; k < fdim; k++) {
+            acc[k] += seg[k];
+            aerr[k] += serr[k];
+        }
+        prev = c->ys[j];
+        for (size_t ch = 0; ch < nc; ch++) {
+            size_t k = c->w.phase ? 0 : (size_t)c->t->k[ch];
+            c->F[(j * c->nx + i) * nc + ch] = acc[k];
+        }
+    }
+    double e = 0;
+    for (size_t ch = 0; ch < nc; ch++)
+        e = fmax(e, aerr[c->w.phase ? 0 : (size_t)c->t->k[ch]]);
+    c->colerr[i] = e;
+    return NBT_OK;
+}
+
+static nbt_status h_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny,
+                         double *F, double *quad_err)
+{
+    hfill_ctx *c = vp;
+    c->xs = xs;
+    c->ys = ys;
+    c->nx = nx;
+    c->ny = ny;
+    c->F = F;
+    c->colerr = calloc(nx, sizeof(double));
+    if (!c->colerr)
+        NBT_FAIL(NBT_ENOMEM, "H table: out of memory");
+    nbt_status st = nbt__parallel_for(nx, c->nt, h_column, c);
+    *quad_err = 0;
+    for (size_t i = 0; i < nx; i++)
+        *quad_err = fmax(*quad_err, c->colerr[i]);
+    free(c->colerr);
+    return st;
+}
+
+nbt_status nbt_h_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)
+{
+    if (t->kind != NBT_TABLE_H)
+        NBT_FAIL(NBT_EINVAL, "H table: the table is not of kind H");
+    if (t->axis[0].lo < 0 || t->axis[1].lo < -NBT_PI_2 || t->axis[1].hi > NBT_PI_2)
+        NBT_FAIL(NBT_EDOM, "H table: axes must lie in u >= 0, v in [-pi/2, pi/2]");
+    if (!(o->quad_tol > 0 && o->quad_tol < 1))
+        NBT_FAIL(NBT_EDOM, "H table: quad_tol must lie in (0, 1)");
+    hfill_ctx c = {.t = t, .tol = o->quad_tol};
+    c.w.phase = fixed;
+    for (size_t ch = 0; ch < t->nch; ch++) {
+        if (fixed)
+            t->k[ch] = -1;
+        else if (t->k[ch] < 0)
+            NBT_FAIL(NBT_EINVAL, "H table: Legendre channels need k >= 0");
+        else if ((size_t)t->k[ch] > c.w.kmax)
+            c.w.kmax = (size_t)t->k[ch];
+    }
+    t->n = 0;
+    t->quad_tol = o->quad_tol;
+    unsigned nt = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
+    nbt_quad_ws *ws[64] = {0};
+    double *buf[64] = {0};
+    nbt_status st = NBT_OK;
+    for (unsigned i = 0; i < nt; i++) {
+        ws[i] = nbt_quad_ws_alloc(nbt__fdim(&c.w), SEG_MAX_INTERVALS);
+        buf[i] = malloc(4 * nbt__fdim(&c.w) * sizeof(double));
+        if (!ws[i] || !buf[i])
+            st = NBT_ENOMEM;
+    }
+    c.ws = ws;
+    c.buf = buf;
+    c.nt = nt;
+    if (st == NBT_OK)
+        st = nbt__table_fill(t, o->measure_error, h_fill, &c);
+    for (unsigned i = 0; i < nt; i++) {
+        nbt_quad_ws_free(ws[i]);
+        free(buf[i]);
+    }
+    if (st == NBT_ENOMEM)
+        NBT_FAIL(st, "H table: out of memory");
+    return st;
+}

@@ -1,0 +1,58 @@
+/* libnbt/internal.h: helpers shared by libnbt's sources; not installed. */
+#ifndef NBT_INTERNAL_H
+#define NBT_INTERNAL_H
+
+#include <stddef.h>
+#include <nbt/error.h>
+#include <nbt/phase.h>
+#include <nbt/quad.h>
+
+#define NBT_PI 3.14159265358979323846
+#define NBT_PI_2 1.57079632679489661923
+
+/* Report a failure to the error handler (if any) and return the status. */
+nbt_status nbt__fail(nbt_status s, const char *reason);
+#define NBT_FAIL(s, reason) return nbt__fail((s), (reason))
+
+/* Weights of the airlight integrand: Legendre orders 0..kmax, or one
+ * fixed-phase channel 4 pi p(mu) when phase != NULL. */
+typedef struct {
+    size_t kmax;
+    const nbt_phase *phase;
+} nbt__weights;
+
+static inline unsigned nbt__fdim(const nbt__weights *w)
+{
+    return w->phase ? 1u : (unsigned)(w->kmax + 1);
+}
+
+/* s(t) = tan(pi/4 + t/2), written without cancellation on either side. */
+double nbt__s_of_t(double t);
+
+/* The airlight segment integral
+ *   S(u; v1, v2) = int_{v1}^{v2} exp(-u (s(t) - s0)) w(-sin t) dt,
+ * s0 = s(v1) when shifted, else 0 (so shifted values carry exp(-u s(v1))
+ * outside). -pi/2 <= v1 <= v2 <= pi/2, u >= 0. out/err hold fdim values. */
+nbt_status nbt__airlight_segment(nbt_quad_ws *ws, const nbt__weights *w, double u,
+                                 double v1, double v2, int shifted, double tol,
+                                 double *out, double *err);
+
+/* Airlight by Nishita's integral in distance along the ray, with phase p or
+ * (p == NULL) the Legendre series b[0..nterms-1]; geometry not checked. */
+nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
+                             const void *geom, double tol, double *La, double *err);
+
+/* Sum over the tables' channels of (2k+1) b_k [T(x0, y1) - T(x0, y0)]
+ * (fixed-phase channels weight 1; y0 = NAN: no subtraction). Returns 1 if x0
+ * lies outside a table's first axis. */
+#include <nbt/table.h>
+int nbt__table_series_diff(const nbt_table *const *tables, size_t ntables, const double *b,
+                           size_t nterms, double x0, double y0, double y1, double *sum);
+
+/* Run fn(i, thread, ctx) for i in [0, n) on up to nthreads threads (0: all
+ * online CPUs). Stops early and returns the first non-OK status. */
+typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);
+nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx);
+unsigned nbt__nthreads(unsigned requested, size_t n);
+
+#endif

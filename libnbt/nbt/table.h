@@ -1,0 +1,88 @@
+/* nbt/table.h: node-aligned 2-D lookup tables, their axis mappings, the
+ * bilinear lookup a GPU sampler performs on them, and OpenEXR I/O.
+ *
+ * Axis convention: node i of n sits at unit coordinate s_i = i/(n-1); the
+ * physical value is x_i = from_unit(s_i), so the first and last nodes are
+ * exactly the range ends. A shader samples at texture coordinate
+ * (s*(n-1) + 0.5)/n. Mappings (x in [lo, hi], r = (x - lo)/(hi - lo)):
+ *   linear: s = r
+ *   sqrt:   s = sqrt(r)
+ *   log1p:  s = log1p(c r)/log1p(c), c > 0 clusters nodes at lo,
+ *           -1 < c < 0 clusters them at hi
+ *   cos:    s = acos(1 - 2r)/pi   (nodes clustered at both ends, Chebyshev-like) */
+#ifndef NBT_TABLE_H_INCLUDED
+#define NBT_TABLE_H_INCLUDED
+
+#include <stddef.h>
+#include <nbt/error.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { NBT_AXIS_LINEAR, NBT_AXIS_SQRT, NBT_AXIS_LOG1P, NBT_AXIS_COS } nbt_axis_map;
+
+typedef struct {
+    double lo, hi;      /* range, lo < hi */
+    nbt_axis_map map;
+    double c;           /* log1p strength (only for NBT_AXIS_LOG1P): c > 0 or -1 < c < 0 */
+    size_t n;           /* number of nodes, >= 2 */
+} nbt_axis;
+
+/* Physical value -> unit coordinate in [0, 1] (clamped outside the range). */
+double nbt_axis_to_unit(const nbt_axis *a, double x);
+/* Unit coordinate -> physical value. */
+double nbt_axis_from_unit(const nbt_axis *a, double s);
+/* Physical value of node i. */
+double nbt_axis_node(const nbt_axis *a, size_t i);
+/* "linear", "sqrt", "log1p", "cos"; parse returns NBT_EFORMAT for other names. */
+const char *nbt_axis_map_name(nbt_axis_map m);
+nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
+
+#define NBT_TABLE_MAX_CH 4
+
+typedef enum { NBT_TABLE_H, NBT_TABLE_J } nbt_table_kind;
+
+typedef struct {
+    nbt_table_kind kind;
+    nbt_axis axis[2];      /* H: axis[0] = u, axis[1] = v;  J: axis[0] = T, axis[1] = theta */
+    size_t nch;            /* channels, 1..4 (RGBA) */
+    int k[NBT_TABLE_MAX_CH];     /* Legendre order per channel; -1: fixed phase (see phase) */
+    int n;                 /* J: cosine exponent (1 = Lambert, >1 Phong); H: 0 */
+    char phase[128];       /* fixed-phase channels: the phase SPEC; else "" */
+    double quad_tol;       /* relative tolerance of the quadrature at the nodes */
+    double quad_err;       /* largest estimated quadrature error at a node (absolute) */
+    double max_err[NBT_TABLE_MAX_CH];  /* estimated max |bilinear - exact| per channel */
+    double max_abs[NBT_TABLE_MAX_CH];  /* max |value| per channel (scale for max_err) */
+    int half;              /* values rounded to half precision (written as HALF) */
+    float *data;           /* data[(iy * axis[0].n + ix) * nch + c] */
+} nbt_table;
+
+/* Allocates the data for the axes' sizes; axes and channels must be set.
+ * Returns NULL on bad sizes or no memory. */
+nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch);
+void nbt_table_free(nbt_table *t);
+
+/* Bilinear interpolation at physical (x0, x1), as a GPU sampler with
+ * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch values. */
+void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
+
+/* Round all values to IEEE half precision (as a HALF texture would hold them). */
+void nbt_table_round_half(nbt_table *t);
+
+typedef enum { NBT_EXR_ZIP, NBT_EXR_NONE } nbt_exr_compression;
+
+/* Write as a scan-line OpenEXR file (32-bit float, or HALF when t->half),
+ * channels R, G, B, A in order, with nbt.* header attributes describing the
+ * table completely. Writes to a temporary file and renames it, so a failed
+ * write leaves nothing behind. */
+nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp);
+
+/* Read a table written by nbt_table_write_exr. On failure *out is NULL and
+ * err holds a one-line reason. */
+nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,431 @@
+/* libnbt/phase.c: phase functions, their Legendre moments and HG truncation errors. */
+#include <config.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/phase.h>
+#include <nbt/quad.h>
+#include "internal.h"
+
+struct nbt_phase {
+    nbt_phase_kind kind;
+    double g;          /* HG */
+    size_t n;          /* SOG components or table points */
+    double *w, *B;     /* SOG (a single Gaussian is n = 1) */
+    double *Z;         /* SOG: 1/(4 pi B (1 - exp(-pi^2/4B))) per component */
+    double *mu, *p;    /* table */
+    char name[64];
+};
+
+static nbt_phase *phase_new(nbt_phase_kind kind)
+{
+    nbt_phase *p = calloc(1, sizeof *p);
+    if (p)
+        p->kind = kind;
+    return p;
+}
+
+nbt_phase *nbt_phase_iso(void)
+{
+    nbt_phase *p = phase_new(NBT_PHASE_ISO);
+    if (p)
+        snprintf(p->name, sizeof p->name, "iso");
+    return p;
+}
+
+nbt_phase *nbt_phase_rayleigh(void)
+{
+    nbt_phase *p = phase_new(NBT_PHASE_RAYLEIGH);
+    if (p)
+        snprintf(p->name, sizeof p->name, "rayleigh");
+    return p;
+}
+
+nbt_phase *nbt_phase_hg(double g)
+{
+    if (!(g > -1.0 && g < 1.0))
+        return NULL;
+    nbt_phase *p = phase_new(NBT_PHASE_HG);
+    if (p) {
+        p->g = g;
+        snprintf(p->name, sizeof p->name, "hg:g=%.17g", g);
+    }
+    return p;
+}
+
+nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B)
+{
+    if (n == 0 || !w || !B)
+        return NULL;
+    double sw = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!(w[i] >= 0 && isfinite(w[i])) || !(B[i] > 0 && isfinite(B[i])))
+            return NULL;
+        sw += w[i];
+    }
+    if (!(sw > 0))
+        return NULL;
+    nbt_phase *p = phase_new(n == 1 ? NBT_PHASE_GAUSS : NBT_PHASE_SOG);
+    if (!p)
+        return NULL;
+    p->n = n;
+    p->w = malloc(n * sizeof(double));
+    p->B = malloc(n * sizeof(double));
+    p->Z = malloc(n * sizeof(double));
+    if (!p->w || !p->B || !p->Z) {
+        nbt_phase_free(p);
+        return NULL;
+    }
+    for (size_t i = 0; i < n; i++) {
+        p->w[i] = w[i] / sw;
+        p->B[i] = B[i];
+        /* -expm1 keeps the normalisation exact for large B as well */
+        p->Z[i] = 1.0 / (4.0 * NBT_PI * B[i] * -expm1(-NBT_PI * NBT_PI / (4.0 * B[i])));
+    }
+    if (n == 1)
+        snprintf(p->name, sizeof p->name, "gauss:B=%.17g", B[0]);
+    else
+        snprintf(p->name, sizeof p->name, "sog:%zu terms", n);
+    return p;
+}
+
+nbt_phase *nbt_phase_gauss(double B)
+{
+    double w = 1.0;
+    return nbt_phase_sog(1, &w, &B);
+}
+
+nbt_phase *nbt_phase_tabulated(size_t n, const double *mu, const double *pv)
+{
+    if (n < 2 || !mu || !pv || mu[0] != -1.0 || mu[n - 1] != 1.0)
+        return NULL;
+    double area = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!(pv[i] >= 0 && isfinite(pv[i])))
+            return NULL;
+        if (i > 0) {
+            if (!(mu[i] > mu[i - 1]))
+                return NULL;
+            area += 0.5 * (pv[i] + pv[i - 1]) * (mu[i] - mu[i - 1]);
+        }
+    }
+    if (!(area > 0))
+        return NULL;
+    nbt_phase *p = phase_new(NBT_PHASE_TABLE);
+    if (!p)
+        return NULL;
+    p->n = n;
+    p->mu = malloc(n * sizeof(double));
+    p->p = malloc(n * sizeof(double));
+    if (!p->mu || !p->p) {
+        nbt_phase_free(p);
+        return NULL;
+    }
+    for (size_t i = 0; i < n; i++) {
+        p->mu[i] = mu[i];
+        p->p[i] = pv[i] / (2.0 * NBT_PI * area);
+    }
+    snprintf(p->name, sizeof p->name, "table:%zu points", n);
+    return p;
+}
+
+void nbt_phase_free(nbt_phase *p)
+{
+    if (!p)
+        return;
+    free(p->w);
+    free(p->B);
+    free(p->Z);
+    free(p->mu);
+    free(p->p);
+    free(p);
+}
+
+nbt_phase_kind nbt_phase_get_kind(const nbt_phase *p) { return p->kind; }
+const char *nbt_phase_name(const nbt_phase *p) { return p->name; }
+
+/* theta/sin(theta) exp(-theta^2/4B) * Z for one Gaussian at mu. */
+static double gauss_eval(double B, double Z, double mu)
+{
+    double th = acos(mu);
+    double st = sqrt((1.0 - mu) * (1.0 + mu));
+    double ratio;
+    if (th < 1e-4)
+        ratio = 1.0 + th * th / 6.0;
+    else
+        ratio = th / fmax(st, 1e-8); /* integrable singularity at mu = -1 cut at sin = 1e-8 */
+    return Z * ratio * exp(-th * th / (4.0 * B));
+}
+
+double nbt_phase_eval(const nbt_phase *p, double mu)
+{
+    if (mu > 1.0)
+        mu = 1.0;
+    if (mu < -1.0)
+        mu = -1.0;
+    switch (p->kind) {
+    case NBT_PHASE_ISO:
+        return 1.0 / (4.0 * NBT_PI);
+    case NBT_PHASE_RAYLEIGH:
+        return 3.0 / (16.0 * NBT_PI) * (1.0 + mu * mu);
+    case NBT_PHASE_HG: {
+        double g = p->g, d = 1.0 + g * g - 2.0 * g * mu;
+        return (1.0 - g * g) / (4.0 * NBT_PI * d * sqrt(d));
+    }
+    case NBT_PHASE_GAUSS:
+    case NBT_PHASE_SOG: {
+        double s = 0;
+        for (size_t i = 0; i < p->n; i++)
+            s += p->w[i] * gauss_eval(p->B[i], p->Z[i], mu);
+        return s;
+    }
+    case NBT_PHASE_TABLE: {
+        size_t lo = 0, hi = p->n - 1;
+        while (hi - lo > 1) {
+            size_t m = (lo + hi) / 2;
+            if (p->mu[m] <= mu)
+                lo = m;
+            else
+                hi = m;
+        }
+        double f = (mu - p->mu[lo]) / (p->mu[hi] - p->mu[lo]);
+        return p->p[lo] + f * (p->p[hi] - p->p[lo]);
+    }
+    }
+    return NAN;
+}
+
+void nbt_legendre_p(size_t kmax, double x, double *P)
+{
+    P[0] = 1.0;
+    if (kmax == 0)
+        return;
+    P[1] = x;
+    for (size_t k = 1; k < kmax; k++)
+        P[k + 1] = ((2.0 * (double)k + 1.0) * x * P[k] - (double)k * P[k - 1]) / ((double)k + 1.0);
+}
+
+/* b_k of one Gaussian: int_0^pi P_k(cos th) th exp(-th^2/4B) dth / (2B (1 - e^{-pi^2/4B})),
+ * integrated in theta, where the integrand is smooth. */
+typedef struct {
+    double B;
+    size_t kmax;
+} gauss_mom_ctx;
+
+static int gauss_mom_f(double th, void *vp, unsigned fdim, double *f)
+{
+    const gauss_mom_ctx *c = vp;
+    nbt_legendre_p(c->kmax, cos(th), f);
+    double dens = th * exp(-th * th / (4.0 * c->B)) / (2.0 * c->B * -expm1(-NBT_PI * NBT_PI / (4.0 * c->B)));
+    for (unsigned k = 0; k < fdim; k++)
+        f[k] *= dens;
+    return 0;
+}
+
+typedef struct {
+    const nbt_phase *p;
+    size_t kmax;
+} table_mom_ctx;
+
+static int table_mom_f(double mu, void *vp, unsigned fdim, double *f)
+{
+    const table_mom_ctx *c = vp;
+    nbt_legendre_p(c->kmax, mu, f);
+    double v = 2.0 * NBT_PI * nbt_phase_eval(c->p, mu);
+    for (unsigned k = 0; k < fdim; k++)
+        f[k] *= v;
+    return 0;
+}
+
+nbt_status nbt_phase_moments(const nbt_phase *p, size_t kmax, double *b)
+{
+    for (size_t k = 0; k <= kmax; k++)
+        b[k] = 0.0;
+    b[0] = 1.0;
+    switch (p->kind) {
+    case NBT_PHASE_ISO:
+        return NBT_OK;
+    case NBT_PHASE_RAYLEIGH:
+        if (kmax >= 2)
+            b[2] = 0.1;
+        return NBT_OK;
+    case NBT_PHASE_HG:
+        for (size_t k = 1; k <= kmax; k++)
+            b[k] = b[k - 1] * p->g;
+        return NBT_OK;
+    default:
+        break;
+    }
+    unsigned fdim = (unsigned)(kmax + 1);
+    double *r = malloc(2 * fdim * sizeof(double));
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(fdim, 4000);
+    if (!r || !ws) {
+        free(r);
+        nbt_quad_ws_free(ws);
+        NBT_FAIL(NBT_ENOMEM, "nbt_phase_moments: out of memory");
+    }
+    nbt_status st = NBT_OK;
+    if (p->kind == NBT_PHASE_TABLE) {
+        table_mom_ctx c = {p, kmax};
+        /* the table's nodes are kinks of the integrand */
+        st = nbt_quad_gk_pts(ws, table_mom_f, &c, fdim, -1.0, 1.0, p->mu + 1, p->n - 2,
+                             1e-14, 1e-13, b, r + fdim);
+    } else {
+        for (size_t i = 0; i < p->n && st == NBT_OK; i++) {
+            gauss_mom_ctx c = {p->B[i], kmax};
+            st = nbt_quad_gk(ws, gauss_mom_f, &c, fdim, 0.0, NBT_PI, 1e-15, 1e-13, r, r + fdim);
+            for (size_t k = 0; k <= kmax; k++)
+                b[k] = (i == 0 ? 0.0 : b[k]) + p->w[i] * r[k];
+        }
+    }
+    free(r);
+    nbt_quad_ws_free(ws);
+    return st;
+}
+
+double nbt_phase_mean_cosine(const nbt_phase *p)
+{
+    double b[2];
+    if (nbt_phase_moments(p, 1, b) != NBT_OK)
+        return NAN;
+    return b[1];
+}
+
+/* sum_{k > N} (2k+1) x^k = x^{N+1} ((2N+3) - (2N+1) x) / (1-x)^2 */
+double nbt_phase_hg_trunc_error(double g, size_t N, nbt_norm norm)
+{
+    double a = fabs(g), n = (double)N;
+    if (!(a < 1.0))
+        return NAN;
+    if (norm == NBT_NORM_MAX)
+        return pow(a, n + 1) * ((2 * n + 3) - (2 * n + 1) * a) / (1.0 + a);
+    double x = a * a;
+    return sqrt(pow(x, n + 1) * ((2 * n + 3) - (2 * n + 1) * x) / (1.0 + x));
+}
+
+size_t nbt_phase_hg_terms(double g, double tol, nbt_norm norm, size_t nmax)
+{
+    for (size_t N = 0; N <= nmax; N++)
+        if (nbt_phase_hg_trunc_error(g, N, norm) <= tol)
+            return N;
+    return nmax + 1;
+}
+
+/* ---- SPEC parsing ---- */
+
+static int parse_double(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+static nbt_status read_table_file(const char *path, nbt_phase **out, char *err, size_t errlen)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        snprintf(err, errlen, "phase table '%s' cannot be opened: %s", path, strerror(errno));
+        return NBT_EIO;
+    }
+    size_t n = 0, cap = 64;
+    double *mu = malloc(cap * sizeof(double)), *p = malloc(cap * sizeof(double));
+    char line[512];
+    nbt_status st = NBT_OK;
+    int lineno = 0;
+    while (mu && p && fgets(line, sizeof line, f)) {
+        lineno++;
+        char *h = strchr(line, '#');
+        if (h)
+            *h = '\0';
+        double a, b;
+        char extra;
+        int got = sscanf(line, "%lf %lf %c", &a, &b, &extra);
+        if (got <= 0)
+            continue;
+        if (got != 2 || !isfinite(a) || !isfinite(b)) {
+            snprintf(err, errlen, "phase table '%s' line %d: expected two numbers 'mu p'", path, lineno);
+            st = NBT_EFORMAT;
+            break;
+        }
+        if (n == cap) {
+            cap *= 2;
+            double *m2 = realloc(mu, cap * sizeof(double));
+            if (m2)
+                mu = m2;
+            double *p2 = realloc(p, cap * sizeof(double));
+            if (p2)
+                p = p2;
+            if (!m2 || !p2) {
+                st = NBT_ENOMEM;
+                snprintf(err, errlen, "out of memory");
+                break;
+            }
+        }
+        mu[n] = a;
+        p[n] = b;
+        n++;
+    }
+    fclose(f);
+    if (!mu || !p) {
+        st = NBT_ENOMEM;
+        snprintf(err, errlen, "out of memory");
+    }
+    if (st == NBT_OK) {
+        *out = nbt_phase_tabulated(n, mu, p);
+        if (!*out) {
+            snprintf(err, errlen,
+                     "phase table '%s': need >= 2 rows 'mu p' with mu strictly increasing from -1 to 1 "
+                     "and p >= 0, not all zero (got %zu rows)", path, n);
+            st = NBT_EFORMAT;
+        }
+    }
+    free(mu);
+    free(p);
+    return st;
+}
+
+nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    double v;
+    if (!strcmp(spec, "iso"))
+        *out = nbt_phase_iso();
+    else if (!strcmp(spec, "rayleigh"))
+        *out = nbt_phase_rayleigh();
+    else if (!strncmp(spec, "hg:g=", 5)) {
+        if (!parse_double(spec + 5, &v) || !(v > -1.0 && v < 1.0)) {
+            snprintf(err, errlen, "phase '%s': g must be a number in (-1, 1)", spec);
+            return NBT_EDOM;
+        }
+        *out = nbt_phase_hg(v);
+    } else if (!strncmp(spec, "gauss:B=", 8)) {
+        if (!parse_double(spec + 8, &v) || !(v > 0.0)) {
+            snprintf(err, errlen, "phase '%s': B must be a number > 0", spec);
+            return NBT_EDOM;
+        }
+        *out = nbt_phase_gauss(v);
+    } else if (!strncmp(spec, "table:", 6)) {
+        if (!spec[6]) {
+            snprintf(err, errlen, "phase '%s': expected table:FILE", spec);
+            return NBT_EFORMAT;
+        }
+        return read_table_file(spec + 6, out, err, errlen);
+    } else {
+        snprintf(err, errlen,
+                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (B>0), table:FILE",
+                 spec);
+        return NBT_EFORMAT;
+    }
+    if (!*out) {
+        snprintf(err, errlen, "out of memory");
+        return NBT_ENOMEM;
+    }
+    return NBT_OK;
+}

@@ -1,0 +1,213 @@
+/* libnbt/table.c: axes, node-aligned tables, GPU-style bilinear lookup, and
+ * the fill-then-measure step shared by the H and J table builders. */
+#include <config.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/table.h>
+#include "internal.h"
+#include "tablefill.h"
+
+double nbt_axis_to_unit(const nbt_axis *a, double x)
+{
+    double r = (x - a->lo) / (a->hi - a->lo);
+    if (!(r > 0.0))
+        return 0.0;
+    if (r >= 1.0)
+        return 1.0;
+    switch (a->map) {
+    case NBT_AXIS_SQRT:
+        return sqrt(r);
+    case NBT_AXIS_LOG1P:
+        return log1p(a->c * r) / log1p(a->c);
+    case NBT_AXIS_COS:
+        return acos(1.0 - 2.0 * r) / NBT_PI;
+    default:
+        return r;
+    }
+}
+
+double nbt_axis_from_unit(const nbt_axis *a, double s)
+{
+    double r;
+    switch (a->map) {
+    case NBT_AXIS_SQRT:
+        r = s * s;
+        break;
+    case NBT_AXIS_LOG1P:
+        r = expm1(s * log1p(a->c)) / a->c;
+        break;
+    case NBT_AXIS_COS:
+        r = 0.5 * (1.0 - cos(NBT_PI * s));
+        break;
+    default:
+        r = s;
+    }
+    if (s >= 1.0)
+        return a->hi; /* the last node is exactly the range end */
+    return a->lo + r * (a->hi - a->lo);
+}
+
+double nbt_axis_node(const nbt_axis *a, size_t i)
+{
+    return nbt_axis_from_unit(a, (double)i / (double)(a->n - 1));
+}
+
+const char *nbt_axis_map_name(nbt_axis_map m)
+{
+    return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos" : "linear";
+}
+
+nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
+{
+    if (!strcmp(name, "linear"))
+        *m = NBT_AXIS_LINEAR;
+    else if (!strcmp(name, "sqrt"))
+        *m = NBT_AXIS_SQRT;
+    else if (!strcmp(name, "log1p"))
+        *m = NBT_AXIS_LOG1P;
+    else if (!strcmp(name, "cos"))
+        *m = NBT_AXIS_COS;
+    else
+        return NBT_EFORMAT;
+    return NBT_OK;
+}
+
+static int axis_ok(const nbt_axis *a)
+{
+    return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&
+           (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c)));
+}
+
+nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
+{
+    if (!axis_ok(ax0) || !axis_ok(ax1) || nch < 1 || nch > NBT_TABLE_MAX_CH)
+        return NULL;
+    nbt_table *t = calloc(1, sizeof *t);
+    if (!t)
+        return NULL;
+    t->kind = kind;
+    t->axis[0] = *ax0;
+    t->axis[1] = *ax1;
+    t->nch = nch;
+    t->data = calloc(ax0->n * ax1->n * nch, sizeof(float));
+    if (!t->data) {
+        free(t);
+        return NULL;
+    }
+    return t;
+}
+
+void nbt_table_free(nbt_table *t)
+{
+    if (!t)
+        return;
+    free(t->data);
+    free(t);
+}
+
+/* texel position p = s (n-1), split into cell and weight as a sampler does */
+static void cell(const nbt_axis *a, double x, size_t *i0, double *f)
+{
+    double p = nbt_axis_to_unit(a, x) * (double)(a->n - 1);
+    double fl = floor(p);
+    if (fl > (double)(a->n - 2))
+        fl = (double)(a->n - 2);
+    *i0 = (size_t)fl;
+    *f = p - fl;
+}
+
+void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
+{
+    size_t i, j, nx = t->axis[0].n, nc = t->nch;
+    double fx, fy;
+    cell(&t->axis[0], x0, &i, &fx);
+    cell(&t->axis[1], x1, &j, &fy);
+    const float *a = t->data + (j * nx + i) * nc, *b = a + nx * nc;
+    for (size_t c = 0; c < nc; c++) {
+        double lo = (1.0 - fx) * a[c] + fx * a[nc + c];
+        double hi = (1.0 - fx) * b[c] + fx * b[nc + c];
+        out[c] = (1.0 - fy) * lo + fy * hi;
+    }
+}
+
+/* float -> nearest IEEE half -> float (round to nearest even) */
+static float to_half_and_back(float v)
+{
+    if (!isfinite(v) || v == 0.0f)
+        return v;
+    float a = fabsf(v);
+    if (a >= 65520.0f)
+        return copysignf(INFINITY, v);
+    int e;
+    frexpf(a, &e);            /* a = m 2^e, m in [0.5, 1) */
+    int q = e - 11;           /* 11 significant bits */
+    if (q < -24)
+        q = -24;              /* subnormal halves: fixed step 2^-24 */
+    float step = ldexpf(1.0f, q);
+    return copysignf(nearbyintf(a / step) * step, v);
+}
+
+void nbt_table_round_half(nbt_table *t)
+{
+    size_t n = t->axis[0].n * t->axis[1].n * t->nch;
+    for (size_t i = 0; i < n; i++)
+        t->data[i] = to_half_and_back(t->data[i]);
+    t->half = 1;
+}
+
+nbt_status nbt__table_fill(nbt_table *t, int measure, nbt__grid_fill fill, void *ctx)
+{
+    size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch;
+    size_t fx = measure ? 2 * nx - 1 : nx, fy = measure ? 2 * ny - 1 : ny;
+    double *xs = malloc(fx * sizeof(double)), *ys = malloc(fy * sizeof(double));
+    double *F = malloc(fx * fy * nc * sizeof(double));
+    if (!xs || !ys || !F) {
+        free(xs);
+        free(ys);
+        free(F);
+        NBT_FAIL(NBT_ENOMEM, "table: out of memory");
+    }
+    for (size_t i = 0; i < fx; i++)
+        xs[i] = nbt_axis_from_unit(&t->axis[0], (double)i / (double)(fx - 1));
+    for (size_t j = 0; j < fy; j++)
+        ys[j] = nbt_axis_from_unit(&t->axis[1], (double)j / (double)(fy - 1));
+    double qerr = 0;
+    nbt_status st = fill(ctx, xs, fx, ys, fy, F, &qerr);
+    if (st == NBT_OK) {
+        size_t step = measure ? 2 : 1;
+        for (size_t c = 0; c < nc; c++)
+            t->max_abs[c] = t->max_err[c] = 0;
+        for (size_t j = 0; j < ny; j++)
+            for (size_t i = 0; i < nx; i++)
+                for (size_t c = 0; c < nc; c++) {
+                    double v = F[((j * step) * fx + i * step) * nc + c];
+                    t->data[(j * nx + i) * nc + c] = (float)v;
+                    t->max_abs[c] = fmax(t->max_abs[c], fabs(v));
+                }
+        if (t->half)
+            nbt_table_round_half(t);
+        t->quad_err = qerr;
+        if (measure) {
+            double out[NBT_TABLE_MAX_CH];
+            for (size_t j = 0; j < fy; j++)
+                for (size_t i = 0; i < fx; i++) {
+                    if (i % 2 == 0 && j % 2 == 0)
+                        continue; /* a node */
+                    nbt_table_lookup(t, xs[i], ys[j], out);
+                    for (size_t c = 0; c < nc; c++)
+                        t->max_err[c] = fmax(t->max_err[c], fabs(out[c] - F[(j * fx + i) * nc + c]));
+                }
+            /* what the midpoints cannot see: the quadrature error at nodes */
+            for (size_t c = 0; c < nc; c++)
+                t->max_err[c] += qerr;
+        } else {
+            for (size_t c = 0; c < nc; c++)
+                t->max_err[c] = NAN;
+        }
+    }
+    free(xs);
+    free(ys);
+    free(F);
+    return st;
+}

@@ -1,0 +1,349 @@
+/* libnbt/table_exr.c: tables as OpenEXR files (C core API).
+ *
+ * Scan line y holds node y of axis 1 (y = 0 is axis[1].lo), pixel x node x
+ * of axis 0. Channels R, G, B, A carry consecutive table channels. Only
+ * NONE and ZIP compression are written (ZIPS has an encoder bug in 3.1.5). */
+#include <config.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <openexr.h>
+#include <nbt/nbt.h>
+#include "internal.h"
+
+static const char *const CH[NBT_TABLE_MAX_CH] = {"R", "G", "B", "A"};
+
+static void quiet(exr_const_context_t c, exr_result_t code, const char *msg)
+{
+    (void)c;
+    (void)code;
+    (void)msg; /* errors are reported through return codes */
+}
+
+static uint16_t half_bits(float f)
+{
+    /* f is already representable as a half (nbt_table_round_half) */
+    union { float f; uint32_t u; } v = {f};
+    uint32_t s = (v.u >> 16) & 0x8000u, e = (v.u >> 23) & 0xffu, m = v.u & 0x7fffffu;
+    if (e == 0xff)
+        return (uint16_t)(s | 0x7c00u | (m ? 0x200u : 0));
+    int ee = (int)e - 127 + 15;
+    if (ee >= 31)
+        return (uint16_t)(s | 0x7c00u);
+    if (ee <= 0) { /* subnormal half */
+        if (ee < -10)
+            return (uint16_t)s;
+        m |= 0x800000u;
+        return (uint16_t)(s | (m >> (14 - ee)));
+    }
+    return (uint16_t)(s | ((uint32_t)ee << 10) | (m >> 13));
+}
+
+static float half_float(uint16_t h)
+{
+    uint32_t s = (uint32_t)(h & 0x8000u) << 16, e = (h >> 10) & 0x1fu, m = h & 0x3ffu;
+    float v;
+    if (e == 0)
+        v = ldexpf((float)m, -24);
+    else if (e == 31)
+        v = m ? NAN : INFINITY;
+    else
+        v = ldexpf((float)(m | 0x400u), (int)e - 25);
+    return s ? -v : v;
+}
+
+static const char *axis_attr(int a, const char *what, char *buf, size_t n)
+{
+    snprintf(buf, n, "nbt.axis%d.%s", a, what);
+    return buf;
+}
+
+nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp)
+{
+    size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch, plen = strlen(path);
+    char *tmp = malloc(plen + 32);
+    if (!tmp)
+        NBT_FAIL(NBT_ENOMEM, "EXR: out of memory");
+    snprintf(tmp, plen + 32, "%s.tmp%ld", path, (long)getpid());
+    int bpe = t->half ? 2 : 4;
+    uint8_t *pix = malloc(nx * ny * nc * (size_t)bpe);
+    if (!pix) {
+        free(tmp);
+        NBT_FAIL(NBT_ENOMEM, "EXR: out of memory");
+    }
+    for (size_t i = 0; i < nx * ny * nc; i++) {
+        if (t->half) {
+            uint16_t h = half_bits(t->data[i]);
+            memcpy(pix + 2 * i, &h, 2);
+        } else
+            memcpy(pix + 4 * i, &t->data[i], 4);
+    }
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet;
+    exr_context_t ctx = NULL;
+    exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    int part = 0;
+    char an[64], buf[256];
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_add_part(ctx, "nbt", EXR_STORAGE_SCANLINE, &part);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_initialize_required_attr_simple(ctx, part, (int32_t)nx, (int32_t)ny,
+                                                 comp == NBT_EXR_ZIP ? EXR_COMPRESSION_ZIP : EXR_COMPRESSION_NONE);
+    for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++)
+        rv = exr_add_channel(ctx, part, CH[c], t->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
+                             EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_set_version(ctx, part, 1);
+    /* metadata: enough to use the file alone */
+    const char *names[2][2] = {{"u", "v"}, {"T", "theta"}};
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.kind", t->kind == NBT_TABLE_H ? "H" : "J");
+    for (int a = 0; a < 2 && rv == EXR_ERR_SUCCESS; a++) {
+        const nbt_axis *ax = &t->axis[a];
+        rv = exr_attr_set_string(ctx, part, axis_attr(a, "name", an, sizeof an), names[t->kind][a]);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_double(ctx, part, axis_attr(a, "lo", an, sizeof an), ax->lo);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_double(ctx, part, axis_attr(a, "hi", an, sizeof an), ax->hi);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_double(ctx, part, axis_attr(a, "c", an, sizeof an), ax->c);
+    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.texcoord",
+                                 "node-aligned: s = map(x) in [0,1], tex = (s*(N-1)+0.5)/N; "
+                                 "scanline 0 = axis1.lo; sqrt: s = sqrt(r), log1p: s = log1p(c r)/log1p(c), "
+                                 "r = (x-lo)/(hi-lo)");
+    size_t off = 0;
+    buf[0] = '\0';
+    for (size_t c = 0; c < nc; c++)
+        off += (size_t)snprintf(buf + off, sizeof buf - off, "%s%s=%d", c ? " " : "", CH[c], t->k[c]);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.channels_k", buf);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_int(ctx, part, "nbt.n", t->n);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.phase", t->phase[0] ? t->phase : "legendre");
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_double(ctx, part, "nbt.quad_tol", t->quad_tol);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_double(ctx, part, "nbt.quad_err", t->quad_err);
+    for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++) {
+        snprintf(an, sizeof an, "nbt.max_err.%s", CH[c]);
+        rv = exr_attr_set_double(ctx, part, an, t->max_err[c]);
+        snprintf(an, sizeof an, "nbt.max_abs.%s", CH[c]);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_double(ctx, part, an, t->max_abs[c]);
+    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.version", nbt_version());
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_write_header(ctx);
+    int32_t lpc = 1;
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_scanlines_per_chunk(ctx, part, &lpc);
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int first = 1;
+    for (int32_t y = 0; y < (int32_t)ny && rv == EXR_ERR_SUCCESS; y += lpc) {
+        exr_chunk_info_t ci;
+        rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = first ? exr_encoding_initialize(ctx, part, &ci, &enc) : exr_encoding_update(ctx, part, &ci, &enc);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        for (int16_t c = 0; c < enc.channel_count; c++) {
+            exr_coding_channel_info_t *ch = &enc.channels[c];
+            size_t idx = 0;
+            while (idx < nc && strcmp(ch->channel_name, CH[idx]))
+                idx++;
+            ch->user_pixel_stride = (int32_t)(nc * (size_t)bpe);
+            ch->user_line_stride = (int32_t)(nx * nc * (size_t)bpe);
+            ch->user_bytes_per_element = (int16_t)bpe;
+            ch->user_data_type = t->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+            ch->encode_from_ptr = pix + ((size_t)y * nx * nc + idx) * (size_t)bpe;
+        }
+        if (first)
+            rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+        first = 0;
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_encoding_run(ctx, part, &enc);
+    }
+    if (!first)
+        exr_encoding_destroy(ctx, &enc);
+    exr_result_t fr = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
+    free(pix);
+    nbt_status st = NBT_OK;
+    if (rv != EXR_ERR_SUCCESS || fr != EXR_ERR_SUCCESS || rename(tmp, path) != 0) {
+        unlink(tmp);
+        st = NBT_EIO;
+    }
+    free(tmp);
+    if (st != NBT_OK)
+        NBT_FAIL(st, "EXR: writing the table failed");
+    return NBT_OK;
+}
+
+static nbt_status rd_fail(char *err, size_t n, const char *path, const char *what)
+{
+    snprintf(err, n, "%s: %s", path, what);
+    return NBT_EFORMAT;
+}
+
+nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    FILE *probe = fopen(path, "rb");
+    if (!probe) {
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        return NBT_EIO;
+    }
+    fclose(probe);
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet;
+    init.flags = EXR_CONTEXT_FLAG_SILENT_HEADER_PARSE;
+    exr_context_t ctx = NULL;
+    if (exr_start_read(&ctx, path, &init) != EXR_ERR_SUCCESS) {
+        if (ctx)
+            exr_finish(&ctx);
+        return rd_fail(err, errlen, path, "not an OpenEXR file");
+    }
+    nbt_status st = NBT_OK;
+    nbt_table *t = NULL;
+    uint8_t *pix = NULL;
+    const char *s;
+    int32_t len;
+    exr_attr_box2i_t dw;
+    const exr_attr_chlist_t *cl;
+    nbt_axis ax[2];
+    nbt_table_kind kind = NBT_TABLE_H;
+    char an[64];
+    if (exr_attr_get_string(ctx, 0, "nbt.kind", &len, &s) != EXR_ERR_SUCCESS ||
+        (strcmp(s, "H") && strcmp(s, "J"))) {
+        st = rd_fail(err, errlen, path, "no nbt.kind attribute: not a table written by nbt");
+        goto done;
+    }
+    kind = s[0] == 'H' ? NBT_TABLE_H : NBT_TABLE_J;
+    if (exr_get_data_window(ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_channels(ctx, 0, &cl) != EXR_ERR_SUCCESS) {
+        st = rd_fail(err, errlen, path, "unreadable data window or channel list");
+        goto done;
+    }
+    for (int a = 0; a < 2; a++) {
+        ax[a].n = (size_t)(a == 0 ? dw.max.x - dw.min.x + 1 : dw.max.y - dw.min.y + 1);
+        if (exr_attr_get_string(ctx, 0, axis_attr(a, "map", an, sizeof an), &len, &s) != EXR_ERR_SUCCESS ||
+            nbt_axis_map_parse(s, &ax[a].map) != NBT_OK ||
+            exr_attr_get_double(ctx, 0, axis_attr(a, "lo", an, sizeof an), &ax[a].lo) != EXR_ERR_SUCCESS ||
+            exr_attr_get_double(ctx, 0, axis_attr(a, "hi", an, sizeof an), &ax[a].hi) != EXR_ERR_SUCCESS ||
+            exr_attr_get_double(ctx, 0, axis_attr(a, "c", an, sizeof an), &ax[a].c) != EXR_ERR_SUCCESS) {
+            st = rd_fail(err, errlen, path, "missing or bad nbt.axis attributes");
+            goto done;
+        }
+    }
+    size_t nc = (size_t)cl->num_channels;
+    int half = nc > 0 && cl->entries[0].pixel_type == EXR_PIXEL_HALF;
+    for (size_t c = 0; c < nc; c++)
+        if (c >= NBT_TABLE_MAX_CH || (cl->entries[c].pixel_type == EXR_PIXEL_HALF) != half ||
+            (cl->entries[c].pixel_type != EXR_PIXEL_HALF && cl->entries[c].pixel_type != EXR_PIXEL_FLOAT)) {
+            st = rd_fail(err, errlen, path, "channels must be 1-4 of R, G, B, A, all FLOAT or all HALF");
+            goto done;
+        }
+    t = nbt_table_alloc(kind, &ax[0], &ax[1], nc);
+    if (!t) {
+        st = rd_fail(err, errlen, path, "bad table axes or size");
+        goto done;
+    }
+    t->half = half;
+    if (exr_attr_get_string(ctx, 0, "nbt.channels_k", &len, &s) != EXR_ERR_SUCCESS) {
+        st = rd_fail(err, errlen, path, "missing nbt.channels_k attribute");
+        goto done;
+    }
+    for (size_t c = 0; c < nc; c++) {
+        char key[4];
+        snprintf(key, sizeof key, "%s=", CH[c]);
+        const char *p = strstr(s, key);
+        if (!p || sscanf(p + 2, "%d", &t->k[c]) != 1) {
+            st = rd_fail(err, errlen, path, "nbt.channels_k does not name every channel");
+            goto done;
+        }
+    }
+    exr_attr_get_int(ctx, 0, "nbt.n", &t->n);
+    if (exr_attr_get_string(ctx, 0, "nbt.phase", &len, &s) == EXR_ERR_SUCCESS && strcmp(s, "legendre"))
+        snprintf(t->phase, sizeof t->phase, "%s", s);
+    exr_attr_get_double(ctx, 0, "nbt.quad_tol", &t->quad_tol);
+    exr_attr_get_double(ctx, 0, "nbt.quad_err", &t->quad_err);
+    for (size_t c = 0; c < nc; c++) {
+        snprintf(an, sizeof an, "nbt.max_err.%s", CH[c]);
+        exr_attr_get_double(ctx, 0, an, &t->max_err[c]);
+        snprintf(an, sizeof an, "nbt.max_abs.%s", CH[c]);
+        exr_attr_get_double(ctx, 0, an, &t->max_abs[c]);
+    }
+    size_t nx = ax[0].n, ny = ax[1].n, bpe = half ? 2 : 4;
+    pix = malloc(nx * ny * nc * bpe);
+    if (!pix) {
+        st = NBT_ENOMEM;
+        snprintf(err, errlen, "out of memory");
+        goto done;
+    }
+    int32_t lpc = 1;
+    exr_get_scanlines_per_chunk(ctx, 0, &lpc);
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int first = 1;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (int32_t y = dw.min.y; y <= dw.max.y && rv == EXR_ERR_SUCCESS; y += lpc) {
+        exr_chunk_info_t ci;
+        rv = exr_read_scanline_chunk_info(ctx, 0, y, &ci);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = first ? exr_decoding_initialize(ctx, 0, &ci, &dec) : exr_decoding_update(ctx, 0, &ci, &dec);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        for (int16_t c = 0; c < dec.channel_count; c++) {
+            exr_coding_channel_info_t *ch = &dec.channels[c];
+            size_t idx = 0;
+            while (idx < nc && strcmp(ch->channel_name, CH[idx]))
+                idx++;
+            if (idx == nc) {
+                rv = EXR_ERR_INVALID_ARGUMENT;
+                break;
+            }
+            ch->user_pixel_stride = (int32_t)(nc * bpe);
+            ch->user_line_stride = (int32_t)(nx * nc * bpe);
+            ch->user_bytes_per_element = (int16_t)bpe;
+            ch->user_data_type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+            ch->decode_to_ptr = pix + ((size_t)(y - dw.min.y) * nx * nc + idx) * bpe;
+        }
+        if (rv == EXR_ERR_SUCCESS && first)
+            rv = exr_decoding_choose_default_routines(ctx, 0, &dec);
+        first = 0;
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_decoding_run(ctx, 0, &dec);
+    }
+    if (!first)
+        exr_decoding_destroy(ctx, &dec);
+    if (rv != EXR_ERR_SUCCESS) {
+        st = rd_fail(err, errlen, path, "pixel data cannot be decoded (truncated or corrupt, or channels not R/G/B/A)");
+        goto done;
+    }
+    for (size_t i = 0; i < nx * ny * nc; i++) {
+        if (half) {
+            uint16_t h;
+            memcpy(&h, pix + 2 * i, 2);
+            t->data[i] = half_float(h);
+        } else
+            memcpy(&t->data[i], pix + 4 * i, 4);
+    }
+done:
+    free(pix);
+    exr_finish(&ctx);
+    if (st != NBT_OK) {
+        nbt_table_free(t);
+        return st;
+    }
+    *out = t;
+    return NBT_OK;
+}
