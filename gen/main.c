@@ -1,0 +1,43 @@
+/* gen/main.c: nbt-gen, lookup tables for scattering in participating media. */
+#include <config.h>
+#include <stdio.h>
+#include <string.h>
+#include "cli.h"
+#include "commands.h"
+
+static void help(void)
+{
+    puts("Usage: nbt-gen                 build the default scene into ./nbt-tables/\n"
+         "       nbt-gen airlight [...]  H_k(u, v) tables (airlight)\n"
+         "       nbt-gen surface [...]   J_k^n(T, theta) tables (surface radiance)\n"
+         "       nbt-gen scene FILE      only the tables a scene needs\n"
+         "       nbt-gen eval WHAT [...] one value with its error: H, J, airlight, surface\n"
+         "       nbt-gen info FILE       a table's metadata and values\n"
+         "       nbt-gen --version\n\n"
+         "'nbt-gen COMMAND --help' describes each command. Exit status: 0 success,\n"
+         "1 failure, 2 bad usage.");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2)
+        return cmd_default(argc, argv);
+    const char *c = argv[1];
+    if (!strcmp(c, "--help") || !strcmp(c, "-h")) {
+        help();
+        return 0;
+    }
+    if (!strcmp(c, "--version")) {
+        printf("nbt-gen (nbt) %s\n", nbt_version());
+        return 0;
+    }
+    if (!strcmp(c, "airlight") || !strcmp(c, "surface"))
+        return cmd_tables(argc - 1, argv + 1);
+    if (!strcmp(c, "scene"))
+        return cmd_scene(argc - 1, argv + 1);
+    if (!strcmp(c, "eval"))
+        return cmd_eval(argc - 1, argv + 1);
+    if (!strcmp(c, "info"))
+        return cmd_info(argc - 1, argv + 1);
+    die_usage("unknown command '%s': airlight, surface, scene, eval, info (see 'nbt-gen --help')", c);
+}

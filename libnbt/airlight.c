@@ -26,6 +26,8 @@ static void weights_at(const nbt__weights *w, double c, double *f)
 {
     if (w->phase)
         f[0] = 4.0 * NBT_PI * nbt_phase_eval(w->phase, c);
+    else if (w->b)
+        f[0] = nbt__legendre_series(w->b, w->kmax, c);
     else
         nbt_legendre_p(w->kmax, c, f);
 }
@@ -121,13 +123,13 @@ static nbt_status h_eval(const nbt__weights *w, double u, double v, double tol, 
 
 nbt_status nbt_hk(size_t kmax, double u, double v, double tol, double *H, double *abserr)
 {
-    nbt__weights w = {kmax, NULL};
+    nbt__weights w = {kmax, NULL, NULL};
     return h_eval(&w, u, v, tol, H, abserr);
 }
 
 nbt_status nbt_h_phase(const nbt_phase *p, double u, double v, double tol, double *H, double *abserr)
 {
-    nbt__weights w = {0, p};
+    nbt__weights w = {0, p, NULL};
     return h_eval(&w, u, v, tol, H, abserr);
 }
 
@@ -158,7 +160,6 @@ typedef struct {
     const nbt_phase *p;        /* phase, or NULL: Legendre series b[0..nterms-1] */
     const double *b;
     size_t nterms;
-    double *P;
     double kt, t, h, dsv;
     double x0, L;              /* tail map x = x0 + L y/(1-y) when L > 0 */
 } ray_ctx;
@@ -167,11 +168,7 @@ static double ray_phase(const ray_ctx *c, double mu)
 {
     if (c->p)
         return nbt_phase_eval(c->p, mu);
-    nbt_legendre_p(c->nterms - 1, mu, c->P);
-    double s = 0;
-    for (size_t k = 0; k < c->nterms; k++)
-        s += (2.0 * (double)k + 1.0) * c->b[k] * c->P[k];
-    return s / (4.0 * NBT_PI);
+    return nbt__legendre_series(c->b, c->nterms - 1, mu) / (4.0 * NBT_PI);
 }
 
 static double ray_value(const ray_ctx *c, double x)
@@ -226,14 +223,10 @@ nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
                              const void *geom, double tol, double *La, double *err)
 {
     const nbt_airlight_geom *g = geom;
-    double *P = NULL;
-    if (!p && !(P = malloc(nterms * sizeof(double))))
-        NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
-    ray_ctx c = {p, b, nterms, P, g->kappa_t, g->dsv * cos(g->gamma), g->dsv * sin(g->gamma),
+    ray_ctx c = {p, b, nterms, g->kappa_t, g->dsv * cos(g->gamma), g->dsv * sin(g->gamma),
                  g->dsv, 0.0, 0.0};
     double v = 0, e = 0;
     nbt_status st = ray_integral(&c, g->dvp, tol, &v, &e);
-    free(P);
     double pre = g->kappa_s * g->I0 * exp(-g->kappa_t * g->dsv);
     *La = pre * v;
     *err = pre * e;
@@ -262,27 +255,18 @@ nbt_status nbt_airlight_series(const double *b, size_t nterms, const nbt_airligh
      * pi/2 to be resolved in angle: the same series in distance is exact. */
     if (sin(g->gamma) < 1e-4)
         return nbt__airlight_ray(NULL, b, nterms, g, tol, La, abserr);
-    nbt__weights w = {nterms - 1, NULL};
-    double *D = malloc(2 * nterms * sizeof(double));
-    nbt_quad_ws *ws = nbt_quad_ws_alloc((unsigned)nterms, SEG_MAX_INTERVALS);
-    if (!D || !ws) {
-        free(D);
-        nbt_quad_ws_free(ws);
+    nbt__weights w = {nterms - 1, NULL, b};
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, SEG_MAX_INTERVALS);
+    if (!ws)
         NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
-    }
     double th0 = g->gamma - NBT_PI_2;
     double thd = isinf(g->dvp) ? NBT_PI_2 : atan2(g->dvp - t, h);
-    st = nbt__airlight_segment(ws, &w, g->kappa_t * h, th0, thd, 1, tol, D, D + nterms);
-    double s = 0, e = 0;
-    for (size_t k = 0; k < nterms; k++) {
-        double c = (2.0 * (double)k + 1.0) * b[k];
-        s += c * D[k];
-        e += fabs(c) * D[nterms + k];
-    }
+    double D, De;
+    /* one channel: the weighted sum of the H_k differences, never a difference of H values */
+    st = nbt__airlight_segment(ws, &w, g->kappa_t * h, th0, thd, 1, tol, &D, &De);
     double pre = g->kappa_s * g->I0 * exp(-g->kappa_t * g->dsv) / (4.0 * NBT_PI * h);
-    *La = pre * s;
-    *abserr = pre * e;
-    free(D);
+    *La = pre * D;
+    *abserr = pre * De;
     nbt_quad_ws_free(ws);
     return st;
 }
@@ -338,7 +322,8 @@ nbt_status nbt_airlight_table(const nbt_table *const *tables, size_t ntables, co
 #include "tablefill.h"
 
 typedef struct {
-    const nbt_table *t;
+    size_t nch;
+    const int *kmap;      /* Legendre order (or -1: fixed phase) per channel */
     nbt__weights w;
     double tol;
     const double *xs, *ys;
@@ -358,7 +343,7 @@ static nbt_status h_column(size_t i, unsigned thread, void *vp)
     for (unsigned k = 0; k < fdim; k++)
         acc[k] = aerr[k] = 0.0;
     double u = c->xs[i], prev = -NBT_PI_2;
-    size_t nc = c->t->nch;
+    size_t nc = c->nch;
     for (size_t j = 0; j < c->ny; j++) {
         nbt_status st = nbt__airlight_segment(c->ws[thread], &c->w, u, prev, c->ys[j], 0, c->tol, seg, serr);
         if (st != NBT_OK)
@@ -369,13 +354,13 @@ static nbt_status h_column(size_t i, unsigned thread, void *vp)
         }
         prev = c->ys[j];
         for (size_t ch = 0; ch < nc; ch++) {
-            size_t k = c->w.phase ? 0 : (size_t)c->t->k[ch];
+            size_t k = c->w.phase ? 0 : (size_t)c->kmap[ch];
             c->F[(j * c->nx + i) * nc + ch] = acc[k];
         }
     }
     double e = 0;
     for (size_t ch = 0; ch < nc; ch++)
-        e = fmax(e, aerr[c->w.phase ? 0 : (size_t)c->t->k[ch]]);
+        e = fmax(e, aerr[c->w.phase ? 0 : (size_t)c->kmap[ch]]);
     c->colerr[i] = e;
     return NBT_OK;
 }
@@ -400,31 +385,48 @@ static nbt_status h_fill(void *vp, const double *xs, size_t nx, const double *ys
     return st;
 }
 
-nbt_status nbt_h_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)
+nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phase *fixed, const nbt_build_opts *o)
 {
-    if (t->kind != NBT_TABLE_H)
-        NBT_FAIL(NBT_EINVAL, "H table: the table is not of kind H");
-    if (t->axis[0].lo < 0 || t->axis[1].lo < -NBT_PI_2 || t->axis[1].hi > NBT_PI_2)
-        NBT_FAIL(NBT_EDOM, "H table: axes must lie in u >= 0, v in [-pi/2, pi/2]");
-    if (!(o->quad_tol > 0 && o->quad_tol < 1))
-        NBT_FAIL(NBT_EDOM, "H table: quad_tol must lie in (0, 1)");
-    hfill_ctx c = {.t = t, .tol = o->quad_tol};
-    c.w.phase = fixed;
-    for (size_t ch = 0; ch < t->nch; ch++) {
-        if (fixed)
-            t->k[ch] = -1;
-        else if (t->k[ch] < 0)
-            NBT_FAIL(NBT_EINVAL, "H table: Legendre channels need k >= 0");
-        else if ((size_t)t->k[ch] > c.w.kmax)
-            c.w.kmax = (size_t)t->k[ch];
+    if (nt == 0)
+        NBT_FAIL(NBT_EINVAL, "H table: no tables given");
+    for (size_t i = 0; i < nt; i++)
+        for (size_t ch = 0; ch < ts[i]->nch; ch++) {
+            if (fixed)
+                ts[i]->k[ch] = -1;
+            else if (ts[i]->k[ch] < 0)
+                NBT_FAIL(NBT_EINVAL, "H table: Legendre channels need k >= 0");
+        }
+    int *kmap = malloc(nt * NBT_TABLE_MAX_CH * sizeof(int));
+    if (!kmap)
+        NBT_FAIL(NBT_ENOMEM, "H table: out of memory");
+    hfill_ctx c = {.kmap = kmap, .tol = o->quad_tol};
+    c.nch = nbt__table_set_channels(ts, nt, kmap);
+    nbt_table *t = ts[0];
+    nbt_status st = NBT_OK;
+    if (c.nch == 0)
+        st = nbt__fail(NBT_EINVAL, "H table: the tables of a set must share kind and axes");
+    else if (t->kind != NBT_TABLE_H)
+        st = nbt__fail(NBT_EINVAL, "H table: the table is not of kind H");
+    else if (t->axis[0].lo < 0 || t->axis[1].lo < -NBT_PI_2 || t->axis[1].hi > NBT_PI_2)
+        st = nbt__fail(NBT_EDOM, "H table: axes must lie in u >= 0, v in [-pi/2, pi/2]");
+    else if (!(o->quad_tol > 0 && o->quad_tol < 1))
+        st = nbt__fail(NBT_EDOM, "H table: quad_tol must lie in (0, 1)");
+    if (st != NBT_OK) {
+        free(kmap);
+        return st;
     }
-    t->n = 0;
-    t->quad_tol = o->quad_tol;
-    unsigned nt = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
+    c.w.phase = fixed;
+    for (size_t ch = 0; ch < c.nch; ch++)
+        if (!fixed && (size_t)kmap[ch] > c.w.kmax)
+            c.w.kmax = (size_t)kmap[ch];
+    for (size_t i = 0; i < nt; i++) {
+        ts[i]->n = 0;
+        ts[i]->quad_tol = o->quad_tol;
+    }
+    unsigned nthr = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
     nbt_quad_ws *ws[64] = {0};
     double *buf[64] = {0};
-    nbt_status st = NBT_OK;
-    for (unsigned i = 0; i < nt; i++) {
+    for (unsigned i = 0; i < nthr; i++) {
         ws[i] = nbt_quad_ws_alloc(nbt__fdim(&c.w), SEG_MAX_INTERVALS);
         buf[i] = malloc(4 * nbt__fdim(&c.w) * sizeof(double));
         if (!ws[i] || !buf[i])
@@ -432,14 +434,20 @@ nbt_status nbt_h_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_bui
     }
     c.ws = ws;
     c.buf = buf;
-    c.nt = nt;
+    c.nt = nthr;
     if (st == NBT_OK)
-        st = nbt__table_fill(t, o->measure_error, h_fill, &c);
-    for (unsigned i = 0; i < nt; i++) {
+        st = nbt__table_fill(ts, nt, o->measure_error, h_fill, &c);
+    for (unsigned i = 0; i < nthr; i++) {
         nbt_quad_ws_free(ws[i]);
         free(buf[i]);
     }
+    free(kmap);
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "H table: out of memory");
     return st;
+}
+
+nbt_status nbt_h_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)
+{
+    return nbt_h_table_build_set(&t, 1, fixed, o);
 }

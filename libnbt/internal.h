@@ -15,16 +15,21 @@ nbt_status nbt__fail(nbt_status s, const char *reason);
 #define NBT_FAIL(s, reason) return nbt__fail((s), (reason))
 
 /* Weights of the airlight integrand: Legendre orders 0..kmax, or one
- * fixed-phase channel 4 pi p(mu) when phase != NULL. */
+ * channel: 4 pi p(mu) when phase != NULL, or the truncated series
+ * sum_k (2k+1) b_k P_k(mu) when b != NULL (orders 0..kmax). */
 typedef struct {
     size_t kmax;
     const nbt_phase *phase;
+    const double *b;
 } nbt__weights;
 
 static inline unsigned nbt__fdim(const nbt__weights *w)
 {
-    return w->phase ? 1u : (unsigned)(w->kmax + 1);
+    return (w->phase || w->b) ? 1u : (unsigned)(w->kmax + 1);
 }
+
+/* sum_{k=0}^{kmax} (2k+1) b_k P_k(x) by Clenshaw's recurrence. */
+double nbt__legendre_series(const double *b, size_t kmax, double x);
 
 /* s(t) = tan(pi/4 + t/2), written without cancellation on either side. */
 double nbt__s_of_t(double t);

@@ -20,6 +20,16 @@ struct nbt_phase {
     char name[64];
 };
 
+/* The shortest %g form that reads back as the same double. */
+static void fmt_double(char *buf, size_t n, double v)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(buf, n, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v)
+            return;
+    }
+}
+
 static nbt_phase *phase_new(nbt_phase_kind kind)
 {
     nbt_phase *p = calloc(1, sizeof *p);
@@ -51,7 +61,9 @@ nbt_phase *nbt_phase_hg(double g)
     nbt_phase *p = phase_new(NBT_PHASE_HG);
     if (p) {
         p->g = g;
-        snprintf(p->name, sizeof p->name, "hg:g=%.17g", g);
+        char num[32];
+        fmt_double(num, sizeof num, g);
+        snprintf(p->name, sizeof p->name, "hg:g=%s", num);
     }
     return p;
 }
@@ -85,8 +97,10 @@ nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B)
         /* -expm1 keeps the normalisation exact for large B as well */
         p->Z[i] = 1.0 / (4.0 * NBT_PI * B[i] * -expm1(-NBT_PI * NBT_PI / (4.0 * B[i])));
     }
+    char num[32];
+    fmt_double(num, sizeof num, B[0]);
     if (n == 1)
-        snprintf(p->name, sizeof p->name, "gauss:B=%.17g", B[0]);
+        snprintf(p->name, sizeof p->name, "gauss:B=%s", num);
     else
         snprintf(p->name, sizeof p->name, "sog:%zu terms", n);
     return p;
@@ -206,6 +220,20 @@ void nbt_legendre_p(size_t kmax, double x, double *P)
     P[1] = x;
     for (size_t k = 1; k < kmax; k++)
         P[k + 1] = ((2.0 * (double)k + 1.0) * x * P[k] - (double)k * P[k - 1]) / ((double)k + 1.0);
+}
+
+double nbt__legendre_series(const double *b, size_t kmax, double x)
+{
+    /* P_{k+1} = a_k P_k + c_k P_{k-1}, a_k = (2k+1)x/(k+1), c_k = -k/(k+1) */
+    double y1 = 0, y2 = 0;
+    for (size_t k = kmax + 1; k-- > 0;) {
+        double kk = (double)k;
+        double a = (2 * kk + 1) * x / (kk + 1), c = -(kk + 1) / (kk + 2);
+        double y = (2 * kk + 1) * b[k] + a * y1 + c * y2;
+        y2 = y1;
+        y1 = y;
+    }
+    return y1;
 }
 
 /* b_k of one Gaussian: int_0^pi P_k(cos th) th exp(-th^2/4B) dth / (2B (1 - e^{-pi^2/4B})),

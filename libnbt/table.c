@@ -156,12 +156,31 @@ void nbt_table_round_half(nbt_table *t)
     t->half = 1;
 }
 
-nbt_status nbt__table_fill(nbt_table *t, int measure, nbt__grid_fill fill, void *ctx)
+size_t nbt__table_set_channels(nbt_table *const *ts, size_t nt, int *kmap)
 {
-    size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch;
+    size_t C = 0;
+    for (size_t i = 0; i < nt; i++) {
+        const nbt_table *t = ts[i];
+        if (t->kind != ts[0]->kind || t->n != ts[0]->n)
+            return 0;
+        for (int a = 0; a < 2; a++)
+            if (memcmp(&t->axis[a], &ts[0]->axis[a], sizeof t->axis[a]))
+                return 0;
+        for (size_t c = 0; c < t->nch; c++)
+            kmap[C++] = t->k[c];
+    }
+    return C;
+}
+
+nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx)
+{
+    const nbt_table *t0 = ts[0];
+    size_t nx = t0->axis[0].n, ny = t0->axis[1].n, C = 0;
+    for (size_t i = 0; i < nt; i++)
+        C += ts[i]->nch;
     size_t fx = measure ? 2 * nx - 1 : nx, fy = measure ? 2 * ny - 1 : ny;
     double *xs = malloc(fx * sizeof(double)), *ys = malloc(fy * sizeof(double));
-    double *F = malloc(fx * fy * nc * sizeof(double));
+    double *F = malloc(fx * fy * C * sizeof(double));
     if (!xs || !ys || !F) {
         free(xs);
         free(ys);
@@ -169,19 +188,21 @@ nbt_status nbt__table_fill(nbt_table *t, int measure, nbt__grid_fill fill, void 
         NBT_FAIL(NBT_ENOMEM, "table: out of memory");
     }
     for (size_t i = 0; i < fx; i++)
-        xs[i] = nbt_axis_from_unit(&t->axis[0], (double)i / (double)(fx - 1));
+        xs[i] = nbt_axis_from_unit(&t0->axis[0], (double)i / (double)(fx - 1));
     for (size_t j = 0; j < fy; j++)
-        ys[j] = nbt_axis_from_unit(&t->axis[1], (double)j / (double)(fy - 1));
+        ys[j] = nbt_axis_from_unit(&t0->axis[1], (double)j / (double)(fy - 1));
     double qerr = 0;
     nbt_status st = fill(ctx, xs, fx, ys, fy, F, &qerr);
-    if (st == NBT_OK) {
-        size_t step = measure ? 2 : 1;
+    size_t off = 0, step = measure ? 2 : 1;
+    for (size_t ti = 0; ti < nt && st == NBT_OK; off += ts[ti]->nch, ti++) {
+        nbt_table *t = ts[ti];
+        size_t nc = t->nch;
         for (size_t c = 0; c < nc; c++)
             t->max_abs[c] = t->max_err[c] = 0;
         for (size_t j = 0; j < ny; j++)
             for (size_t i = 0; i < nx; i++)
                 for (size_t c = 0; c < nc; c++) {
-                    double v = F[((j * step) * fx + i * step) * nc + c];
+                    double v = F[((j * step) * fx + i * step) * C + off + c];
                     t->data[(j * nx + i) * nc + c] = (float)v;
                     t->max_abs[c] = fmax(t->max_abs[c], fabs(v));
                 }
@@ -196,7 +217,7 @@ nbt_status nbt__table_fill(nbt_table *t, int measure, nbt__grid_fill fill, void 
                         continue; /* a node */
                     nbt_table_lookup(t, xs[i], ys[j], out);
                     for (size_t c = 0; c < nc; c++)
-                        t->max_err[c] = fmax(t->max_err[c], fabs(out[c] - F[(j * fx + i) * nc + c]));
+                        t->max_err[c] = fmax(t->max_err[c], fabs(out[c] - F[(j * fx + i) * C + off + c]));
                 }
             /* what the midpoints cannot see: the quadrature error at nodes */
             for (size_t c = 0; c < nc; c++)

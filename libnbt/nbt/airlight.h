@@ -47,7 +47,8 @@ nbt_status nbt_airlight_check(const nbt_airlight_geom *g);
 nbt_status nbt_airlight_direct(const nbt_phase *p, const nbt_airlight_geom *g, double tol,
                                double *La, double *abserr);
 /* Legendre series with moments b[0..nterms-1] over exactly computed H_k
- * (the H_k differences are integrated directly, never subtracted). */
+ * (one channel: the weighted sum of the H_k differences is integrated
+ * directly, never formed by subtracting H values). */
 nbt_status nbt_airlight_series(const double *b, size_t nterms, const nbt_airlight_geom *g,
                                double tol, double *La, double *abserr);
 /* Table lookup: Legendre tables (any number, channels give k; b indexed by k,
@@ -65,6 +66,10 @@ typedef struct {
 } nbt_build_opts;
 
 nbt_status nbt_h_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o);
+/* Several tables with the same axes (e.g. packs of four orders) in one pass:
+ * every order is integrated once. */
+nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phase *fixed,
+                                 const nbt_build_opts *o);
 
 #ifdef __cplusplus
 }

@@ -71,6 +71,9 @@ nbt_status nbt_surface_table(const nbt_table *const *diffuse, size_t ndiffuse,
  * Gauss-Legendre nodes in g, product-integration weights of K_n that respect
  * each theta's kinks, J = G M^T. max_err measured at midpoints as for H. */
 nbt_status nbt_j_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o);
+/* Several J tables with the same axes and n (at most 64) in one pass. */
+nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phase *fixed,
+                                 const nbt_build_opts *o);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,94 @@
+/* gen/cli.c: argument checking and fatal errors for nbt-gen. */
+#include <config.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include "cli.h"
+
+static void vmsg(const char *fmt, va_list ap)
+{
+    fputs("nbt-gen: ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+}
+
+void die_usage(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vmsg(fmt, ap);
+    va_end(ap);
+    exit(EXIT_USAGE);
+}
+
+void die(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vmsg(fmt, ap);
+    va_end(ap);
+    exit(EXIT_FAILURE);
+}
+
+static const char *bound(double v, int open, int lower)
+{
+    static char buf[2][64];
+    if (isinf(v))
+        return lower ? "(-inf" : "inf)";
+    if (lower)
+        snprintf(buf[1], sizeof buf[1], "%s%g", open ? "(" : "[", v);
+    else
+        snprintf(buf[0], sizeof buf[0], "%g%s", v, open ? ")" : "]");
+    return buf[lower];
+}
+
+double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(arg, &end);
+    int ok = end != arg && *end == '\0' && errno != ERANGE && isfinite(v) &&
+             (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+    if (!ok)
+        die_usage("%s: '%s' is not accepted: expected a number in %s, %s", opt, arg,
+                  bound(lo, lo_open, 1), bound(hi, hi_open, 0));
+    return v;
+}
+
+long opt_long(const char *opt, const char *arg, long lo, long hi)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(arg, &end, 10);
+    if (end == arg || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+        die_usage("%s: '%s' is not accepted: expected an integer in [%ld, %ld]", opt, arg, lo, hi);
+    return v;
+}
+
+void opt_range(const char *opt, const char *arg, double lo, double hi, double *a, double *b)
+{
+    const char *colon = strchr(arg, ':');
+    if (!colon) {
+        *a = *b = opt_double(opt, arg, lo, 0, hi, 0);
+        return;
+    }
+    char first[128];
+    size_t n = (size_t)(colon - arg);
+    if (n >= sizeof first)
+        die_usage("%s: '%s' is too long", opt, arg);
+    memcpy(first, arg, n);
+    first[n] = '\0';
+    *a = opt_double(opt, first, lo, 0, hi, 0);
+    *b = opt_double(opt, colon + 1, lo, 0, hi, 0);
+    if (*b < *a)
+        die_usage("%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
+}
+
+int stderr_is_tty(void)
+{
+    return isatty(fileno(stderr));
+}

@@ -1,0 +1,333 @@
+/* gen/cmd_eval.c: "nbt-gen eval H|J|airlight|surface": one value and its
+ * estimated absolute error on one line, 17 significant digits. */
+#include <config.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "cli.h"
+#include "commands.h"
+
+enum {
+    O_K, O_U, O_V, O_N, O_T, O_THETA, O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP,
+    O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_METHOD, O_TERMS, O_TOL, O_COUNT
+};
+static const struct option opts[] = {
+    {"k", required_argument, 0, O_K},         {"u", required_argument, 0, O_U},
+    {"v", required_argument, 0, O_V},         {"n", required_argument, 0, O_N},
+    {"T", required_argument, 0, O_T},         {"theta", required_argument, 0, O_THETA},
+    {"g", required_argument, 0, O_G},         {"phase", required_argument, 0, O_PHASE},
+    {"kappa-s", required_argument, 0, O_KS},  {"kappa-t", required_argument, 0, O_KT},
+    {"I0", required_argument, 0, O_I0},       {"dsv", required_argument, 0, O_DSV},
+    {"gamma", required_argument, 0, O_GAMMA}, {"dvp", required_argument, 0, O_DVP},
+    {"dsp", required_argument, 0, O_DSP},     {"theta-s", required_argument, 0, O_THS},
+    {"theta-r", required_argument, 0, O_THR}, {"kd", required_argument, 0, O_KD},
+    {"ks", required_argument, 0, O_KSPEC},    {"method", required_argument, 0, O_METHOD},
+    {"terms", required_argument, 0, O_TERMS}, {"tol", required_argument, 0, O_TOL},
+    {"help", no_argument, 0, 'h'},            {0, 0, 0, 0}};
+
+static void eval_help(void)
+{
+    puts("Usage: nbt-gen eval H --k K --u U --v V [--tol EPS]\n"
+         "       nbt-gen eval H --phase SPEC --u U --v V            (fixed phase, 4 pi p)\n"
+         "       nbt-gen eval J --k K --n N --T T --theta TH [--tol EPS]   (or --phase SPEC)\n"
+         "       nbt-gen eval airlight (--g G | --phase SPEC) --kappa-s KS --kappa-t KT --I0 I\n"
+         "                --dsv D --gamma GA --dvp DV|inf [--method direct|series|table] [--terms N] [--tol EPS]\n"
+         "       nbt-gen eval surface (--g G | --phase SPEC) --kappa-s KS --kappa-t KT --I0 I\n"
+         "                --dsp D --theta-s TS --theta-r TR --kd KD --ks KS --n N [--method ...] [--terms N] [--tol EPS]\n\n"
+         "Prints the value and its estimated absolute error, 17 significant digits.\n"
+         "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
+         "until the series changes by less than tol relative (unless --terms); 'table' builds\n"
+         "tables at 1e-3 relative interpolation error and reports their recorded error.\n"
+         "Angles in radians, distances in scene units, coefficients in 1/length.");
+}
+
+typedef struct {
+    const char *arg[O_COUNT];
+} args_t;
+
+static double need(const args_t *a, int o, const char *name, double lo, int lo_open, double hi, int hi_open)
+{
+    if (!a->arg[o])
+        die_usage("eval: %s is required here", name);
+    return opt_double(name, a->arg[o], lo, lo_open, hi, hi_open);
+}
+
+static void only(const args_t *a, const char *what, const int *allowed, size_t n)
+{
+    for (int o = 0; o < O_COUNT; o++) {
+        if (!a->arg[o])
+            continue;
+        int ok = 0;
+        for (size_t i = 0; i < n; i++)
+            ok |= allowed[i] == o;
+        if (!ok)
+            die_usage("eval %s: --%s does not apply here", what, opts[o].name);
+    }
+}
+
+static nbt_phase *get_phase(const args_t *a)
+{
+    nbt_phase *p = NULL;
+    if (a->arg[O_G] && a->arg[O_PHASE])
+        die_usage("eval: --g and --phase exclude each other");
+    if (a->arg[O_G])
+        p = nbt_phase_hg(opt_double("--g", a->arg[O_G], -1, 1, 1, 1));
+    else if (a->arg[O_PHASE]) {
+        char err[256];
+        if (nbt_phase_parse(a->arg[O_PHASE], &p, err, sizeof err) != NBT_OK)
+            die_usage("--phase: %s", err);
+    } else
+        die_usage("eval: give the phase function with --g G or --phase SPEC");
+    if (!p)
+        die("out of memory");
+    return p;
+}
+
+static void print_result(nbt_status st, double v, double e)
+{
+    if (st != NBT_OK && st != NBT_ETOL)
+        die("evaluation failed: %s", nbt_strerror(st));
+    printf("%.17g %.17g\n", v, e);
+    if (st == NBT_ETOL)
+        fprintf(stderr, "nbt-gen: warning: the requested tolerance was not reached; the error estimate is honest\n");
+}
+
+/* The physical evaluations share method handling. */
+typedef struct {
+    int surface;
+    nbt_airlight_geom ag;
+    nbt_surface_geom sg;
+} phys_t;
+
+static nbt_status series_eval(const phys_t *ph, const double *b, size_t N, double tol, double *v, double *e)
+{
+    return ph->surface ? nbt_surface_series(b, N, &ph->sg, tol, v, e) : nbt_airlight_series(b, N, &ph->ag, tol, v, e);
+}
+
+/* Series with terms added (doubling) until it changes by < tol relative. */
+static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed, double tol, double *v,
+                              double *e, size_t *used)
+{
+    const size_t cap = 2048;
+    double *b = malloc((cap + 1) * sizeof(double));
+    if (!b || nbt_phase_moments(p, cap, b) != NBT_OK)
+        die("cannot compute the Legendre moments of the phase function");
+    nbt_status st;
+    if (fixed) {
+        st = series_eval(ph, b, fixed, tol, v, e);
+        *used = fixed;
+    } else {
+        double prev = NAN, pe = 0;
+        size_t N = 4;
+        st = series_eval(ph, b, N, tol, &prev, &pe);
+        for (;;) {
+            size_t M = 2 * N;
+            if (st != NBT_OK || M > cap) {
+                *v = prev;
+                *e = pe;
+                *used = N;
+                if (st == NBT_OK)
+                    st = NBT_ETOL;
+                break;
+            }
+            double cur, ce;
+            st = series_eval(ph, b, M, tol, &cur, &ce);
+            double d = fabs(cur - prev);
+            prev = cur;
+            pe = ce + d; /* the last change bounds the rest of a decaying tail */
+            N = M;
+            if (st == NBT_OK && d <= tol * fabs(cur)) {
+                *v = cur;
+                *e = pe;
+                *used = N;
+                break;
+            }
+        }
+    }
+    free(b);
+    return st;
+}
+
+static int eval_phys(const args_t *a, phys_t *ph)
+{
+    nbt_phase *p = get_phase(a);
+    double tol = a->arg[O_TOL] ? opt_double("--tol", a->arg[O_TOL], 1e-15, 0, 0.1, 0) : 1e-8;
+    const char *method = a->arg[O_METHOD] ? a->arg[O_METHOD] : "direct";
+    size_t terms = a->arg[O_TERMS] ? (size_t)opt_long("--terms", a->arg[O_TERMS], 1, 2048) : 0;
+    nbt_status st = ph->surface ? nbt_surface_check(&ph->sg) : nbt_airlight_check(&ph->ag);
+    if (st != NBT_OK)
+        die_usage("eval: the geometry is outside the domain (%s)",
+                  ph->surface ? "kappa_t >= kappa_s >= 0, dsp > 0, angles in [0, pi]"
+                              : "kappa_t >= kappa_s >= 0, dsv > 0, gamma in [0, pi], dvp > 0, and the ray must not run through the source");
+    double v = NAN, e = NAN;
+    if (!strcmp(method, "direct")) {
+        if (terms)
+            die_usage("--terms applies to --method series|table only");
+        st = ph->surface ? nbt_surface_direct(p, &ph->sg, tol, &v, &e) : nbt_airlight_direct(p, &ph->ag, tol, &v, &e);
+    } else if (!strcmp(method, "series")) {
+        size_t used;
+        st = series_auto(ph, p, terms, tol, &v, &e, &used);
+        fprintf(stderr, "nbt-gen: %zu Legendre terms\n", used);
+    } else if (!strcmp(method, "table")) {
+        size_t used = 1;
+        double sv = 0, se = 0;
+        int fixed = a->arg[O_PHASE] && !terms;
+        /* as many terms as the tables' own accuracy (1e-3) warrants */
+        if (!fixed)
+            st = series_auto(ph, p, terms, 1e-3, &sv, &se, &used);
+        double x = ph->surface ? ph->sg.kappa_t * ph->sg.dsp : ph->ag.kappa_t * ph->ag.dsv * sin(ph->ag.gamma);
+        tableset_spec s = {ph->surface ? NBT_TABLE_J : NBT_TABLE_H, 1, used, fixed ? p : NULL,
+                           fmax(10.0, 1.01 * x), 1e-3, {0, 0}, 0, 0};
+        tableset sets[2];
+        memset(sets, 0, sizeof sets);
+        int nsets = ph->surface ? 2 : 1;
+        for (int i = 0; i < nsets; i++) {
+            s.n = i == 0 ? 1 : ph->sg.n;
+            if ((ph->surface && (i == 0 ? ph->sg.kd : ph->sg.ks) == 0) || (i == 1 && ph->sg.n == 1)) {
+                if (i == 1 && ph->sg.n == 1 && ph->sg.ks > 0)
+                    sets[1] = sets[0];
+                continue;
+            }
+            if (tableset_build(&s, &sets[i]) != 0)
+                die("building the tables failed");
+        }
+        double *b = malloc((used + 1) * sizeof(double));
+        if (!b || nbt_phase_moments(p, used, b) != NBT_OK)
+            die("cannot compute the Legendre moments");
+        if (ph->surface)
+            st = nbt_surface_table((const nbt_table *const *)sets[0].t, sets[0].count,
+                                   (const nbt_table *const *)sets[1].t, sets[1].count, b, used, &ph->sg, &v);
+        else
+            st = nbt_airlight_table((const nbt_table *const *)sets[0].t, sets[0].count, b, used, &ph->ag, &v);
+        /* error: each channel's recorded interpolation error (twice for a
+         * difference of lookups), weighted as in the series, plus truncation */
+        double w = 0;
+        for (int i = 0; i < nsets; i++) {
+            double coef = ph->surface ? (i == 0 ? ph->sg.kd : ph->sg.ks) : 1.0;
+            for (size_t t = 0; t < sets[i].count; t++)
+                for (size_t c = 0; c < sets[i].t[t]->nch; c++) {
+                    int k = sets[i].t[t]->k[c];
+                    w += coef * (ph->surface ? 1 : 2) * fabs(k < 0 ? 1.0 : (2.0 * k + 1.0) * b[k]) *
+                         sets[i].t[t]->max_err[c];
+                }
+        }
+        double pre = ph->surface ? ph->sg.kappa_s * ph->sg.I0 / (4 * M_PI * ph->sg.dsp)
+                                 : ph->ag.kappa_s * ph->ag.I0 * exp(-ph->ag.kappa_t * ph->ag.dsv * cos(ph->ag.gamma)) /
+                                       (4 * M_PI * ph->ag.dsv * sin(ph->ag.gamma));
+        e = pre * w + (fixed ? 0.0 : se); /* se: the series' own error at that many terms */
+        if (st == NBT_ETOL)
+            fprintf(stderr, "nbt-gen: warning: outside the table's range, clamped\n");
+        if (st == NBT_ETOL)
+            st = NBT_OK;
+        free(b);
+        int same = ph->surface && sets[1].t[0] == sets[0].t[0];
+        tableset_free(&sets[0]);
+        if (!same)
+            tableset_free(&sets[1]);
+        fprintf(stderr, "nbt-gen: %zu Legendre terms, %s tables\n", used, fixed ? "fixed-phase" : "Legendre");
+    } else
+        die_usage("--method: '%s' is not accepted: direct, series or table", method);
+    nbt_phase_free(p);
+    print_result(st, v, e);
+    return 0;
+}
+
+int cmd_eval(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        if (argc < 2)
+            die_usage("eval: say what to evaluate: H, J, airlight or surface (see 'nbt-gen eval --help')");
+        eval_help();
+        return 0;
+    }
+    const char *what = argv[1];
+    args_t a = {{0}};
+    int c;
+    optind = 2;
+    while ((c = getopt_long_only(argc, argv, "", opts, NULL)) != -1) {
+        if (c == 'h') {
+            eval_help();
+            return 0;
+        }
+        if (c < 0 || c >= O_COUNT)
+            die_usage("see 'nbt-gen eval --help'");
+        a.arg[c] = optarg;
+    }
+    if (optind < argc)
+        die_usage("eval: unexpected argument '%s'", argv[optind]);
+    double tol = a.arg[O_TOL] ? opt_double("--tol", a.arg[O_TOL], 1e-15, 0, 0.1, 0) : 1e-8;
+    if (!strcmp(what, "H") || !strcmp(what, "J")) {
+        int isJ = what[0] == 'J';
+        static const int okH[] = {O_K, O_U, O_V, O_TOL, O_PHASE}, okJ[] = {O_K, O_N, O_T, O_THETA, O_TOL, O_PHASE};
+        only(&a, what, isJ ? okJ : okH, isJ ? 6 : 5);
+        nbt_phase *p = NULL;
+        long k = 0;
+        if (a.arg[O_PHASE] && a.arg[O_K])
+            die_usage("eval %s: --k and --phase exclude each other", what);
+        if (a.arg[O_PHASE])
+            p = get_phase(&a);
+        else if (a.arg[O_K])
+            k = opt_long("--k", a.arg[O_K], 0, 10000);
+        else
+            die_usage("eval %s: --k K (Legendre order) or --phase SPEC is required", what);
+        double *v = malloc(2 * (size_t)(k + 1) * sizeof(double));
+        if (!v)
+            die("out of memory");
+        nbt_status st;
+        if (!isJ) {
+            double u = need(&a, O_U, "--u", 0, 0, INFINITY, 1);
+            double vv = need(&a, O_V, "--v", -M_PI_2, 0, M_PI_2, 0);
+            st = p ? nbt_h_phase(p, u, vv, tol, v, v + 1) : nbt_hk((size_t)k, u, vv, tol, v, v + k + 1);
+        } else {
+            int n = (int)opt_long("--n", a.arg[O_N] ? a.arg[O_N] : "", 1, 10000);
+            double T = need(&a, O_T, "--T", 0, 0, INFINITY, 1);
+            double th = need(&a, O_THETA, "--theta", 0, 0, M_PI, 0);
+            st = p ? nbt_j_phase(p, n, T, th, tol, v, v + 1) : nbt_jk((size_t)k, n, T, th, tol, v, v + k + 1);
+        }
+        if (p)
+            print_result(st, v[0], v[1]);
+        else
+            print_result(st, v[k], v[2 * k + 1]);
+        free(v);
+        nbt_phase_free(p);
+        return 0;
+    }
+    phys_t ph;
+    memset(&ph, 0, sizeof ph);
+    if (!strcmp(what, "airlight")) {
+        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP, O_METHOD, O_TERMS, O_TOL};
+        only(&a, what, ok, sizeof ok / sizeof ok[0]);
+        ph.ag.kappa_s = need(&a, O_KS, "--kappa-s", 0, 0, INFINITY, 1);
+        ph.ag.kappa_t = need(&a, O_KT, "--kappa-t", 0, 0, INFINITY, 1);
+        ph.ag.I0 = need(&a, O_I0, "--I0", 0, 0, INFINITY, 1);
+        ph.ag.dsv = need(&a, O_DSV, "--dsv", 0, 1, INFINITY, 1);
+        ph.ag.gamma = need(&a, O_GAMMA, "--gamma", 0, 0, M_PI, 0);
+        if (a.arg[O_DVP] && !strcmp(a.arg[O_DVP], "inf"))
+            ph.ag.dvp = INFINITY;
+        else
+            ph.ag.dvp = need(&a, O_DVP, "--dvp", 0, 1, INFINITY, 1);
+        if (ph.ag.kappa_t < ph.ag.kappa_s)
+            die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.ag.kappa_t, ph.ag.kappa_s);
+        return eval_phys(&a, &ph);
+    }
+    if (!strcmp(what, "surface")) {
+        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_N, O_METHOD, O_TERMS, O_TOL};
+        only(&a, what, ok, sizeof ok / sizeof ok[0]);
+        ph.surface = 1;
+        ph.sg.kappa_s = need(&a, O_KS, "--kappa-s", 0, 0, INFINITY, 1);
+        ph.sg.kappa_t = need(&a, O_KT, "--kappa-t", 0, 0, INFINITY, 1);
+        ph.sg.I0 = need(&a, O_I0, "--I0", 0, 0, INFINITY, 1);
+        ph.sg.dsp = need(&a, O_DSP, "--dsp", 0, 1, INFINITY, 1);
+        ph.sg.theta_s = need(&a, O_THS, "--theta-s", 0, 0, M_PI, 0);
+        ph.sg.theta_r = need(&a, O_THR, "--theta-r", 0, 0, M_PI, 0);
+        ph.sg.kd = need(&a, O_KD, "--kd", 0, 0, INFINITY, 1);
+        ph.sg.ks = need(&a, O_KSPEC, "--ks", 0, 0, INFINITY, 1);
+        ph.sg.n = (int)opt_long("--n", a.arg[O_N] ? a.arg[O_N] : "", 1, 10000);
+        if (ph.sg.kappa_t < ph.sg.kappa_s)
+            die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.sg.kappa_t, ph.sg.kappa_s);
+        return eval_phys(&a, &ph);
+    }
+    die_usage("eval: '%s' is not accepted: H, J, airlight or surface", what);
+}

@@ -1,0 +1,77 @@
+/* gen/cmd_info.c: "nbt-gen info FILE [--at X,Y]": a table's metadata and
+ * interpolated values. */
+#include <config.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include "cli.h"
+#include "commands.h"
+
+int cmd_info(int argc, char **argv)
+{
+    static const struct option opts[] = {{"at", required_argument, 0, 'a'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    const char *at = NULL;
+    int c;
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+        if (c == 'a')
+            at = optarg;
+        else if (c == 'h') {
+            puts("Usage: nbt-gen info FILE.exr [--at X,Y]\n"
+                 "Prints the table's metadata; with --at, the bilinear (GPU-equivalent) values at\n"
+                 "physical coordinates X (u or T) and Y (v or theta).");
+            return 0;
+        } else
+            die_usage("see 'nbt-gen info --help'");
+    }
+    if (optind != argc - 1)
+        die_usage("info: expected exactly one table file");
+    const char *path = argv[optind];
+    double x = 0, y = 0;
+    if (at) {
+        char extra;
+        if (sscanf(at, "%lf,%lf%c", &x, &y, &extra) != 2 || !isfinite(x) || !isfinite(y))
+            die_usage("--at: '%s' is not accepted: expected X,Y (two finite numbers)", at);
+    }
+    nbt_table *t;
+    char err[512];
+    nbt_status st = nbt_table_read_exr(path, &t, err, sizeof err);
+    if (st != NBT_OK)
+        die("%s", err);
+    const char *n0 = t->kind == NBT_TABLE_H ? "u" : "T", *n1 = t->kind == NBT_TABLE_H ? "v" : "theta";
+    printf("file        %s\n", path);
+    printf("kind        %s\n", t->kind == NBT_TABLE_H ? "H" : "J");
+    if (t->kind == NBT_TABLE_J)
+        printf("n           %d\n", t->n);
+    for (int a = 0; a < 2; a++)
+        printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(t->axis[a].map),
+               t->axis[a].map == NBT_AXIS_LOG1P ? "(c)" : "", t->axis[a].lo, t->axis[a].hi, t->axis[a].n);
+    if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P)
+        printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
+    printf("storage     %s\n", t->half ? "half" : "float");
+    printf("phase       %s\n", t->phase[0] ? t->phase : "legendre");
+    static const char *CH = "RGBA";
+    for (size_t ch = 0; ch < t->nch; ch++) {
+        char what[32];
+        if (t->k[ch] < 0)
+            snprintf(what, sizeof what, "fixed phase");
+        else
+            snprintf(what, sizeof what, "k=%d", t->k[ch]);
+        printf("channel %c   %-11s max |value| %.6g  max interp err %.3e\n", CH[ch], what, t->max_abs[ch],
+               t->max_err[ch]);
+    }
+    printf("quad tol    %.3g (largest node error estimate %.3g)\n", t->quad_tol, t->quad_err);
+    if (at) {
+        double v[NBT_TABLE_MAX_CH];
+        nbt_table_lookup(t, x, y, v);
+        printf("at %s=%.17g %s=%.17g:", n0, x, n1, y);
+        for (size_t ch = 0; ch < t->nch; ch++)
+            printf(" %.9g", v[ch]);
+        printf("\n");
+        if (x < t->axis[0].lo || x > t->axis[0].hi || y < t->axis[1].lo || y > t->axis[1].hi)
+            fprintf(stderr, "nbt-gen: warning: (%g, %g) lies outside the table; values are clamped to its edge\n", x, y);
+    }
+    nbt_table_free(t);
+    return 0;
+}

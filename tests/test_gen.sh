@@ -1,0 +1,114 @@
+#!/bin/sh
+# tests/test_gen.sh: nbt-gen end to end: values against the library's closed
+# forms, methods against each other, bad input (exit 2, one message naming
+# the option, no output left), table files readable and complete.
+NBT_GEN=${NBT_GEN:-./nbt-gen}
+case $NBT_GEN in /*) ;; *) NBT_GEN=$(pwd)/$NBT_GEN ;; esac
+pass=0; fail=0
+ok()   { pass=$((pass + 1)); }
+bad()  { fail=$((fail + 1)); echo "FAIL: $*"; }
+tmp=$(mktemp -d /tmp/nbt-test-gen.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+
+# expect_usage DESCRIPTION PATTERN CMD...: exit 2, one line on stderr matching PATTERN
+expect_usage() {
+  d=$1; pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
+  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
+}
+# close A B RELTOL DESCRIPTION
+close() {
+  if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
+  then ok; else bad "$4: $1 vs $2 (rel tol $3)"; fi
+}
+
+"$NBT_GEN" --version | grep -q "nbt-gen (nbt)" && ok || bad "--version"
+"$NBT_GEN" --help | grep -q "Usage" && ok || bad "--help"
+
+# eval H: closed form H_0(0, v) = v + pi/2
+set -- $("$NBT_GEN" eval H --k 0 --u 0 --v 0.3)
+close "$1" 1.8707963267948966 1e-14 "eval H_0(0, 0.3)"
+[ "$(echo "$1" | tr -d '.-' | sed 's/e.*//' | wc -c)" -ge 17 ] && ok || bad "17 significant digits: $1"
+# eval J: closed form J_0^1(0, 0) = pi^2 + 2 pi
+set -- $("$NBT_GEN" eval J --k 0 --n 1 --T 0 --theta 0)
+close "$1" 16.152789708268945 1e-12 "eval J_0^1(0, 0)"
+
+# airlight: direct vs series vs table
+A="--g 0.7 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.4 --dvp 20"
+d=$("$NBT_GEN" eval airlight $A --method direct | cut -d' ' -f1)
+s=$("$NBT_GEN" eval airlight $A --method series 2>/dev/null | cut -d' ' -f1)
+set -- $("$NBT_GEN" eval airlight $A --method table 2>/dev/null)
+close "$s" "$d" 1e-7 "airlight series vs direct"
+t=$1; terr=$2
+awk -v a="$t" -v b="$d" -v e="$terr" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e && e < 0.2 * b) }' && ok ||
+  bad "airlight table $t within its reported error $terr of direct $d"
+"$NBT_GEN" eval airlight $A --dvp inf >/dev/null && ok || bad "--dvp inf accepted"
+# surface: direct vs series
+S="--g 0.5 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks 0.3 --n 20"
+d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
+s=$("$NBT_GEN" eval surface $S --method series 2>/dev/null | cut -d' ' -f1)
+close "$s" "$d" 1e-6 "surface series vs direct"
+set -- $("$NBT_GEN" eval surface $S --method table 2>/dev/null)
+awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e) }' && ok ||
+  bad "surface table $1 within its reported error $2 of direct $d"
+
+# bad input: exit 2, one clear line
+expect_usage "negative u" "--u" "$NBT_GEN" eval H --k 0 --u -1 --v 0
+expect_usage "v beyond pi/2" "--v" "$NBT_GEN" eval H --k 0 --u 1 --v 2
+expect_usage "NaN" "--u" "$NBT_GEN" eval H --k 0 --u nan --v 0
+expect_usage "g = 1" "--g" "$NBT_GEN" eval airlight --g 1 --kappa-s 0.1 --kappa-t 0.1 --I0 1 --dsv 1 --gamma 1 --dvp 1
+expect_usage "kappa_s > kappa_t" "--kappa-t" "$NBT_GEN" eval airlight --g 0 --kappa-s 0.2 --kappa-t 0.1 --I0 1 --dsv 1 --gamma 1 --dvp 1
+expect_usage "ray through source" "through the source" "$NBT_GEN" eval airlight --g 0 --kappa-s 0.1 --kappa-t 0.1 --I0 1 --dsv 1 --gamma 0 --dvp 2
+expect_usage "unknown method" "--method" "$NBT_GEN" eval airlight $A --method magic
+expect_usage "missing option" "--dsv" "$NBT_GEN" eval airlight --g 0 --kappa-s 0.1 --kappa-t 0.1 --I0 1 --gamma 1 --dvp 1
+expect_usage "foreign option" "--theta" "$NBT_GEN" eval H --k 0 --u 1 --v 0 --theta 1
+expect_usage "unknown command" "frobnicate" "$NBT_GEN" frobnicate
+expect_usage "bad phase" "mie" "$NBT_GEN" eval H --phase mie --u 1 --v 0
+expect_usage "tol out of range" "--tol" "$NBT_GEN" airlight -o "$tmp/x.exr" --tol 2
+expect_usage "size and tol" "exclude" "$NBT_GEN" airlight -o "$tmp/x.exr" --tol 0.01 --size 9x9
+expect_usage "bad size" "--size" "$NBT_GEN" airlight -o "$tmp/x.exr" --size 1x9
+expect_usage "not .exr" "\.exr" "$NBT_GEN" airlight -o "$tmp/x.png"
+expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
+[ -z "$(ls "$tmp" | grep -v '^out$\|^err$')" ] && ok || bad "no output files left by rejected commands: $(ls "$tmp")"
+
+# tables: write, read back, info
+"$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >/dev/null 2>&1 && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+"$NBT_GEN" info "$tmp/h.exr" >"$tmp/info" && grep -q "kind        H" "$tmp/info" && grep -q "33 nodes" "$tmp/info" &&
+  grep -q "17 nodes" "$tmp/info" && grep -q "max interp err" "$tmp/info" && ok || bad "info on an H table"
+# info --at a node on the u = 0 column returns H_0(0, -pi/2 + ...) ; at v = pi/2, u = 0: H_0 = pi
+set -- $("$NBT_GEN" info "$tmp/h.exr" --at 0,1.5707963267948966 | grep '^at' | cut -d: -f2)
+close "$1" 3.141592653589793 1e-6 "table H_0(0, pi/2) = pi (float)"
+"$NBT_GEN" surface -o "$tmp/j.exr" --kmax 5 --n 20 --size 17x17 >/dev/null 2>&1 &&
+  [ -s "$tmp/j_k0-3.exr" ] && [ -s "$tmp/j_k4-5.exr" ] && ok || bad "surface --kmax 5 writes two packs"
+"$NBT_GEN" info "$tmp/j_k4-5.exr" | grep -q "channel G   k=5" && ok || bad "second pack holds k = 5"
+"$NBT_GEN" airlight -o "$tmp/p.exr" --phase hg:g=0.8 --size 17x17 --half >/dev/null 2>&1 &&
+  "$NBT_GEN" info "$tmp/p.exr" | grep -q "hg:g=0.8" && ok || bad "fixed-phase half table"
+head -c 300 "$tmp/h.exr" >"$tmp/trunc.exr"
+"$NBT_GEN" info "$tmp/trunc.exr" >/dev/null 2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && [ -s "$tmp/err" ] && ok || bad "truncated EXR: rc=$rc"
+"$NBT_GEN" airlight -o /nonexistent/dir/h.exr --size 9x9 >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
+
+# scene files
+srcdir=${top_srcdir:-.}
+"$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>/dev/null &&
+  [ -s "$tmp/scene/H_k0-3.exr" ] && [ -s "$tmp/scene/J1_k0-3.exr" ] && [ -s "$tmp/scene/J20_k0-3.exr" ] &&
+  grep -q "Legendre terms" "$tmp/out" && ok || bad "example scene: $(cat "$tmp/out")"
+printf 'kappa_t = 0.1\ndistance = 10\nphase = hg:g=0.8\nfog = thick\n' >"$tmp/bad.scene"
+expect_usage "unknown scene key" "unknown key 'fog'" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+printf 'kappa_t = -0.1\ndistance = 10\nphase = iso\n' >"$tmp/bad.scene"
+expect_usage "negative kappa_t" "kappa_t" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+printf 'kappa_t = 0.1\ndistance = 10\n' >"$tmp/bad.scene"
+expect_usage "no phase" "exactly one of g" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+[ ! -e "$tmp/scene2" ] && ok || bad "rejected scene left output"
+printf 'kappa_t = 0.1\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/fixed.scene"
+"$NBT_GEN" scene "$tmp/fixed.scene" -o "$tmp/scene3" >/dev/null 2>&1 && [ -s "$tmp/scene3/H_hg_g_0.8.exr" ] &&
+  [ ! -e "$tmp/scene3/J1.exr" ] && ok || bad "fixed-phase scene builds only H: $(ls "$tmp/scene3" 2>&1)"
+
+# the default scene
+(cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
+  [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
+  bad "default scene: $(cat "$tmp/err")"
+
+echo "$pass passed, $fail failed"
+[ $fail -eq 0 ]

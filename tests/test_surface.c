@@ -1,0 +1,156 @@
+/* tests/test_surface.c: J_k^n against mpmath references and closed forms,
+ * the azimuthal kernel, surface radiance series vs the direct integral,
+ * J tables against pointwise J within their recorded error. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+typedef struct {
+    int n;
+    double a, b;
+} lobe;
+static int lobe_f(double phi, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    const lobe *l = vp;
+    double v = l->a + l->b * cos(phi);
+    f[0] = v > 0 ? pow(v, l->n) : 0;
+    return 0;
+}
+typedef struct {
+    int n;
+    double theta;
+} kint;
+static int ksin_f(double g, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    const kint *c = vp;
+    f[0] = nbt_surface_kernel(c->n, c->theta, g) * sin(g);
+    return 0;
+}
+
+int main(void)
+{
+    double J[16], E[16];
+    /* ---- mpmath references ---- */
+    const char *refdir = getenv("NBT_REF") ? getenv("NBT_REF") : "tests/ref";
+    char path[1024], line[256];
+    snprintf(path, sizeof path, "%s/jk.txt", refdir);
+    FILE *f = fopen(path, "r");
+    t_true(f != NULL, "reference file %s opens", path);
+    int nref = 0, honest = 1;
+    while (f && fgets(line, sizeof line, f)) {
+        int k, n;
+        double T, th, ref;
+        if (line[0] == '#' || sscanf(line, "%d %d %lf %lf %lf", &k, &n, &T, &th, &ref) != 5)
+            continue;
+        nbt_status st = nbt_jk((size_t)k, n, T, th, 1e-10, J, E);
+        double d = fabs(J[k] - ref);
+        t_true(st == NBT_OK && d <= 1e-9 * fabs(ref), "J_%d^%d(%g, %g) vs mpmath: rel diff %.2e", k, n, T, th, d / fabs(ref));
+        honest &= d <= E[k];
+        nref++;
+    }
+    if (f)
+        fclose(f);
+    t_true(nref >= 40, "read %d J references", nref);
+    t_true(honest, "every J error estimate bounds its true error");
+    /* closed form: J_0^1(0, 0) = 2 pi int_0^{pi/2} (pi - g) cos g dg = pi^2 + 2 pi */
+    nbt_jk(0, 1, 0, 0, 1e-12, J, E);
+    t_rel(J[0], M_PI * M_PI + 2 * M_PI, 1e-12, "J_0^1(0, 0) = pi^2 + 2 pi");
+
+    /* ---- kernel ---- */
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 500);
+    int nk[] = {1, 2, 7, 20, 200};
+    for (int i = 0; i < 5; i++) {
+        int n = nk[i];
+        double worst = 0;
+        for (int j = 0; j < 40; j++) {
+            double th = M_PI * t_uniform(), g = M_PI * t_uniform(), r, e;
+            lobe l = {n, cos(th) * cos(g), sin(th) * sin(g)};
+            double ph0 = (l.b > 0 && fabs(l.a) < l.b) ? acos(-l.a / l.b) : M_PI;
+            nbt_quad_gk_pts(ws, lobe_f, &l, 1, 0, M_PI, &ph0, ph0 < M_PI, 1e-300, 1e-13, &r, &e);
+            double K = nbt_surface_kernel(n, th, g);
+            worst = fmax(worst, fabs(K - 2 * r) / fmax(2 * r, 1e-300 + (r == 0)));
+        }
+        t_abs(worst, 0, 1e-11, "K_%d matches pointwise azimuthal quadrature at 40 random (theta, g)", n);
+        t_rel(nbt_surface_kernel(n, 0, 0.7), 2 * M_PI * pow(cos(0.7), n), 1e-13, "K_%d(0, g) = 2 pi cos^n g", n);
+        /* int K sin g dg = int over the sphere of cos^n_+ = 2 pi/(n+1), whatever theta */
+        for (double th = 0.1; th < M_PI; th += 0.9) {
+            kint c = {n, th};
+            double r, e;
+            double pts[4] = {fabs(M_PI_2 - th), th + M_PI_2 < M_PI ? th + M_PI_2 : M_PI - 1e-9};
+            nbt_quad_gk_pts(ws, ksin_f, &c, 1, 0, M_PI, pts, pts[0] < pts[1] ? 2 : 1, 0, 1e-12, &r, &e);
+            t_rel(r, 2 * M_PI / (n + 1), 1e-9, "int K_%d(%g, g) sin g dg = 2 pi/(n+1)", n, th);
+        }
+    }
+    nbt_quad_ws_free(ws);
+
+    /* ---- surface radiance: series vs direct ---- */
+    nbt_phase *hg = nbt_phase_hg(0.6);
+    double b[200];
+    nbt_phase_moments(hg, 199, b);
+    int agree = 0;
+    double worst = 0;
+    for (int i = 0; i < 12; i++) {
+        nbt_surface_geom g = {0, 0, 2.385, 0, 0, 0, 0.7, 0.3, i % 2 ? 20 : 5};
+        g.kappa_t = 0.01 * pow(300.0, t_uniform());
+        g.kappa_s = g.kappa_t * 0.9;
+        g.dsp = 0.3 * pow(30.0, t_uniform());
+        g.theta_s = M_PI * t_uniform();
+        g.theta_r = M_PI * t_uniform();
+        double Ld, Ed, Ls, Es;
+        nbt_status s1 = nbt_surface_direct(hg, &g, 1e-8, &Ld, &Ed);
+        nbt_status s2 = nbt_surface_series(b, 120, &g, 1e-9, &Ls, &Es);
+        double rel = fabs(Ls - Ld) / Ld;
+        worst = fmax(worst, rel);
+        int ok = s1 == NBT_OK && s2 == NBT_OK && rel <= 1e-6;
+        if (!ok)
+            printf("kt=%g dsp=%g ts=%g tr=%g n=%d: direct %.12g series %.12g (%d %d)\n", g.kappa_t, g.dsp, g.theta_s,
+                   g.theta_r, g.n, Ld, Ls, s1, s2);
+        agree += ok;
+    }
+    t_true(agree == 12, "surface series = direct within 1e-6 on %d/12 random geometries (worst %.2e)", agree, worst);
+
+    /* ---- edges ---- */
+    nbt_status st = nbt_jk(3, 1, 1e3, 0.3, 1e-10, J, E);
+    t_true(st == NBT_OK && isfinite(J[0]) && J[0] >= 0 && J[0] < 1e-300, "T = 1000: finite, tiny, >= 0 (%.3g)", J[0]);
+    st = nbt_jk(3, 1000, 2.385, M_PI, 1e-10, J, E);
+    t_true(st == NBT_OK && isfinite(J[0]) && J[0] >= 0, "n = 1000, theta = pi: finite (%.3g)", J[0]);
+    t_true(nbt_jk(0, 0, 1, 1, 1e-10, J, E) == NBT_EDOM, "n = 0 rejected");
+    t_true(nbt_jk(0, 1, -1, 1, 1e-10, J, E) == NBT_EDOM, "T < 0 rejected");
+    t_true(nbt_jk(0, 1, 1, 3.2, 1e-10, J, E) == NBT_EDOM, "theta > pi rejected");
+
+    /* ---- J table: pointwise truth within the recorded error ---- */
+    int ns[2] = {1, 20};
+    for (int i = 0; i < 2; i++) {
+        nbt_axis a0 = {0, 10, NBT_AXIS_SQRT, 0, 65}, a1 = {0, M_PI, NBT_AXIS_COS, 0, 65};
+        nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &a0, &a1, 4);
+        for (int c = 0; c < 4; c++)
+            t->k[c] = c;
+        t->n = ns[i];
+        nbt_build_opts o = {1e-10, 1, 0};
+        t_true(nbt_j_table_build(t, NULL, &o) == NBT_OK, "J^%d table builds", ns[i]);
+        int in = 0;
+        double ratio = 0;
+        for (int j = 0; j < 60; j++) {
+            double T = 10 * t_uniform(), th = M_PI * t_uniform(), v[4];
+            nbt_table_lookup(t, T, th, v);
+            nbt_jk(3, ns[i], T, th, 1e-10, J, E);
+            int ok = 1;
+            for (int c = 0; c < 4; c++) {
+                ratio = fmax(ratio, fabs(v[c] - J[c]) / t->max_err[c]);
+                ok &= fabs(v[c] - J[c]) <= 1.25 * t->max_err[c];
+            }
+            in += ok;
+        }
+        t_true(in == 60, "J^%d table: %d/60 random points within 1.25x the recorded error (worst ratio %.2f)", ns[i], in, ratio);
+        /* nodes carry the exact values (to float) */
+        nbt_jk(3, ns[i], nbt_axis_node(&a0, 7), nbt_axis_node(&a1, 50), 1e-11, J, E);
+        t_rel(t->data[(50 * 65 + 7) * 4], J[0], 1e-7, "J^%d table node (7, 50) = J to float precision", ns[i]);
+        nbt_table_free(t);
+    }
+    nbt_phase_free(hg);
+    return t_done();
+}

@@ -1,0 +1,165 @@
+/* tests/test_table.c: axis maps, GPU-equivalent bilinear lookup, half
+ * rounding, EXR round trips and bad files, recorded H interpolation error. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+/* What a GPU does: texcoord tc = (s(N-1) + 0.5)/N, texel space p = tc N - 0.5, clamp. */
+static double hand_bilinear(const nbt_table *t, double x0, double x1, size_t c)
+{
+    size_t i[2];
+    double f[2];
+    for (int a = 0; a < 2; a++) {
+        double s = nbt_axis_to_unit(&t->axis[a], a ? x1 : x0), N = (double)t->axis[a].n;
+        double tc = (s * (N - 1) + 0.5) / N, p = tc * N - 0.5;
+        double fl = floor(p);
+        if (fl > N - 2)
+            fl = N - 2;
+        i[a] = (size_t)fl;
+        f[a] = p - fl;
+    }
+    size_t nx = t->axis[0].n, nc = t->nch;
+#define V(a, b) ((double)t->data[((i[1] + (b)) * nx + i[0] + (a)) * nc + c])
+    return (1 - f[1]) * ((1 - f[0]) * V(0, 0) + f[0] * V(1, 0)) + f[1] * ((1 - f[0]) * V(0, 1) + f[0] * V(1, 1));
+#undef V
+}
+
+static int same_tables(const nbt_table *a, const nbt_table *b)
+{
+    if (a->kind != b->kind || a->nch != b->nch || a->n != b->n || a->half != b->half || strcmp(a->phase, b->phase))
+        return 0;
+    for (int i = 0; i < 2; i++)
+        if (a->axis[i].n != b->axis[i].n || a->axis[i].lo != b->axis[i].lo || a->axis[i].hi != b->axis[i].hi ||
+            a->axis[i].map != b->axis[i].map || a->axis[i].c != b->axis[i].c)
+            return 0;
+    for (size_t c = 0; c < a->nch; c++)
+        if (a->k[c] != b->k[c] || a->max_err[c] != b->max_err[c] || a->max_abs[c] != b->max_abs[c])
+            return 0;
+    return !memcmp(a->data, b->data, a->axis[0].n * a->axis[1].n * a->nch * sizeof(float)) &&
+           a->quad_tol == b->quad_tol && a->quad_err == b->quad_err;
+}
+
+int main(void)
+{
+    /* ---- axis maps ---- */
+    nbt_axis maps[5] = {{-1.5, 2.385, NBT_AXIS_LINEAR, 0, 9}, {0, 10, NBT_AXIS_SQRT, 0, 9},
+                        {0, 10, NBT_AXIS_LOG1P, 100, 9},     {0, 3, NBT_AXIS_LOG1P, -0.99, 9},
+                        {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 9}};
+    for (int m = 0; m < 5; m++) {
+        double worst = 0;
+        for (double s = 0; s <= 1.0; s += 1.0 / 64)
+            worst = fmax(worst, fabs(nbt_axis_to_unit(&maps[m], nbt_axis_from_unit(&maps[m], s)) - s));
+        t_abs(worst, 0, 1e-13, "%s(c=%g): to_unit(from_unit(s)) = s", nbt_axis_map_name(maps[m].map), maps[m].c);
+        t_true(nbt_axis_node(&maps[m], 0) == maps[m].lo && nbt_axis_node(&maps[m], 8) == maps[m].hi,
+               "%s: first and last nodes are exactly the range ends", nbt_axis_map_name(maps[m].map));
+        t_true(nbt_axis_to_unit(&maps[m], maps[m].lo - 5) == 0 && nbt_axis_to_unit(&maps[m], maps[m].hi + 5) == 1,
+               "%s: clamped outside the range", nbt_axis_map_name(maps[m].map));
+    }
+    nbt_axis_map mm;
+    t_true(nbt_axis_map_parse("cubic", &mm) == NBT_EFORMAT, "unknown mapping name rejected");
+
+    /* ---- lookup = hand bilinear, on a table of arbitrary values ---- */
+    nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &maps[2], &maps[3], 3);
+    for (size_t i = 0; i < 9 * 9 * 3; i++)
+        t->data[i] = (float)(t_uniform() * 4 - 2);
+    double worst = 0;
+    for (int j = 0; j < 500; j++) {
+        double x0 = -1 + 12 * t_uniform(), x1 = -0.5 + 4 * t_uniform(), v[4];
+        nbt_table_lookup(t, x0, x1, v);
+        for (size_t c = 0; c < 3; c++)
+            worst = fmax(worst, fabs(v[c] - hand_bilinear(t, x0, x1, c)));
+    }
+    t_abs(worst, 0, 1e-14, "lookup equals the GPU-style bilinear at 500 points (in and out of range)");
+    double v[4];
+    nbt_table_lookup(t, nbt_axis_node(&maps[2], 3), nbt_axis_node(&maps[3], 5), v);
+    t_abs(v[1], t->data[(5 * 9 + 3) * 3 + 1], 1e-6, "lookup at a node returns the node value");
+
+    /* ---- EXR round trips ---- */
+    t->k[0] = 0;
+    t->k[1] = 1;
+    t->k[2] = 2;
+    t->n = 20;
+    t->quad_tol = 1e-10;
+    t->quad_err = 3.5e-12;
+    for (int c = 0; c < 3; c++) {
+        t->max_err[c] = 1e-4 * (c + 1);
+        t->max_abs[c] = 2;
+    }
+    char path[] = "/tmp/nbt-test-tableXXXXXX";
+    int fd = mkstemp(path);
+    close(fd);
+    char err[512];
+    nbt_table *r = NULL;
+    for (int comp = 0; comp < 2; comp++) {
+        t_true(nbt_table_write_exr(t, path, comp ? NBT_EXR_NONE : NBT_EXR_ZIP) == NBT_OK, "write EXR (%s)", comp ? "none" : "zip");
+        t_true(nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK, "read it back");
+        t_true(r && same_tables(t, r), "float round trip is bit-exact, metadata included (%s)", comp ? "none" : "zip");
+        nbt_table_free(r);
+    }
+    nbt_table_round_half(t);
+    int halfok = 1;
+    for (size_t i = 0; i < 9 * 9 * 3; i++)
+        halfok &= fabsf(t->data[i]) < 1.0f / 1024 || fabsf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])) -
+                                                           nearbyintf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])))) == 0;
+    t_true(halfok, "half rounding leaves 11 significant bits");
+    t_true(nbt_table_write_exr(t, path, NBT_EXR_ZIP) == NBT_OK && nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK &&
+               same_tables(t, r), "half round trip is bit-exact");
+    nbt_table_free(r);
+    /* a single-channel fixed-phase table keeps its phase */
+    nbt_table *p1 = nbt_table_alloc(NBT_TABLE_H, &maps[1], &maps[4], 1);
+    p1->k[0] = -1;
+    snprintf(p1->phase, sizeof p1->phase, "hg:g=0.8");
+    t_true(nbt_table_write_exr(p1, path, NBT_EXR_ZIP) == NBT_OK && nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK &&
+               same_tables(p1, r), "fixed-phase single-channel round trip");
+    nbt_table_free(r);
+    nbt_table_free(p1);
+    /* bad files */
+    FILE *f = fopen(path, "w");
+    fputs("not an EXR file\n", f);
+    fclose(f);
+    t_true(nbt_table_read_exr(path, &r, err, sizeof err) == NBT_EFORMAT && r == NULL && err[0], "non-EXR: %s", err);
+    nbt_table_write_exr(t, path, NBT_EXR_ZIP);
+    f = fopen(path, "r+");
+    fseek(f, 0, SEEK_END);
+    long sz = ftell(f);
+    fclose(f);
+    t_true(truncate(path, sz / 2) == 0, "truncate");
+    t_true(nbt_table_read_exr(path, &r, err, sizeof err) != NBT_OK && r == NULL, "truncated EXR rejected: %s", err);
+    unlink(path);
+    t_true(nbt_table_read_exr("/nonexistent/t.exr", &r, err, sizeof err) == NBT_EIO, "missing file: %s", err);
+    t_true(nbt_table_write_exr(t, "/nonexistent/dir/t.exr", NBT_EXR_ZIP) == NBT_EIO &&
+               access("/nonexistent/dir/t.exr", F_OK) != 0, "unwritable path: NBT_EIO, nothing left");
+    nbt_table_free(t);
+    t_true(nbt_table_alloc(NBT_TABLE_H, &(nbt_axis){0, 0, NBT_AXIS_LINEAR, 0, 9}, &maps[4], 1) == NULL,
+           "empty axis range rejected");
+    t_true(nbt_table_alloc(NBT_TABLE_H, &maps[1], &maps[4], 5) == NULL, "more than 4 channels rejected");
+
+    /* ---- recorded interpolation error of an H table is honest ---- */
+    nbt_axis a0 = {0, 10, NBT_AXIS_LOG1P, 100, 65}, a1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 65};
+    nbt_table *h = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 4);
+    for (int c = 0; c < 4; c++)
+        h->k[c] = c;
+    nbt_build_opts o = {1e-10, 1, 2};
+    t_true(nbt_h_table_build(h, NULL, &o) == NBT_OK, "H table builds");
+    double ratio = 0, Hk[4], E[4];
+    for (int j = 0; j < 400; j++) {
+        double u = j < 200 ? 10 * t_uniform() : 0.05 * t_uniform(), vv = -M_PI_2 + M_PI * t_uniform();
+        nbt_table_lookup(h, u, vv, v);
+        nbt_hk(3, u, vv, 1e-12, Hk, E);
+        for (int c = 0; c < 4; c++)
+            ratio = fmax(ratio, fabs(v[c] - Hk[c]) / h->max_err[c]);
+    }
+    t_true(ratio <= 1.25, "H table: 400 random points within 1.25x the recorded error (worst ratio %.2f)", ratio);
+    /* same table with 1 and 2 threads: identical */
+    nbt_table *h1 = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 4);
+    memcpy(h1->k, h->k, sizeof h->k);
+    o.nthreads = 1;
+    nbt_h_table_build(h1, NULL, &o);
+    t_true(same_tables(h, h1), "H table identical with 1 and 2 threads");
+    nbt_table_free(h);
+    nbt_table_free(h1);
+    return t_done();
+}
