@@ -1,0 +1,42 @@
+#!/bin/sh
+# quickstart.sh        install what is missing (Debian 12), build, run nbt-gen's default scene
+# quickstart.sh check  the same set-up (warnings are errors), then the whole test suite
+set -eu
+cd "$(dirname "$0")"
+mode=${1:-run}
+case $mode in run|check) ;; *) echo "usage: ./quickstart.sh [check]" >&2; exit 2 ;; esac
+
+PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libopenexr-dev openexr libpng-dev"
+missing=""
+for p in $PKGS; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+if [ -n "$missing" ]; then
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "quickstart: missing Debian packages:$missing -- run as root, or: sudo apt-get install$missing" >&2
+    exit 1
+  fi
+  echo "quickstart: installing$missing"
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing >/dev/null
+fi
+
+jobs=$(nproc 2>/dev/null || echo 2)
+[ -x configure ] || autoreconf -fi
+flags=""
+[ "$mode" = check ] && flags="--enable-werror"
+./configure -q $flags ${NBT_CONFIGURE_FLAGS:-}
+make -j"$jobs"
+
+if [ "$mode" = run ]; then
+  ./nbt-gen
+  echo "quickstart: tables and previews are in ./nbt-tables/"
+  exit 0
+fi
+
+status=0
+make -j"$jobs" check || status=$?
+# one plain line over all test programs (each prints "N passed, M failed")
+cat tests/*.log 2>/dev/null | awk '/^[0-9]+ passed, [0-9]+ failed$/ { p += $1; f += $3 }
+  END { printf "%d passed, %d failed\n", p, f }'
+exit $status
