@@ -110,47 +110,6 @@ static void parse_scene(const char *path, scene_t *s)
         die_usage("%s: the scene needs no tables (airlight = no, diffuse = no, no phong)", path);
 }
 
-/* Smallest N such that the airlight series truncated to N terms differs from
- * the converged one by at most tol relative, for HG with |g| <= gmax, over
- * sample rays (u up to umax, gamma from 0.05 to 2.5 rad, unobstructed). */
-static size_t choose_terms(double gmax, double umax, double tol, double *achieved)
-{
-    /* orders beyond K: (2k+1) g^k below 1e-3 tol, negligible for the tail */
-    size_t K = 8;
-    while (K < 512 && (2.0 * K + 1.0) * pow(gmax, (double)K) > 1e-3 * tol)
-        K *= 2;
-    static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
-    double *h1 = malloc(2 * (K + 1) * sizeof(double)), *h0 = malloc(2 * (K + 1) * sizeof(double));
-    double *worst = calloc(K + 2, sizeof(double));
-    if (!h1 || !h0 || !worst)
-        die("out of memory");
-    for (int iu = 0; iu < 6; iu++) {
-        double u = umax * pow(10.0, -iu * 0.6);
-        for (size_t ig = 0; ig < sizeof gam / sizeof gam[0]; ig++) {
-            if (nbt_hk(K, u, M_PI_2, 1e-10, h1, h1 + K + 1) != NBT_OK ||
-                nbt_hk(K, u, gam[ig] - M_PI_2, 1e-10, h0, h0 + K + 1) != NBT_OK)
-                die("H_k evaluation failed");
-            double total = 0, tail = 0, gk = 1;
-            for (size_t k = 0; k <= K; k++, gk *= gmax)
-                total += (2.0 * k + 1.0) * gk * (h1[k] - h0[k]);
-            /* tail after N terms, from the top down */
-            gk = pow(gmax, (double)K);
-            for (size_t k = K + 1; k-- > 0; gk = gmax != 0 ? gk / gmax : (k == 1 ? 1 : 0)) {
-                tail += (2.0 * k + 1.0) * gk * (h1[k] - h0[k]);
-                worst[k] = fmax(worst[k], fabs(tail / total));
-            }
-        }
-    }
-    size_t N = 1;
-    while (N <= K && worst[N] > tol)
-        N++;
-    *achieved = N <= K ? worst[N] : worst[K];
-    free(h1);
-    free(h0);
-    free(worst);
-    return N;
-}
-
 int cmd_scene(int argc, char **argv)
 {
     static const struct option opts[] = {{"output", required_argument, 0, 'o'},
@@ -188,16 +147,10 @@ int cmd_scene(int argc, char **argv)
     if (xmax > 1e6)
         die_usage("%s: kappa_t * distance = %g exceeds 1e6 (the medium is opaque long before)", argv[optind], xmax);
     size_t nterms = 1;
-    double trunc = 0;
-    if (!ph) {
-        double gmax = fmax(fabs(s.g_lo), fabs(s.g_hi));
-        nterms = choose_terms(gmax, xmax, 0.5 * s.tol, &trunc);
-        if (nterms > 512)
-            die("%s: |g| up to %g needs more than 512 Legendre terms at tol %g: use a fixed phase "
-                "(phase = hg:g=...) or a larger tol", argv[optind], gmax, s.tol);
-        printf("# Legendre terms: %zu (airlight truncation error <= %.2e relative for |g| <= %g)\n", nterms, trunc,
-               gmax);
-    }
+    double ttol = s.tol;
+    if (!ph && legendre_budget(fmax(fabs(s.g_lo), fabs(s.g_hi)), xmax, s.tol, &nterms, &ttol) != 0)
+        die("%s: |g| up to %g needs more than 512 Legendre terms at tol %g: use a fixed phase "
+            "(phase = hg:g=...) or a larger tol", argv[optind], fmax(fabs(s.g_lo), fabs(s.g_hi)), s.tol);
     if (mkdir(dir, 0777) != 0) {
         struct stat sb;
         if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
@@ -205,18 +158,6 @@ int cmd_scene(int argc, char **argv)
     }
     tableset_spec specs[18];
     size_t ns = 0;
-    /* Interpolation gets the other half of tol. In the series each order's
-     * error is weighted by (2k+1)|g|^k, so each table must be that much
-     * better than tol/2 (relative to H_0/J_0). */
-    double amp = 1;
-    if (!ph) {
-        double gmax = fmax(fabs(s.g_lo), fabs(s.g_hi));
-        amp = 0;
-        for (size_t k = 0; k < nterms; k++)
-            amp += (2.0 * k + 1.0) * pow(gmax, (double)k);
-    }
-    double ttol = ph ? s.tol : 0.5 * s.tol / amp;
-    printf("# per-table interpolation target: %.2e relative to H_0/J_0 (error amplification %.3g)\n", ttol, amp);
     tableset_spec base = {NBT_TABLE_H, 0, nterms, ph, xmax, ttol, {0, 0}, s.half, threads};
     if (s.airlight)
         specs[ns++] = base;

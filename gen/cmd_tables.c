@@ -75,9 +75,17 @@ static nbt_table *new_pack(const tableset_spec *s, size_t pack, const nbt_axis *
     return t;
 }
 
+/* Quadrature tolerance of the tables written, and of the candidates tried
+ * while searching mapping and size (only their interpolation error matters). */
+#define QUAD_TOL 1e-10
+static double search_quad_tol(const tableset_spec *s)
+{
+    return s->tol > 0 ? fmin(1e-7, 0.01 * s->tol) : 1e-7;
+}
+
 /* Build packs [first, first + count) in one pass (every order integrated once). */
 static nbt_status build_packs(const tableset_spec *s, size_t first, size_t count, const nbt_axis *a0,
-                              const nbt_axis *a1, nbt_table **out)
+                              const nbt_axis *a1, double qtol, nbt_table **out)
 {
     for (size_t i = 0; i < count; i++)
         if (!(out[i] = new_pack(s, first + i, a0, a1))) {
@@ -85,7 +93,7 @@ static nbt_status build_packs(const tableset_spec *s, size_t first, size_t count
                 nbt_table_free(out[j]);
             return NBT_ENOMEM;
         }
-    nbt_build_opts o = {1e-10, 1, s->threads};
+    nbt_build_opts o = {qtol, 1, s->threads};
     nbt_status st = s->kind == NBT_TABLE_H ? nbt_h_table_build_set(out, count, s->phase, &o)
                                            : nbt_j_table_build_set(out, count, s->phase, &o);
     if (st != NBT_OK)
@@ -96,10 +104,11 @@ static nbt_status build_packs(const tableset_spec *s, size_t first, size_t count
     return st;
 }
 
+/* A search candidate: the first pack only, at the search tolerance. */
 static nbt_table *build_one(const tableset_spec *s, nbt_axis a0, nbt_axis a1, nbt_status *st)
 {
     nbt_table *t = NULL;
-    *st = build_packs(s, 0, 1, &a0, &a1, &t);
+    *st = build_packs(s, 0, 1, &a0, &a1, search_quad_tol(s), &t);
     return t;
 }
 
@@ -119,6 +128,68 @@ static nbt_axis make_axis(const tableset_spec *s, int which, nbt_axis_map m, dou
     return a;
 }
 
+/* Axis-0 mapping candidates, ordered by how strongly they cluster nodes at
+ * 0 (where H and J have a log singularity in u and T): sqrt, then log1p with
+ * c = 10 .. 1e6. Axis 1: cos or linear. */
+#define NMAP0 7
+static void map0(int i, nbt_axis_map *m, double *c)
+{
+    *m = i == 0 ? NBT_AXIS_SQRT : NBT_AXIS_LOG1P;
+    *c = i == 0 ? 0 : pow(10.0, i);
+}
+
+/* Best mapping at N0 x N1 nodes: try (i0 +- 1, j0) and (i0, other j), keep
+ * the best; repeat from the new best until nothing improves. *cur holds the
+ * best table so far (or NULL) and is replaced. */
+static nbt_status best_mapping(const tableset_spec *s, size_t N0, size_t N1, int *i0, int *j0, nbt_table **cur)
+{
+    nbt_status st = NBT_OK;
+    double best = *cur ? rel_error(*cur, table_scale(*cur)) : INFINITY;
+    char tried[NMAP0][2] = {{0}};
+    for (int moved = 1; moved && st == NBT_OK;) {
+        moved = 0;
+        int cand[4][2] = {{*i0, *j0}, {*i0 - 1, *j0}, {*i0 + 1, *j0}, {*i0, 1 - *j0}};
+        int bi = *i0, bj = *j0;
+        for (int q = 0; q < 4 && st == NBT_OK; q++) {
+            int i = cand[q][0], j = cand[q][1];
+            if (i < 0 || i >= NMAP0 || tried[i][j])
+                continue;
+            tried[i][j] = 1;
+            nbt_axis_map m;
+            double c;
+            map0(i, &m, &c);
+            nbt_table *t = build_one(s, make_axis(s, 0, m, c, N0), make_axis(s, 1, j ? NBT_AXIS_LINEAR : NBT_AXIS_COS, 0, N1), &st);
+            if (t && rel_error(t, table_scale(t)) < best) {
+                best = rel_error(t, table_scale(t));
+                nbt_table_free(*cur);
+                *cur = t;
+                bi = i;
+                bj = j;
+            } else
+                nbt_table_free(t);
+        }
+        if (bi != *i0 || bj != *j0) {
+            *i0 = bi;
+            *j0 = bj;
+            moved = 1;
+        }
+    }
+    return st;
+}
+
+/* Sizes tried by the error-driven search, growing by ~1.5. */
+static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
+#define NSIZES (sizeof SIZES / sizeof SIZES[0])
+
+/* The next size after N, or 0 past the last. */
+static size_t grow(size_t N)
+{
+    for (size_t i = 0; i < NSIZES; i++)
+        if (SIZES[i] > N)
+            return SIZES[i];
+    return 0;
+}
+
 int tableset_build(const tableset_spec *s, tableset *out)
 {
     memset(out, 0, sizeof *out);
@@ -129,53 +200,50 @@ int tableset_build(const tableset_spec *s, tableset *out)
     }
     double t0 = now_seconds();
     nbt_status st = NBT_OK;
-    nbt_axis a0, a1;
     nbt_table *first = NULL;
+    int i0 = 3, j0 = 0; /* start from log1p(c = 1000) x cos */
     if (s->tol <= 0) {
-        a0 = make_axis(s, 0, NBT_AXIS_SQRT, 0, s->size[0]);
-        a1 = make_axis(s, 1, NBT_AXIS_COS, 0, s->size[1]);
-        first = build_one(s, a0, a1, &st);
+        /* fixed size: the best mapping at that size */
+        st = best_mapping(s, s->size[0], s->size[1], &i0, &j0, &first);
     } else {
-        /* mapping: the best of a few candidates on a small grid */
-        static const nbt_axis_map m0[] = {NBT_AXIS_SQRT, NBT_AXIS_LOG1P}, m1[] = {NBT_AXIS_COS, NBT_AXIS_LINEAR};
-        static const double c0[] = {0, 100};
-        double best = INFINITY;
-        for (int i = 0; i < 2 && st == NBT_OK; i++)
-            for (int j = 0; j < 2 && st == NBT_OK; j++) {
-                nbt_table *t = build_one(s, make_axis(s, 0, m0[i], c0[i], 33), make_axis(s, 1, m1[j], 0, 33), &st);
-                if (t && rel_error(t, table_scale(t)) < best) {
-                    best = rel_error(t, table_scale(t));
-                    nbt_table_free(first);
-                    first = t;
-                } else
-                    nbt_table_free(t);
-            }
-        /* size: grow by ~1.5 until the measured error meets tol */
-        static const size_t sizes[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
-        for (size_t i = 1; st == NBT_OK && first && rel_error(first, table_scale(first)) > s->tol; i++) {
-            if (i == sizeof sizes / sizeof sizes[0]) {
+        /* size: grow by ~1.5 until the measured error meets tol, re-choosing
+         * the mapping at every size (the best clustering grows with N) */
+        for (size_t i = 0; st == NBT_OK; i++) {
+            if (i == NSIZES) {
                 fprintf(stderr, "nbt-gen: --tol %g is not reached with up to 2049x2049 nodes (best %.2g): "
                         "ask for a larger tolerance or a smaller range\n", s->tol, rel_error(first, table_scale(first)));
                 nbt_table_free(first);
                 return 1;
             }
-            nbt_axis b0 = first->axis[0], b1 = first->axis[1];
-            b0.n = b1.n = sizes[i];
-            nbt_table *t = build_one(s, b0, b1, &st);
             nbt_table_free(first);
-            first = t;
+            first = NULL;
+            st = best_mapping(s, SIZES[i], SIZES[i], &i0, &j0, &first);
+            if (st == NBT_OK && first && rel_error(first, table_scale(first)) <= s->tol)
+                break;
         }
     }
-    if (first) {
-        a0 = first->axis[0];
-        a1 = first->axis[1];
-        out->t[out->count++] = first;
-    }
-    if (npacks > 1 && st == NBT_OK) {
-        st = build_packs(s, 1, npacks - 1, &a0, &a1, out->t + 1);
-        if (st == NBT_OK)
+    /* the set itself: every pack, at the final quadrature tolerance, in one
+     * pass; higher orders oscillate more, so grow until every pack meets tol */
+    if (st == NBT_OK && first) {
+        nbt_axis a0 = first->axis[0], a1 = first->axis[1];
+        nbt_table_free(first);
+        first = NULL;
+        for (;;) {
+            st = build_packs(s, 0, npacks, &a0, &a1, QUAD_TOL, out->t);
+            if (st != NBT_OK)
+                break;
             out->count = npacks;
+            double scale = table_scale(out->t[0]), worst = 0;
+            for (size_t p = 0; p < npacks; p++)
+                worst = fmax(worst, rel_error(out->t[p], scale));
+            size_t next = grow(a0.n);
+            if (s->tol <= 0 || worst <= s->tol || next == 0 || a1.n != a0.n)
+                break;
+            tableset_free(out);
+            a0.n = a1.n = next;
+        }
     }
+    nbt_table_free(first);
     if (st != NBT_OK) {
         fprintf(stderr, "nbt-gen: building the %s table failed: %s\n", s->kind == NBT_TABLE_H ? "H" : "J",
                 nbt_strerror(st));
@@ -260,11 +328,70 @@ int tableset_write(const tableset *ts, const char *stem, int preview)
     return rc;
 }
 
+/* Smallest N such that the airlight series truncated to N terms differs from
+ * the converged one by at most tol relative, for HG with |g| <= gmax, over
+ * sample rays (u up to umax, gamma from 0.05 to 2.5 rad, unobstructed). */
+static size_t choose_terms(double gmax, double umax, double tol, double *achieved)
+{
+    /* orders beyond K: (2k+1) g^k below 1e-3 tol, negligible for the tail */
+    size_t K = 8;
+    while (K < 512 && (2.0 * K + 1.0) * pow(gmax, (double)K) > 1e-3 * tol)
+        K *= 2;
+    static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
+    double *h1 = malloc(2 * (K + 1) * sizeof(double)), *h0 = malloc(2 * (K + 1) * sizeof(double));
+    double *worst = calloc(K + 2, sizeof(double));
+    if (!h1 || !h0 || !worst)
+        die("out of memory");
+    for (int iu = 0; iu < 6; iu++) {
+        double u = umax * pow(10.0, -iu * 0.6);
+        for (size_t ig = 0; ig < sizeof gam / sizeof gam[0]; ig++) {
+            if (nbt_hk(K, u, M_PI_2, 1e-10, h1, h1 + K + 1) != NBT_OK ||
+                nbt_hk(K, u, gam[ig] - M_PI_2, 1e-10, h0, h0 + K + 1) != NBT_OK)
+                die("H_k evaluation failed");
+            double total = 0, tail = 0, gk = 1;
+            for (size_t k = 0; k <= K; k++, gk *= gmax)
+                total += (2.0 * k + 1.0) * gk * (h1[k] - h0[k]);
+            /* tail after N terms, from the top down */
+            gk = pow(gmax, (double)K);
+            for (size_t k = K + 1; k-- > 0; gk = gmax != 0 ? gk / gmax : (k == 1 ? 1 : 0)) {
+                tail += (2.0 * k + 1.0) * gk * (h1[k] - h0[k]);
+                worst[k] = fmax(worst[k], fabs(tail / total));
+            }
+        }
+    }
+    size_t N = 1;
+    while (N <= K && worst[N] > tol)
+        N++;
+    *achieved = N <= K ? worst[N] : worst[K];
+    free(h1);
+    free(h0);
+    free(worst);
+    return N;
+}
+
+int legendre_budget(double gmax, double xmax, double tol, size_t *nterms, double *table_tol)
+{
+    double trunc;
+    *nterms = choose_terms(gmax, xmax, 0.5 * tol, &trunc);
+    if (*nterms > 512)
+        return 1;
+    /* Interpolation gets the other half of tol. In the series each order's
+     * error is weighted by (2k+1)|g|^k, so each table must be that much
+     * better than tol/2 (relative to H_0/J_0). */
+    double amp = 0;
+    for (size_t k = 0; k < *nterms; k++)
+        amp += (2.0 * k + 1.0) * pow(gmax, (double)k);
+    *table_tol = 0.5 * tol / amp;
+    printf("# Legendre terms: %zu (airlight truncation error <= %.2e relative for |g| <= %g)\n", *nterms, trunc, gmax);
+    printf("# per-table interpolation target: %.2e relative to H_0/J_0 (error amplification %.3g)\n", *table_tol, amp);
+    return 0;
+}
+
 /* ---- nbt-gen airlight|surface ---- */
 
 static void tables_help(const char *cmd)
 {
-    printf("Usage: nbt-gen %s [-o FILE.exr] [--size WxH | --tol EPS] [--kmax K | --phase SPEC]\n"
+    printf("Usage: nbt-gen %s [-o FILE.exr] [--size WxH | --tol EPS] [--kmax K | --g LO:HI | --phase SPEC]\n"
            "       %*s [--max X] [--half] [--threads T] [--no-preview]%s\n\n"
            "Tabulates %s on a node-aligned grid and writes OpenEXR (+ PNG preview).\n"
            "  -o FILE.exr    output (default ./%s.exr; more than 4 orders: FILE_k0-3.exr, ...)\n"
@@ -273,6 +400,9 @@ static void tables_help(const char *cmd)
            "                 first pack (H_0/J_0), default 1e-3; mappings and size are chosen to meet it,\n"
            "                 measured at all cell and edge midpoints\n"
            "  --kmax K       Legendre orders 0..K (default 3), packed 4 per file (RGBA)\n"
+           "  --g LO:HI      HG asymmetry range to serve: the number of orders is chosen so the\n"
+           "                 airlight series truncation stays below tol/2, and the tables' error\n"
+           "                 target is tol/2 over the error amplification sum (2k+1)|g|^k\n"
            "  --phase SPEC   fixed phase instead: iso, rayleigh, hg:g=G, gauss:B=B, table:FILE\n"
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
@@ -301,11 +431,13 @@ int cmd_tables(int argc, char **argv)
     int surface = !strcmp(cmd, "surface");
     tableset_spec s = {surface ? NBT_TABLE_J : NBT_TABLE_H, 1, 4, NULL, 10.0, 0, {0, 0}, 0, 0};
     const char *out = NULL, *phase_spec = NULL;
-    int have_size = 0, have_tol = 0, have_k = 0, preview = 1;
+    int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1;
+    double g_lo = 0, g_hi = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"size", required_argument, 0, 's'},
         {"tol", required_argument, 0, 't'},    {"kmax", required_argument, 0, 'k'},
         {"phase", required_argument, 0, 'p'},  {"n", required_argument, 0, 'n'},
+        {"g", required_argument, 0, 'g'},
         {"max", required_argument, 0, 'm'},    {"half", no_argument, 0, 'H'},
         {"threads", required_argument, 0, 'j'}, {"no-preview", no_argument, 0, 'P'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
@@ -318,6 +450,7 @@ int cmd_tables(int argc, char **argv)
         case 't': s.tol = opt_double("--tol", optarg, 0, 1, 1, 1); have_tol = 1; break;
         case 'k': s.nterms = (size_t)opt_long("--kmax", optarg, 0, 4 * TABLESET_MAX - 1) + 1; have_k = 1; break;
         case 'p': phase_spec = optarg; break;
+        case 'g': opt_range("--g", optarg, -0.99, 0.99, &g_lo, &g_hi); have_g = 1; break;
         case 'n':
             if (!surface)
                 die_usage("--n applies to 'surface' tables only");
@@ -337,8 +470,18 @@ int cmd_tables(int argc, char **argv)
         die_usage("--size and --tol exclude each other: give one");
     if (phase_spec && have_k)
         die_usage("--kmax and --phase exclude each other: Legendre orders or one fixed phase");
+    if (have_g && (phase_spec || have_k))
+        die_usage("--g chooses the Legendre orders itself: it excludes --kmax and --phase");
     if (!have_size && !have_tol)
         s.tol = 1e-3;
+    if (have_g) {
+        double ttol;
+        if (legendre_budget(fmax(fabs(g_lo), fabs(g_hi)), s.xmax, have_tol ? s.tol : 1e-3, &s.nterms, &ttol) != 0)
+            die("--g: |g| up to %g needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G",
+                fmax(fabs(g_lo), fabs(g_hi)));
+        if (!have_size)
+            s.tol = ttol;
+    }
     nbt_phase *ph = NULL;
     if (phase_spec) {
         char err[256];

@@ -47,4 +47,11 @@ void tableset_stem(const tableset_spec *spec, char *buf, size_t n);
 
 double now_seconds(void);
 
+/* For Legendre tables serving |g| <= gmax at total relative error tol: the
+ * number of terms (truncation error <= tol/2, measured on sample rays with u
+ * up to xmax) and the per-table interpolation target (tol/2 over the error
+ * amplification sum (2k+1)|g|^k). Prints both as '#' lines. 0, or 1 when
+ * more than 512 terms would be needed. */
+int legendre_budget(double gmax, double xmax, double tol, size_t *nterms, double *table_tol);
+
 #endif

@@ -11,14 +11,19 @@
 /* exp(-y) beyond this y is below 1e-34 of the segment's leading value */
 #define Y_TAIL 80.0
 
-double nbt__s_of_t(double t)
+/* s = tan(pi/4 + t/2) = (1 + sin t)/cos t = cos t/(1 - sin t) from sin t, cos t */
+static double s_of_sc(double t, double st, double ct)
 {
-    /* tan(pi/4 + t/2) = (1 + sin t)/cos t = cos t/(1 - sin t) */
     if (t >= NBT_PI_2)
         return INFINITY;
     if (t <= -NBT_PI_2)
         return 0.0; /* cos of the double nearest -pi/2 is 6e-17, not 0 */
-    return t < 0 ? cos(t) / (1.0 - sin(t)) : (1.0 + sin(t)) / cos(t);
+    return t < 0 ? ct / (1.0 - st) : (1.0 + st) / ct;
+}
+
+double nbt__s_of_t(double t)
+{
+    return s_of_sc(t, sin(t), cos(t));
 }
 
 /* Legendre orders or 4 pi p at mu = c. */
@@ -41,12 +46,12 @@ typedef struct {
 static int seg_t(double t, void *vp, unsigned fdim, double *f)
 {
     const seg_ctx *c = vp;
-    double e = 1.0;
+    double e = 1.0, st = sin(t), ct = cos(t);
     if (c->u > 0) {
-        double s = nbt__s_of_t(t);
+        double s = s_of_sc(t, st, ct);
         e = isinf(s) ? 0.0 : exp(-c->u * (s - c->base));
     }
-    weights_at(c->w, -sin(t), f);
+    weights_at(c->w, -st, f);
     for (unsigned k = 0; k < fdim; k++)
         f[k] *= e;
     return 0;

@@ -476,7 +476,7 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
             st = nbt__parallel_for(nx, c->nt, j_product, c);
     }
     /* error of the g quadrature: check against adaptive J at the corners
-     * and the centre (to 1e-9: this bounds an error far below any table's) */
+     * and the centre (to 1e-8: this bounds an error far below any table's) */
     double qerr = 0;
     for (size_t i = 0; i < nx; i++)
         qerr = fmax(qerr, c->rowerr[i]) ; /* G's own error, times int K <= 2 pi */
@@ -492,7 +492,7 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
                 st = NBT_ENOMEM;
                 break;
             }
-            st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-9), Jv, Ev);
+            st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-8), Jv, Ev);
             for (size_t ch = 0; ch < c->nch && st == NBT_OK; ch++) {
                 unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
                 qerr = fmax(qerr, fabs(F[(j * nx + i) * c->nch + ch] - Jv[k]) + Ev[k]);

@@ -84,6 +84,17 @@ close "$1" 3.141592653589793 1e-6 "table H_0(0, pi/2) = pi (float)"
 "$NBT_GEN" info "$tmp/j_k4-5.exr" | grep -q "channel G   k=5" && ok || bad "second pack holds k = 5"
 "$NBT_GEN" airlight -o "$tmp/p.exr" --phase hg:g=0.8 --size 17x17 --half >/dev/null 2>&1 &&
   "$NBT_GEN" info "$tmp/p.exr" | grep -q "hg:g=0.8" && ok || bad "fixed-phase half table"
+# --g: the number of orders follows from the g range and tol
+"$NBT_GEN" airlight -o "$tmp/g.exr" --g 0:0.5 --tol 0.02 >"$tmp/out" 2>/dev/null; rc=$?
+nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
+target=$(sed -n 's/^# per-table interpolation target: \([^ ]*\) .*/\1/p' "$tmp/out")
+[ $rc -eq 0 ] && [ -n "$nt" ] && [ "$(ls "$tmp"/g_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
+  bad "airlight --g 0:0.5: $nt terms, files $(ls "$tmp"/g_k*.exr)"
+# every pack meets the per-table target (rel column of the summary lines)
+awk -v t="$target" '/^\// { for (i = 1; i <= NF; i++) if ($i == "(rel") { v = $(i + 1); sub(/\)/, "", v); if (v + 0 > t + 0) bad = 1 } }
+  END { exit bad }' "$tmp/out" && ok || bad "a pack misses the target $target: $(cat "$tmp/out")"
+expect_usage "--g with --kmax" "excludes" "$NBT_GEN" airlight -o "$tmp/x.exr" --g 0.5 --kmax 3
+expect_usage "--g out of range" "--g" "$NBT_GEN" airlight -o "$tmp/x.exr" --g 0:1
 head -c 300 "$tmp/h.exr" >"$tmp/trunc.exr"
 "$NBT_GEN" info "$tmp/trunc.exr" >/dev/null 2>"$tmp/err"; rc=$?
 [ $rc -eq 1 ] && [ -s "$tmp/err" ] && ok || bad "truncated EXR: rc=$rc"
