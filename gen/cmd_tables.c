@@ -237,8 +237,14 @@ int tableset_build(const tableset_spec *s, tableset *out)
             for (size_t p = 0; p < npacks; p++)
                 worst = fmax(worst, rel_error(out->t[p], scale));
             size_t next = grow(a0.n);
-            if (s->tol <= 0 || worst <= s->tol || next == 0 || a1.n != a0.n)
+            if (s->tol <= 0 || worst <= s->tol)
                 break;
+            if (next == 0) {
+                fprintf(stderr, "nbt-gen: --tol %g is not reached by every order with up to 2049x2049 nodes "
+                        "(worst %.2g): ask for a larger tolerance or fewer orders\n", s->tol, worst);
+                tableset_free(out);
+                return 1;
+            }
             tableset_free(out);
             a0.n = a1.n = next;
         }

@@ -392,25 +392,15 @@ static nbt_status h_fill(void *vp, const double *xs, size_t nx, const double *ys
 
 nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phase *fixed, const nbt_build_opts *o)
 {
-    if (nt == 0)
-        NBT_FAIL(NBT_EINVAL, "H table: no tables given");
-    for (size_t i = 0; i < nt; i++)
-        for (size_t ch = 0; ch < ts[i]->nch; ch++) {
-            if (fixed)
-                ts[i]->k[ch] = -1;
-            else if (ts[i]->k[ch] < 0)
-                NBT_FAIL(NBT_EINVAL, "H table: Legendre channels need k >= 0");
-        }
-    int *kmap = malloc(nt * NBT_TABLE_MAX_CH * sizeof(int));
-    if (!kmap)
-        NBT_FAIL(NBT_ENOMEM, "H table: out of memory");
-    hfill_ctx c = {.kmap = kmap, .tol = o->quad_tol};
-    c.nch = nbt__table_set_channels(ts, nt, kmap);
+    int *kmap;
+    hfill_ctx c = {.tol = o->quad_tol};
+    c.w.phase = fixed;
+    nbt_status st = nbt__table_set_prepare(ts, nt, fixed, &kmap, &c.nch, &c.w.kmax);
+    if (st != NBT_OK)
+        return st;
+    c.kmap = kmap;
     nbt_table *t = ts[0];
-    nbt_status st = NBT_OK;
-    if (c.nch == 0)
-        st = nbt__fail(NBT_EINVAL, "H table: the tables of a set must share kind and axes");
-    else if (t->kind != NBT_TABLE_H)
+    if (t->kind != NBT_TABLE_H)
         st = nbt__fail(NBT_EINVAL, "H table: the table is not of kind H");
     else if (t->axis[0].lo < 0 || t->axis[1].lo < -NBT_PI_2 || t->axis[1].hi > NBT_PI_2)
         st = nbt__fail(NBT_EDOM, "H table: axes must lie in u >= 0, v in [-pi/2, pi/2]");
@@ -420,10 +410,6 @@ nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phas
         free(kmap);
         return st;
     }
-    c.w.phase = fixed;
-    for (size_t ch = 0; ch < c.nch; ch++)
-        if (!fixed && (size_t)kmap[ch] > c.w.kmax)
-            c.w.kmax = (size_t)kmap[ch];
     for (size_t i = 0; i < nt; i++) {
         ts[i]->n = 0;
         ts[i]->quad_tol = o->quad_tol;

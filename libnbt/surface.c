@@ -483,11 +483,11 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
     qerr *= 2.0 * NBT_PI;
     if (st == NBT_OK) {
         size_t si[5] = {0, nx - 1, 0, nx - 1, nx / 2}, sj[5] = {0, 0, ny - 1, ny - 1, ny / 2};
-        double J[NBT_TABLE_MAX_CH * 64], E[NBT_TABLE_MAX_CH * 64];
+        double J[256], E[256];
         for (int a = 0; a < 5 && st == NBT_OK; a++) {
             size_t i = si[a], j = sj[a];
             unsigned fd = c->fdim;
-            double *Jv = fd <= 64 ? J : malloc(2 * fd * sizeof(double)), *Ev = fd <= 64 ? E : Jv + fd;
+            double *Jv = fd <= 256 ? J : malloc(2 * fd * sizeof(double)), *Ev = fd <= 256 ? E : Jv + fd;
             if (!Jv) {
                 st = NBT_ENOMEM;
                 break;
@@ -510,35 +510,27 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
 
 nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const nbt_build_opts *o)
 {
-    if (ntab == 0)
-        NBT_FAIL(NBT_EINVAL, "J table: no tables given");
-    for (size_t i = 0; i < ntab; i++)
-        for (size_t ch = 0; ch < ts[i]->nch; ch++) {
-            if (fixed)
-                ts[i]->k[ch] = -1;
-            else if (ts[i]->k[ch] < 0)
-                NBT_FAIL(NBT_EINVAL, "J table: Legendre channels need k >= 0");
-        }
-    int kmap[64 * NBT_TABLE_MAX_CH];
-    if (ntab > 64)
-        NBT_FAIL(NBT_EINVAL, "J table: at most 64 tables in one set");
-    nbt_table *t = ts[0];
-    jfill_ctx c = {.kmap = kmap, .n = t->n, .tol = o->quad_tol};
-    c.nch = nbt__table_set_channels(ts, ntab, kmap);
-    if (c.nch == 0)
-        NBT_FAIL(NBT_EINVAL, "J table: the tables of a set must share kind, n and axes");
-    if (t->kind != NBT_TABLE_J)
-        NBT_FAIL(NBT_EINVAL, "J table: the table is not of kind J");
-    if (t->n < 1)
-        NBT_FAIL(NBT_EDOM, "J table: the cosine exponent n must be >= 1");
-    if (t->axis[0].lo < 0 || t->axis[1].lo < 0 || t->axis[1].hi > NBT_PI)
-        NBT_FAIL(NBT_EDOM, "J table: axes must lie in T >= 0, theta in [0, pi]");
-    if (!(o->quad_tol > 0 && o->quad_tol < 1))
-        NBT_FAIL(NBT_EDOM, "J table: quad_tol must lie in (0, 1)");
+    int *kmap;
+    jfill_ctx c = {.tol = o->quad_tol};
     c.w.phase = fixed;
-    for (size_t ch = 0; ch < c.nch; ch++)
-        if (!fixed && (size_t)kmap[ch] > c.w.kmax)
-            c.w.kmax = (size_t)kmap[ch];
+    nbt_status st = nbt__table_set_prepare(ts, ntab, fixed, &kmap, &c.nch, &c.w.kmax);
+    if (st != NBT_OK)
+        return st;
+    c.kmap = kmap;
+    nbt_table *t = ts[0];
+    c.n = t->n;
+    if (t->kind != NBT_TABLE_J)
+        st = nbt__fail(NBT_EINVAL, "J table: the table is not of kind J");
+    else if (t->n < 1)
+        st = nbt__fail(NBT_EDOM, "J table: the cosine exponent n must be >= 1");
+    else if (t->axis[0].lo < 0 || t->axis[1].lo < 0 || t->axis[1].hi > NBT_PI)
+        st = nbt__fail(NBT_EDOM, "J table: axes must lie in T >= 0, theta in [0, pi]");
+    else if (!(o->quad_tol > 0 && o->quad_tol < 1))
+        st = nbt__fail(NBT_EDOM, "J table: quad_tol must lie in (0, 1)");
+    if (st != NBT_OK) {
+        free(kmap);
+        return st;
+    }
     c.fdim = nbt__fdim(&c.w);
     for (size_t i = 0; i < ntab; i++)
         ts[i]->quad_tol = o->quad_tol;
@@ -558,7 +550,6 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     c.nt = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
     nbt_quad_ws *ws[64] = {0};
     double *buf[64] = {0};
-    nbt_status st = NBT_OK;
     for (unsigned i = 0; i < c.nt; i++) {
         ws[i] = nbt_quad_ws_alloc(c.fdim, SEG_MAX_INTERVALS);
         buf[i] = malloc(c.fdim * sizeof(double));
@@ -596,6 +587,7 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     nbt_gl_rule_free(rp);
     nbt_gl_rule_free(c.rk);
     nbt_gl_rule_free(c.rm);
+    free(kmap);
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "J table: out of memory");
     return st;

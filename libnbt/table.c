@@ -156,20 +156,36 @@ void nbt_table_round_half(nbt_table *t)
     t->half = 1;
 }
 
-size_t nbt__table_set_channels(nbt_table *const *ts, size_t nt, int *kmap)
+nbt_status nbt__table_set_prepare(nbt_table *const *ts, size_t nt, const nbt_phase *fixed, int **kmap,
+                                  size_t *nch, size_t *kmax)
 {
+    *kmap = NULL;
+    if (nt == 0)
+        NBT_FAIL(NBT_EINVAL, "table set: no tables given");
     size_t C = 0;
     for (size_t i = 0; i < nt; i++) {
         const nbt_table *t = ts[i];
-        if (t->kind != ts[0]->kind || t->n != ts[0]->n)
-            return 0;
-        for (int a = 0; a < 2; a++)
-            if (memcmp(&t->axis[a], &ts[0]->axis[a], sizeof t->axis[a]))
-                return 0;
+        if (t->kind != ts[0]->kind || t->n != ts[0]->n || memcmp(&t->axis[0], &ts[0]->axis[0], sizeof t->axis[0]) ||
+            memcmp(&t->axis[1], &ts[0]->axis[1], sizeof t->axis[1]))
+            NBT_FAIL(NBT_EINVAL, "table set: the tables must share kind, n and axes");
         for (size_t c = 0; c < t->nch; c++)
-            kmap[C++] = t->k[c];
+            if (!fixed && t->k[c] < 0)
+                NBT_FAIL(NBT_EINVAL, "table set: Legendre channels need k >= 0");
+        C += t->nch;
     }
-    return C;
+    if (!(*kmap = malloc(C * sizeof(int))))
+        NBT_FAIL(NBT_ENOMEM, "table set: out of memory");
+    *nch = 0;
+    *kmax = 0;
+    for (size_t i = 0; i < nt; i++)
+        for (size_t c = 0; c < ts[i]->nch; c++) {
+            if (fixed)
+                ts[i]->k[c] = -1;
+            else if ((size_t)ts[i]->k[c] > *kmax)
+                *kmax = (size_t)ts[i]->k[c];
+            (*kmap)[(*nch)++] = ts[i]->k[c];
+        }
+    return NBT_OK;
 }
 
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx)

@@ -17,9 +17,12 @@ typedef nbt_status (*nbt__grid_fill)(void *ctx, const double *xs, size_t nx, con
  * quadrature error. Sets max_abs and quad_err. */
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx);
 
-/* Check that the tables share kind and axes; the channel -> k map of all of
- * them (k = -1 for fixed phase) into kmap (size >= total channels). Returns
- * the total number of channels, 0 on mismatch. */
-size_t nbt__table_set_channels(nbt_table *const *ts, size_t nt, int *kmap);
+/* Validate a set of tables to be filled together (nt >= 1; same kind, n and
+ * axes; Legendre channels k >= 0, or all marked k = -1 when fixed != NULL)
+ * and return the channel -> k map of all of them (malloc'd, free it), the
+ * total number of channels and the highest order. */
+#include <nbt/phase.h>
+nbt_status nbt__table_set_prepare(nbt_table *const *ts, size_t nt, const nbt_phase *fixed, int **kmap,
+                                  size_t *nch, size_t *kmax);
 
 #endif
