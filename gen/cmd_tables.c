@@ -177,6 +177,19 @@ static nbt_status best_mapping(const tableset_spec *s, size_t N0, size_t N1, int
     return st;
 }
 
+/* One status line on a terminal (overwritten in place), nothing otherwise. */
+static void progress(const tableset_spec *s, const char *what, size_t N)
+{
+    if (!stderr_is_tty())
+        return;
+    if (!what) {
+        fprintf(stderr, "\r\033[K");
+        return;
+    }
+    fprintf(stderr, "\r\033[Knbt-gen: %s%s: %s %zux%zu", s->kind == NBT_TABLE_H ? "H" : "J",
+            s->kind == NBT_TABLE_J ? (s->n == 1 ? "1" : "n") : "", what, N, N);
+}
+
 /* Sizes tried by the error-driven search, growing by ~1.5. */
 static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
 #define NSIZES (sizeof SIZES / sizeof SIZES[0])
@@ -210,6 +223,7 @@ int tableset_build(const tableset_spec *s, tableset *out)
          * the mapping at every size (the best clustering grows with N) */
         for (size_t i = 0; st == NBT_OK; i++) {
             if (i == NSIZES) {
+                progress(s, NULL, 0);
                 fprintf(stderr, "nbt-gen: --tol %g is not reached with up to 2049x2049 nodes (best %.2g): "
                         "ask for a larger tolerance or a smaller range\n", s->tol, rel_error(first, table_scale(first)));
                 nbt_table_free(first);
@@ -217,6 +231,7 @@ int tableset_build(const tableset_spec *s, tableset *out)
             }
             nbt_table_free(first);
             first = NULL;
+            progress(s, "trying axis mappings at", SIZES[i]);
             st = best_mapping(s, SIZES[i], SIZES[i], &i0, &j0, &first);
             if (st == NBT_OK && first && rel_error(first, table_scale(first)) <= s->tol)
                 break;
@@ -229,6 +244,7 @@ int tableset_build(const tableset_spec *s, tableset *out)
         nbt_table_free(first);
         first = NULL;
         for (;;) {
+            progress(s, "building all orders at", a0.n);
             st = build_packs(s, 0, npacks, &a0, &a1, QUAD_TOL, out->t);
             if (st != NBT_OK)
                 break;
@@ -240,6 +256,7 @@ int tableset_build(const tableset_spec *s, tableset *out)
             if (s->tol <= 0 || worst <= s->tol)
                 break;
             if (next == 0) {
+                progress(s, NULL, 0);
                 fprintf(stderr, "nbt-gen: --tol %g is not reached by every order with up to 2049x2049 nodes "
                         "(worst %.2g): ask for a larger tolerance or fewer orders\n", s->tol, worst);
                 tableset_free(out);
@@ -250,6 +267,7 @@ int tableset_build(const tableset_spec *s, tableset *out)
         }
     }
     nbt_table_free(first);
+    progress(s, NULL, 0);
     if (st != NBT_OK) {
         fprintf(stderr, "nbt-gen: building the %s table failed: %s\n", s->kind == NBT_TABLE_H ? "H" : "J",
                 nbt_strerror(st));
