@@ -28,6 +28,9 @@ static inline unsigned nbt__fdim(const nbt__weights *w)
     return (w->phase || w->b) ? 1u : (unsigned)(w->kmax + 1);
 }
 
+/* A cosine of the scattering angle distributed as p, from uniforms in [0, 1). */
+double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void *rs);
+
 /* sum_{k=0}^{kmax} (2k+1) b_k P_k(x) by Clenshaw's recurrence. */
 double nbt__legendre_series(const double *b, size_t kmax, double x);
 

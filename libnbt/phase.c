@@ -17,6 +17,7 @@ struct nbt_phase {
     double *w, *B;     /* SOG (a single Gaussian is n = 1) */
     double *Z;         /* SOG: 1/(4 pi B (1 - exp(-pi^2/4B))) per component */
     double *mu, *p;    /* table */
+    double *cdf;       /* table: 2 pi int_{-1}^{mu_i} p, cdf[n-1] = 1 */
     char name[64];
 };
 
@@ -134,13 +135,15 @@ nbt_phase *nbt_phase_tabulated(size_t n, const double *mu, const double *pv)
     p->n = n;
     p->mu = malloc(n * sizeof(double));
     p->p = malloc(n * sizeof(double));
-    if (!p->mu || !p->p) {
+    p->cdf = malloc(n * sizeof(double));
+    if (!p->mu || !p->p || !p->cdf) {
         nbt_phase_free(p);
         return NULL;
     }
     for (size_t i = 0; i < n; i++) {
         p->mu[i] = mu[i];
         p->p[i] = pv[i] / (2.0 * NBT_PI * area);
+        p->cdf[i] = i == 0 ? 0.0 : p->cdf[i - 1] + NBT_PI * (p->p[i] + p->p[i - 1]) * (mu[i] - mu[i - 1]);
     }
     snprintf(p->name, sizeof p->name, "table:%zu points", n);
     return p;
@@ -155,6 +158,7 @@ void nbt_phase_free(nbt_phase *p)
     free(p->Z);
     free(p->mu);
     free(p->p);
+    free(p->cdf);
     free(p);
 }
 
@@ -340,6 +344,62 @@ size_t nbt_phase_hg_terms(double g, double tol, nbt_norm norm, size_t nmax)
         if (nbt_phase_hg_trunc_error(g, N, norm) <= tol)
             return N;
     return nmax + 1;
+}
+
+/* ---- sampling ---- */
+
+double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void *rs)
+{
+    switch (p->kind) {
+    case NBT_PHASE_ISO:
+        return 2.0 * uniform(rs) - 1.0;
+    case NBT_PHASE_RAYLEIGH: {
+        /* CDF (mu^3 + 3 mu + 4)/8: solve the depressed cubic by Cardano */
+        double q = 8.0 * uniform(rs) - 4.0, d = sqrt(q * q / 4.0 + 1.0);
+        return cbrt(q / 2.0 + d) + cbrt(q / 2.0 - d);
+    }
+    case NBT_PHASE_HG: {
+        double g = p->g, u = uniform(rs);
+        if (fabs(g) < 1e-6)
+            return 2.0 * u - 1.0;
+        double f = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+        double mu = (1.0 + g * g - f * f) / (2.0 * g);
+        return mu > 1.0 ? 1.0 : (mu < -1.0 ? -1.0 : mu);
+    }
+    case NBT_PHASE_GAUSS:
+    case NBT_PHASE_SOG: {
+        size_t i = 0;
+        if (p->n > 1) {
+            double u = uniform(rs), c = p->w[0];
+            while (i + 1 < p->n && u >= c)
+                c += p->w[++i];
+        }
+        /* theta = |s|, s 2-D Gaussian with per-component variance 2B; theta >= pi rejected */
+        for (;;) {
+            double th = sqrt(-4.0 * p->B[i] * log1p(-uniform(rs)));
+            if (th < NBT_PI)
+                return cos(th);
+        }
+    }
+    case NBT_PHASE_TABLE: {
+        double u = uniform(rs);
+        size_t lo = 0, hi = p->n - 1;
+        while (hi - lo > 1) {
+            size_t m = (lo + hi) / 2;
+            if (p->cdf[m] <= u)
+                lo = m;
+            else
+                hi = m;
+        }
+        /* within the segment: 2 pi (p0 d + s d^2/2) = u - cdf0, s the slope */
+        double p0 = p->p[lo], sl = (p->p[hi] - p->p[lo]) / (p->mu[hi] - p->mu[lo]);
+        double c = (u - p->cdf[lo]) / (2.0 * NBT_PI), disc = p0 * p0 + 2.0 * sl * c;
+        double d = c > 0 ? 2.0 * c / (p0 + sqrt(disc > 0 ? disc : 0.0)) : 0.0;
+        double mu = p->mu[lo] + d;
+        return mu > p->mu[hi] ? p->mu[hi] : mu;
+    }
+    }
+    return 1.0;
 }
 
 /* ---- SPEC parsing ---- */

@@ -8,6 +8,8 @@
 #include <nbt/table.h>
 #include <nbt/airlight.h>
 #include <nbt/surface.h>
+#include <nbt/beam.h>
+#include <nbt/mc.h>
 
 #ifdef __cplusplus
 extern "C" {

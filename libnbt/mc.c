@@ -1,0 +1,330 @@
+/* libnbt/mc.c: analog photon counting for a pencil beam in a layered medium. */
+#include <config.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <nbt/mc.h>
+#include "internal.h"
+
+#define NBATCH 64
+
+/* xoshiro256+ seeded from (seed, photon index) by splitmix64: each photon's
+ * stream depends on nothing else, whichever thread runs it. */
+typedef struct {
+    uint64_t s[4];
+} rng_t;
+
+static uint64_t splitmix(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+static void rng_seed(rng_t *r, uint64_t seed, uint64_t photon)
+{
+    uint64_t x = seed ^ (photon * 0xd1b54a32d192ed03u);
+    splitmix(&x);
+    for (int i = 0; i < 4; i++)
+        r->s[i] = splitmix(&x);
+}
+
+static inline uint64_t rotl(uint64_t x, int k)
+{
+    return (x << k) | (x >> (64 - k));
+}
+
+/* uniform in [0, 1) */
+static inline double rng_u(rng_t *r)
+{
+    uint64_t *s = r->s, res = s[0] + s[3], t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = rotl(s[3], 45);
+    return (double)(res >> 11) * 0x1.0p-53;
+}
+
+static double rng_cb(void *r)
+{
+    return rng_u(r);
+}
+
+typedef struct {
+    const nbt_mc_config *cfg;
+    size_t nlay;        /* regions [b[i], b[i+1]) with density rho[i]; b[nlay] = top */
+    double *b, *rho;
+    double top;         /* slab: thickness (escape above); else z_cut (photon dropped) */
+    int slab;
+    size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
+    double *acc;        /* NBATCH * stride */
+    atomic_uint done;
+} mc_ctx;
+
+/* Tally forward crossings of planes in (z0, z1] along a move. */
+static void tally(const mc_ctx *c, double *a, double x, double y, double z0, double z1, double ux, double uy,
+                  double uz)
+{
+    const nbt_mc_config *cf = c->cfg;
+    size_t np = cf->nplanes, nb = cf->r_bins;
+    /* first plane above z0 */
+    size_t lo = 0, hi = np;
+    while (lo < hi) {
+        size_t m = (lo + hi) / 2;
+        if (cf->z_planes[m] <= z0)
+            lo = m + 1;
+        else
+            hi = m;
+    }
+    for (size_t j = lo; j < np && cf->z_planes[j] <= z1; j++) {
+        double t = (cf->z_planes[j] - z0) / uz, px = x + t * ux, py = y + t * uy;
+        double r2 = px * px + py * py, r = sqrt(r2);
+        double *pl = a + j * (nb + 2);
+        double bin = r / (cf->r_max_scale * cf->z_planes[j]) * (double)nb;
+        if (bin < (double)nb)
+            pl[(size_t)bin] += 1.0;
+        pl[nb] += 1.0;
+        pl[nb + 1] += r2;
+    }
+}
+
+static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
+{
+    mc_ctx *c = vp;
+    const nbt_mc_config *cf = c->cfg;
+    double *a = c->acc + batch * c->stride;
+    uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH, events = 0;
+    size_t tail = c->stride - 3; /* R, T, events */
+    for (uint64_t ph = p0; ph < p1; ph++) {
+        rng_t rs;
+        rng_seed(&rs, cf->seed, ph);
+        double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
+        size_t li = 0;
+        int scattered = 0;
+        for (;;) {
+            double tau = -log1p(-rng_u(&rs)); /* optical depth to the next interaction */
+            int alive = 1;
+            while (alive && tau > 0) {
+                double rho = c->rho[li], zb;
+                int up = uz > 0;
+                if (uz > 0)
+                    zb = c->b[li + 1];
+                else if (uz < 0)
+                    zb = c->b[li];
+                else
+                    zb = NAN;
+                double db = uz != 0 ? (zb - z) / uz : INFINITY;
+                double dn = rho > 0 ? tau / (cf->sigma_t * rho) : INFINITY;
+                double d = dn < db ? dn : db;
+                if (isinf(d)) { /* horizontal flight in vacuum: never returns */
+                    alive = 0;
+                    break;
+                }
+                double z1 = dn < db ? z + d * uz : zb;
+                if (scattered && uz > 0 && cf->nplanes)
+                    tally(c, a, x, y, z, z1, ux, uy, uz);
+                x += d * ux;
+                y += d * uy;
+                z = z1;
+                if (dn < db) {
+                    tau = 0;
+                    break;
+                }
+                tau -= cf->sigma_t * rho * db;
+                if (up) {
+                    if (++li == c->nlay) { /* through the top */
+                        if (c->slab)
+                            a[tail + 1] += 1.0;
+                        alive = 0;
+                    }
+                } else {
+                    if (li-- == 0) { /* out through z = 0 */
+                        if (c->slab)
+                            a[tail] += 1.0;
+                        alive = 0;
+                    }
+                }
+            }
+            if (!alive)
+                break;
+            events++;
+            if (rng_u(&rs) >= cf->albedo)
+                break; /* absorbed */
+            scattered = 1;
+            double mu = nbt__phase_sample_mu(cf->phase, rng_cb, &rs);
+            double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * NBT_PI * rng_u(&rs);
+            double cp = cos(phi), sp = sin(phi);
+            if (fabs(uz) > 0.99999) {
+                ux = st * cp;
+                uy = st * sp;
+                uz = uz > 0 ? mu : -mu; /* mu times the sign of uz */
+            } else {
+                double tmp = sqrt(1.0 - uz * uz);
+                double nx = st * (ux * uz * cp - uy * sp) / tmp + ux * mu;
+                double ny = st * (uy * uz * cp + ux * sp) / tmp + uy * mu;
+                double nz = -st * cp * tmp + uz * mu;
+                double n = sqrt(nx * nx + ny * ny + nz * nz);
+                ux = nx / n;
+                uy = ny / n;
+                uz = nz / n;
+            }
+        }
+    }
+    a[tail + 2] = (double)events;
+    unsigned d = atomic_fetch_add(&c->done, 1) + 1;
+    if (thread == 0 && cf->progress)
+        cf->progress((double)d / NBATCH, cf->progress_data);
+    return NBT_OK;
+}
+
+static nbt_status check(const nbt_mc_config *c)
+{
+    if (!(c->sigma_t > 0) || !isfinite(c->sigma_t))
+        NBT_FAIL(NBT_EDOM, "mc: sigma_t must be finite and > 0");
+    if (!(c->albedo >= 0 && c->albedo <= 1))
+        NBT_FAIL(NBT_EDOM, "mc: albedo must lie in [0, 1]");
+    if (!c->phase)
+        NBT_FAIL(NBT_EINVAL, "mc: no phase function");
+    if (c->photons < NBATCH)
+        NBT_FAIL(NBT_EDOM, "mc: at least 64 photons");
+    if (!(c->slab >= 0) || !isfinite(c->slab))
+        NBT_FAIL(NBT_EDOM, "mc: slab thickness must be finite and >= 0");
+    if (c->nplanes > 0) {
+        if (!c->z_planes || c->r_bins < 1 || !(c->r_max_scale > 0) || !isfinite(c->r_max_scale))
+            NBT_FAIL(NBT_EDOM, "mc: planes need r_bins >= 1 and r_max_scale > 0");
+        for (size_t j = 0; j < c->nplanes; j++)
+            if (!(c->z_planes[j] > 0) || !isfinite(c->z_planes[j]) || (j > 0 && !(c->z_planes[j] > c->z_planes[j - 1])))
+                NBT_FAIL(NBT_EDOM, "mc: tally planes must be finite, > 0 and increasing");
+    } else if (c->slab == 0)
+        NBT_FAIL(NBT_EINVAL, "mc: nothing to tally (no planes, no slab)");
+    if (c->nlayers > 0 && c->slab == 0) {
+        if (!c->z || !c->rho || c->z[0] != 0)
+            NBT_FAIL(NBT_EDOM, "mc: layers need z[0] = 0 and a density per layer");
+        for (size_t i = 0; i < c->nlayers; i++)
+            if (!(c->rho[i] >= 0) || !isfinite(c->rho[i]) || !isfinite(c->z[i]) || (i > 0 && !(c->z[i] > c->z[i - 1])))
+                NBT_FAIL(NBT_EDOM, "mc: layer boundaries must increase and densities be finite, >= 0");
+    }
+    if (!(c->z_cut >= 0) || !isfinite(c->z_cut))
+        NBT_FAIL(NBT_EDOM, "mc: z_cut must be finite and >= 0");
+    return NBT_OK;
+}
+
+void nbt_mc_result_free(nbt_mc_result *r)
+{
+    if (!r)
+        return;
+    free(r->psi);
+    free(r->psi_se);
+    free(r->M0);
+    free(r->M0_se);
+    free(r->M2);
+    free(r->M2_se);
+    free(r);
+}
+
+/* mean of per-photon values from batch sums, and its standard error from the
+ * spread of the batch means (sizes differ by at most one photon) */
+static void batch_stats(const mc_ctx *c, size_t off, double scale, double *mean, double *se)
+{
+    const nbt_mc_config *cf = c->cfg;
+    double N = (double)cf->photons, tot = 0;
+    for (size_t b = 0; b < NBATCH; b++)
+        tot += c->acc[b * c->stride + off];
+    double m = tot / N, v = 0;
+    for (size_t b = 0; b < NBATCH; b++) {
+        double nb = (double)(cf->photons * (b + 1) / NBATCH - cf->photons * b / NBATCH);
+        double d = c->acc[b * c->stride + off] / nb - m;
+        v += nb * d * d;
+    }
+    *mean = m * scale;
+    *se = sqrt(v / ((NBATCH - 1) * N)) * scale;
+}
+
+nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
+{
+    *out = NULL;
+    nbt_status st = check(cf);
+    if (st != NBT_OK)
+        return st;
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    mc_ctx c = {.cfg = cf};
+    atomic_init(&c.done, 0);
+    size_t nl = cf->slab > 0 ? 1 : (cf->nlayers ? cf->nlayers : 1);
+    c.nlay = nl;
+    c.slab = cf->slab > 0;
+    c.b = malloc((nl + 1) * sizeof(double));
+    c.rho = malloc(nl * sizeof(double));
+    c.stride = cf->nplanes * (cf->r_bins + 2) + 3;
+    c.acc = calloc(NBATCH * c.stride, sizeof(double));
+    nbt_mc_result *r = calloc(1, sizeof *r);
+    size_t nv = cf->nplanes * cf->r_bins;
+    if (r) {
+        r->psi = malloc((nv ? nv : 1) * sizeof(double));
+        r->psi_se = malloc((nv ? nv : 1) * sizeof(double));
+        r->M0 = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M0_se = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M2 = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M2_se = malloc((cf->nplanes + 1) * sizeof(double));
+    }
+    if (!c.b || !c.rho || !c.acc || !r || !r->psi || !r->psi_se || !r->M0 || !r->M0_se || !r->M2 || !r->M2_se) {
+        free(c.b);
+        free(c.rho);
+        free(c.acc);
+        nbt_mc_result_free(r);
+        NBT_FAIL(NBT_ENOMEM, "mc: out of memory");
+    }
+    if (c.slab) {
+        c.b[0] = 0;
+        c.b[1] = cf->slab;
+        c.rho[0] = 1;
+    } else {
+        for (size_t i = 0; i < nl; i++) {
+            c.b[i] = cf->nlayers ? cf->z[i] : 0.0;
+            c.rho[i] = cf->nlayers ? cf->rho[i] : 1.0;
+        }
+        double last = cf->nplanes ? cf->z_planes[cf->nplanes - 1] : 0;
+        double zc = cf->z_cut > 0 ? cf->z_cut : 2.0 * last + 20.0 / cf->sigma_t;
+        if (zc <= c.b[nl - 1])
+            zc = c.b[nl - 1] + 20.0 / cf->sigma_t;
+        c.b[nl] = zc;
+    }
+    st = nbt__parallel_for(NBATCH, cf->threads, run_batch, &c);
+    if (st == NBT_OK) {
+        r->nplanes = cf->nplanes;
+        r->r_bins = cf->r_bins;
+        size_t nb = cf->r_bins;
+        for (size_t j = 0; j < cf->nplanes; j++) {
+            double zj = cf->z_planes[j], dr = cf->r_max_scale * zj / (double)nb;
+            for (size_t k = 0; k < nb; k++) {
+                double area = NBT_PI * dr * dr * (double)(2 * k + 1); /* annulus [k dr, (k+1) dr) */
+                batch_stats(&c, j * (nb + 2) + k, 1.0 / area, &r->psi[j * nb + k], &r->psi_se[j * nb + k]);
+            }
+            batch_stats(&c, j * (nb + 2) + nb, 1.0, &r->M0[j], &r->M0_se[j]);
+            batch_stats(&c, j * (nb + 2) + nb + 1, 1.0, &r->M2[j], &r->M2_se[j]);
+        }
+        size_t tail = c.stride - 3;
+        batch_stats(&c, tail, 1.0, &r->R, &r->R_se);
+        batch_stats(&c, tail + 1, 1.0, &r->T, &r->T_se);
+        double ev = 0;
+        for (size_t b = 0; b < NBATCH; b++)
+            ev += c.acc[b * c.stride + tail + 2];
+        r->interactions = (uint64_t)ev;
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    r->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    free(c.b);
+    free(c.rho);
+    free(c.acc);
+    if (st != NBT_OK) {
+        nbt_mc_result_free(r);
+        return st;
+    }
+    *out = r;
+    return NBT_OK;
+}

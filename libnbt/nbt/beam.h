@@ -1,0 +1,81 @@
+/* nbt/beam.h: narrow beam theory (Ishimaru; Shinya et al. sec. 2-3) for a
+ * pencil beam entering a layered medium at the origin along +z.
+ *
+ * Conventions (doc/beam.md derives each): density rho(z) >= 0 multiplies
+ * sigma_t and sigma_s = albedo sigma_t; zeta(z) = int_0^z rho; the phase
+ * function is a sum of small-angle Gaussians p(s) = sum_i w_i
+ * exp(-|s|^2/4B_i)/(4 pi B_i) (dtheta^2 = 4B_i); the diffusion coefficient
+ * is A = rho sigma_s <theta^2>/4 = rho sigma_s B_mix, B_mix = sum w_i B_i
+ * (eq. 10; eq. 17's sigma_t is a typo, see DESIGN.md). G(x) = erfc(x/sqrt2)/2. */
+#ifndef NBT_BEAM_H
+#define NBT_BEAM_H
+
+#include <stddef.h>
+#include <nbt/error.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define NBT_BEAM_MAX_LOBES 16
+
+typedef struct {
+    double sigma_t;          /* extinction at unit density, > 0 */
+    double albedo;           /* sigma_s / sigma_t, [0, 1] */
+    size_t nlobes;           /* Gaussian lobes, 1..NBT_BEAM_MAX_LOBES */
+    double w[NBT_BEAM_MAX_LOBES], B[NBT_BEAM_MAX_LOBES]; /* weights (sum 1), spreads > 0 */
+    size_t nlayers;          /* 0: homogeneous, rho = 1 */
+    const double *z;         /* layer i is [z[i], z[i+1]) (the last unbounded); z[0] = 0, increasing */
+    const double *rho;       /* density per layer, >= 0, finite */
+} nbt_beam_medium;
+
+/* A homogeneous medium with one Gaussian lobe. */
+nbt_beam_medium nbt_beam_homogeneous(double sigma_t, double albedo, double B);
+/* Checks every field; NBT_EDOM with a reason through the error handler. */
+nbt_status nbt_beam_check(const nbt_beam_medium *m);
+
+/* zeta(z) = int_0^z rho. */
+double nbt_beam_zeta(const nbt_beam_medium *m, double z);
+
+typedef enum {
+    NBT_BEAM_ISHIMARU,   /* eq. 25/26 (homogeneous), eq. 28/29 (layered) */
+    NBT_BEAM_SMALLANGLE  /* small-angle random walk: M2 = e^{-sa zeta} int 4 B sigma_s rho(y) (z-y)^2 dy */
+} nbt_beam_model;
+
+/* Moments of the scattered light on the plane z >= 0: M0 = int int I_d ds dr,
+ * M2 = int int |r|^2 I_d ds dr. Closed forms for homogeneous media, a line
+ * integral (adaptive, error in *err, may be NULL) for layers. */
+nbt_status nbt_beam_moments(const nbt_beam_medium *m, nbt_beam_model model, double z, double *M0,
+                            double *M2, double *err);
+
+/* Heuristic kernel Psi(z, r) = alpha/r G(r/beta) reproducing M0 and M2:
+ * beta^2 = (3/2) M2/M0, alpha = M0/(sqrt(2 pi) beta)  (M0 = 0: alpha = beta = 0). */
+void nbt_beam_kernel_params(double M0, double M2, double *alpha, double *beta);
+double nbt_beam_kernel(double alpha, double beta, double r);
+
+/* Psi by model at (z, r > 0), per unit area:
+ *   KERNEL_*  the heuristic kernel from that model's moments
+ *   LINEINT   int I_d ds of eq. 16, done analytically in s, leaving a line integral in z'
+ *   SINGLE    single scattering Psi_1 (homogeneous: eq. 32 corrected,
+ *             sigma_s e^{-tau}/(2 sqrt(pi B)) (1/r) G(r/(z sqrt(2B))) per lobe)
+ *   ELEK      Elek et al. eq. 2: M0 exp(-r^2/2W^2)/(2 pi W^2),
+ *             W(s)^2 = 1/2 (2 sigma_a/(3s) + 4/(s^3 sigma_s (1-g)))^-1, s = z, g the mean cosine
+ * err (may be NULL) gets the quadrature error of LINEINT / layered SINGLE. */
+typedef enum {
+    NBT_PSI_ISHIMARU,
+    NBT_PSI_SMALLANGLE,
+    NBT_PSI_LINEINT,
+    NBT_PSI_SINGLE,
+    NBT_PSI_ELEK
+} nbt_psi_model;
+
+nbt_status nbt_beam_psi(const nbt_beam_medium *m, nbt_psi_model model, double z, double r, double *psi,
+                        double *err);
+
+/* The unscattered (direct) part on plane z: a delta at r = 0 of weight exp(-tau(z)). */
+double nbt_beam_direct(const nbt_beam_medium *m, double z);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

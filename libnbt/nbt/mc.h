@@ -1,0 +1,66 @@
+/* nbt/mc.h: photon counting, the ground truth for the beam models.
+ *
+ * A pencil beam enters at the origin along +z. The medium fills z >= 0 with
+ * density rho(z) (layers as in nbt/beam.h; for a slab, rho = 1 on [0, d] and
+ * vacuum elsewhere); z < 0 is vacuum. Photons scatter with the given phase
+ * function and are absorbed with probability 1 - albedo per interaction
+ * (analog: every tally is a count, so results are exactly reproducible).
+ * Without a slab, a photon is followed until absorbed, escaped through
+ * z = 0, or deeper than z_cut (default twice the last tally plane plus 20
+ * mean free paths at density 1), from where its return is not counted.
+ *
+ * Tallies on planes z_j: every forward crossing (mu > 0) by a photon that
+ * has scattered at least once adds 1/(N * annulus area) to the radial bin
+ * of its crossing radius, r in [0, F z_j) in equal bins, so Psi is per unit
+ * area per launched photon; M0 and M2 count all radii. Standard errors come
+ * from 64 fixed batches (by photon index), so results are identical for
+ * any thread count. */
+#ifndef NBT_MC_H
+#define NBT_MC_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <nbt/error.h>
+#include <nbt/phase.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    double sigma_t;          /* extinction at unit density, > 0 */
+    double albedo;           /* [0, 1] */
+    const nbt_phase *phase;  /* any phase function; sampled exactly */
+    size_t nlayers;          /* 0: rho = 1 for z >= 0 */
+    const double *z, *rho;   /* layers: z[0] = 0 < z[1] < ..., density per layer */
+    double slab;             /* > 0: slab of this thickness (overrides layers), R and T tallied */
+    size_t nplanes;          /* tally planes (may be 0 with a slab) */
+    const double *z_planes;  /* increasing, > 0 */
+    size_t r_bins;           /* radial bins per plane, >= 1 */
+    double r_max_scale;      /* F: r range [0, F z_j), > 0 */
+    double z_cut;            /* 0: default (see above) */
+    uint64_t photons;        /* >= 64 */
+    uint64_t seed;
+    unsigned threads;        /* 0: all CPUs */
+    /* optional progress callback, called from the calling thread with the
+     * fraction done; may be NULL */
+    void (*progress)(double fraction, void *data);
+    void *progress_data;
+} nbt_mc_config;
+
+typedef struct {
+    size_t nplanes, r_bins;
+    double *psi, *psi_se;    /* [plane * r_bins + bin] */
+    double *M0, *M0_se, *M2, *M2_se; /* per plane */
+    double R, R_se, T, T_se; /* slab only: reflected, transmitted (unscattered included) */
+    double seconds;          /* wall time of the run */
+    uint64_t interactions;   /* total scattering + absorption events */
+} nbt_mc_result;
+
+nbt_status nbt_mc_run(const nbt_mc_config *cfg, nbt_mc_result **out);
+void nbt_mc_result_free(nbt_mc_result *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

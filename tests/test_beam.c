@@ -1,0 +1,141 @@
+/* tests/test_beam.c: narrow-beam moments (closed form vs line integral vs
+ * independent integrals), kernels reproduce their moments, edges, bad input. */
+#include <math.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+typedef struct {
+    const nbt_beam_medium *m;
+    nbt_psi_model model;
+    double z, alpha, beta;
+    int power;
+} rint_ctx;
+
+/* 2 pi r^(1+power) Psi(r), r = t/(1-t) on t in [0, 1) */
+static int rint_f(double t, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    const rint_ctx *c = vp;
+    double r = t / (1 - t), jac = 1 / ((1 - t) * (1 - t)), psi;
+    if (c->beta > 0)
+        psi = nbt_beam_kernel(c->alpha, c->beta, r);
+    else
+        nbt_beam_psi(c->m, c->model, c->z, r, &psi, NULL);
+    f[0] = 2 * M_PI * pow(r, 1 + c->power) * psi * jac;
+    return 0;
+}
+
+static double rmoment(nbt_quad_ws *ws, rint_ctx *c, int power)
+{
+    double r, e;
+    c->power = power;
+    nbt_quad_gk(ws, rint_f, c, 1, 0.0, 1.0, 1e-300, 1e-10, &r, &e);
+    return r;
+}
+
+int main(void)
+{
+    double M0, M2, e, a, b;
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 4000);
+    double albedos[] = {0.1, 0.5, 0.9, 0.99, 1.0}, Bs[] = {0.0685, 0.274};
+    for (int ia = 0; ia < 5; ia++)
+        for (int ib = 0; ib < 2; ib++) {
+            nbt_beam_medium h = nbt_beam_homogeneous(1.0, albedos[ia], Bs[ib]);
+            double zl[3] = {0, 0.7, 2.385}, rl[3] = {1, 1, 1};
+            nbt_beam_medium L = h;
+            L.nlayers = 3;
+            L.z = zl;
+            L.rho = rl;
+            for (double z = 0.02; z <= 10; z *= 2.2) {
+                double M0l, M2l;
+                nbt_beam_moments(&h, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+                nbt_beam_moments(&L, NBT_BEAM_ISHIMARU, z, &M0l, &M2l, &e);
+                t_rel(M2l, M2, 1e-10, "albedo %g B %g z %g: eq. 26 = eq. 29 with equal layers", albedos[ia], Bs[ib], z);
+                t_rel(M0, exp(-(1 - albedos[ia]) * z) * (1 - exp(-albedos[ia] * z)), 1e-14, "M0 eq. 25");
+                nbt_beam_moments(&L, NBT_BEAM_SMALLANGLE, z, &M0l, &M2l, &e);
+                t_rel(M2l, exp(-(1 - albedos[ia]) * z) * 4.0 / 3.0 * albedos[ia] * Bs[ib] * z * z * z, 1e-10,
+                      "random walk, layered = (4/3) sigma_s B z^3");
+            }
+            /* kernel reproduces the moments; the line-integral Psi has them too */
+            for (double z = 0.3; z <= 10; z *= 3) {
+                nbt_beam_moments(&h, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+                nbt_beam_kernel_params(M0, M2, &a, &b);
+                rint_ctx c = {&h, NBT_PSI_ISHIMARU, z, a, b, 0};
+                t_rel(rmoment(ws, &c, 0), M0, 1e-9, "int Psi dA = M0 (albedo %g, z %g)", albedos[ia], z);
+                t_rel(rmoment(ws, &c, 2), M2, 1e-9, "int r^2 Psi dA = M2 (albedo %g, z %g)", albedos[ia], z);
+                if (ib == 0 && (ia == 1 || ia == 3)) {
+                    rint_ctx l = {&h, NBT_PSI_LINEINT, z, 0, 0, 0};
+                    t_rel(rmoment(ws, &l, 0), M0, 1e-6, "line-integral Psi: M0 (albedo %g, z %g)", albedos[ia], z);
+                    t_rel(rmoment(ws, &l, 2), M2, 1e-6, "line-integral Psi: M2 (albedo %g, z %g)", albedos[ia], z);
+                    rint_ctx s = {&h, NBT_PSI_SINGLE, z, 0, 0, 0};
+                    double ss = albedos[ia];
+                    t_rel(rmoment(ws, &s, 0), ss * z * exp(-z), 1e-7, "int Psi_1 dA = sigma_s z e^-tau");
+                    t_rel(rmoment(ws, &s, 2), 4.0 / 3.0 * Bs[ib] * ss * z * z * z * exp(-z), 1e-7,
+                          "int r^2 Psi_1 dA = (4/3) B sigma_s z^3 e^-tau");
+                    rint_ctx el = {&h, NBT_PSI_ELEK, z, 0, 0, 0};
+                    t_rel(rmoment(ws, &el, 0), M0, 1e-8, "Elek kernel normalised to M0");
+                }
+            }
+        }
+    /* the small-z series of eq. 26 joins the closed form */
+    nbt_beam_medium h = nbt_beam_homogeneous(2.0, 0.8, 0.1);
+    double zs = 0.5 / 1.6, M0a, M2a, M2b;
+    nbt_beam_moments(&h, NBT_BEAM_ISHIMARU, zs * (1 - 1e-9), &M0a, &M2a, NULL);
+    nbt_beam_moments(&h, NBT_BEAM_ISHIMARU, zs * (1 + 1e-9), &M0a, &M2b, NULL);
+    t_rel(M2a, M2b, 1e-8, "eq. 26 series and closed form agree where they meet");
+    nbt_beam_moments(&h, NBT_BEAM_ISHIMARU, 1e-6, &M0a, &M2a, NULL);
+    t_rel(M2a, 4.0 / 3.0 * 1.6 * 0.1 * 1e-18, 1e-5, "M2 -> (4/3) sigma_s B z^3 as z -> 0 (no cancellation)");
+    /* layers: density 2 = doubled sigma_t; a vacuum gap */
+    double z2[1] = {0}, r2[1] = {2.0};
+    nbt_beam_medium d2 = nbt_beam_homogeneous(0.5, 0.9, 0.0685), hh = nbt_beam_homogeneous(1.0, 0.9, 0.0685);
+    d2.nlayers = 1;
+    d2.z = z2;
+    d2.rho = r2;
+    nbt_beam_moments(&d2, NBT_BEAM_ISHIMARU, 2.385, &M0, &M2, NULL);
+    nbt_beam_moments(&hh, NBT_BEAM_ISHIMARU, 2.385, &M0a, &M2a, NULL);
+    t_rel(M2, M2a, 1e-10, "density 2 x sigma_t 0.5 = sigma_t 1");
+    double zg[3] = {0, 1, 2}, rg[3] = {1, 0, 1};
+    nbt_beam_medium gap = hh;
+    gap.nlayers = 3;
+    gap.z = zg;
+    gap.rho = rg;
+    nbt_beam_moments(&gap, NBT_BEAM_SMALLANGLE, 3, &M0, &M2, NULL);
+    t_rel(M2, exp(-0.1 * 2) * 4 * 0.0685 * 0.9 * 20.0 / 3.0, 1e-10, "random walk across a vacuum gap: int (3-y)^2 = 20/3");
+    t_rel(M0, exp(-0.1 * 2) * (1 - exp(-0.9 * 2)), 1e-14, "M0 across a gap depends on zeta only");
+    double psl, psh;
+    nbt_beam_medium lay = hh;
+    double zl1[2] = {0, 1.5}, rl1[2] = {1, 1};
+    lay.nlayers = 2;
+    lay.z = zl1;
+    lay.rho = rl1;
+    nbt_beam_psi(&lay, NBT_PSI_SINGLE, 2.385, 0.3, &psl, NULL);
+    nbt_beam_psi(&hh, NBT_PSI_SINGLE, 2.385, 0.3, &psh, NULL);
+    t_rel(psl, psh, 1e-8, "single scattering: layered quadrature = closed form");
+    /* edges */
+    nbt_beam_medium z0 = nbt_beam_homogeneous(1.0, 0.0, 0.0685);
+    nbt_beam_moments(&z0, NBT_BEAM_ISHIMARU, 2, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, &a, &b);
+    t_true(M0 == 0 && M2 == 0 && a == 0 && b == 0 && nbt_beam_kernel(a, b, 1) == 0, "albedo 0: no scattered light, kernel 0");
+    nbt_beam_moments(&hh, NBT_BEAM_ISHIMARU, 1e4, &M0, &M2, NULL);
+    t_true(isfinite(M0) && isfinite(M2) && M0 >= 0 && M2 >= 0, "tau = 1e4: finite (M0 %g, M2 %g)", M0, M2);
+    nbt_beam_medium tiny = nbt_beam_homogeneous(1.0, 0.9, 1e-12);
+    double p1;
+    t_true(nbt_beam_psi(&tiny, NBT_PSI_LINEINT, 2, 1e-7, &p1, NULL) == NBT_OK && isfinite(p1) && p1 >= 0, "B = 1e-12: finite");
+    t_true(nbt_beam_psi(&hh, NBT_PSI_ISHIMARU, 1e-12, 1e-13, &p1, NULL) == NBT_OK && isfinite(p1), "z = 1e-12: finite");
+    /* bad input */
+    nbt_beam_medium bad = nbt_beam_homogeneous(1.0, 1.2, 0.1);
+    t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "albedo > 1 rejected");
+    bad = nbt_beam_homogeneous(-1.0, 0.5, 0.1);
+    t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "sigma_t < 0 rejected");
+    bad = nbt_beam_homogeneous(1.0, 0.5, 0);
+    t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "B = 0 rejected");
+    t_true(nbt_beam_moments(&hh, NBT_BEAM_ISHIMARU, NAN, &M0, &M2, NULL) == NBT_EDOM, "z = NaN rejected");
+    double zb[2] = {0, 0}, rb[2] = {1, 1};
+    bad = hh;
+    bad.nlayers = 2;
+    bad.z = zb;
+    bad.rho = rb;
+    t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "non-increasing layers rejected");
+    nbt_quad_ws_free(ws);
+    return t_done();
+}
