@@ -1,4 +1,4 @@
-/* gen/cli.c: argument checking and fatal errors for nbt-gen. */
+/* gen/cli.c: argument checking and fatal errors for nbt-gen and nbt-fit. */
 #include <config.h>
 #include <errno.h>
 #include <math.h>
@@ -9,9 +9,11 @@
 #include <unistd.h>
 #include "cli.h"
 
+const char *cli_prog = "nbt";
+
 static void vmsg(const char *fmt, va_list ap)
 {
-    fputs("nbt-gen: ", stderr);
+    fprintf(stderr, "%s: ", cli_prog);
     vfprintf(stderr, fmt, ap);
     fputc('\n', stderr);
 }

@@ -7,6 +7,9 @@
 
 #define EXIT_USAGE 2
 
+/* The program's name for messages ("nbt-gen", "nbt-fit"); set by main. */
+extern const char *cli_prog;
+
 _Noreturn void die_usage(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 _Noreturn void die(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 

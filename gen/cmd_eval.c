@@ -11,7 +11,8 @@
 
 enum {
     O_K, O_U, O_V, O_N, O_T, O_THETA, O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP,
-    O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_METHOD, O_TERMS, O_TOL, O_COUNT
+    O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_METHOD, O_TERMS, O_TOL, O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_R,
+    O_MODEL, O_DENSITY, O_COUNT
 };
 static const struct option opts[] = {
     {"k", required_argument, 0, O_K},         {"u", required_argument, 0, O_U},
@@ -25,6 +26,10 @@ static const struct option opts[] = {
     {"theta-r", required_argument, 0, O_THR}, {"kd", required_argument, 0, O_KD},
     {"ks", required_argument, 0, O_KSPEC},    {"method", required_argument, 0, O_METHOD},
     {"terms", required_argument, 0, O_TERMS}, {"tol", required_argument, 0, O_TOL},
+    {"albedo", required_argument, 0, O_ALBEDO}, {"sigma-t", required_argument, 0, O_SIGMAT},
+    {"B", required_argument, 0, O_BSPREAD},   {"z", required_argument, 0, O_Z},
+    {"r", required_argument, 0, O_R},         {"model", required_argument, 0, O_MODEL},
+    {"density", required_argument, 0, O_DENSITY},
     {"help", no_argument, 0, 'h'},            {0, 0, 0, 0}};
 
 static void eval_help(void)
@@ -36,7 +41,12 @@ static void eval_help(void)
          "                --dsv D --gamma GA --dvp DV|inf [--method direct|series|table] [--terms N] [--tol EPS]\n"
          "       nbt-gen eval surface (--g G | --phase SPEC) --kappa-s KS --kappa-t KT --I0 I\n"
          "                --dsp D --theta-s TS --theta-r TR --kd KD --ks KS --n N [--method ...] [--terms N] [--tol EPS]\n\n"
+         "       nbt-gen eval moments --albedo W --sigma-t ST --B B --z Z [--model ishimaru|smallangle]\n"
+         "                [--density FILE]           prints M0 M2 alpha beta (narrow beam, pencil at z = 0)\n"
+         "       nbt-gen eval psi --albedo W --sigma-t ST --B B --z Z --r R\n"
+         "                [--model ishimaru|smallangle|lineint|single|elek] [--density FILE]\n\n"
          "Prints the value and its estimated absolute error, 17 significant digits.\n"
+         "A density FILE has lines 'z rho': layers from z (first 0) with density rho >= 0.\n"
          "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
          "until the series changes by less than tol relative (unless --terms); 'table' builds\n"
          "tables at 1e-3 relative interpolation error and reports their recorded error.\n"
@@ -234,11 +244,69 @@ static int eval_phys(const args_t *a, phys_t *ph)
     return 0;
 }
 
+/* eval moments | psi: the narrow-beam models of nbt/beam.h */
+static int eval_beam(const args_t *a, const char *what)
+{
+    int psi = !strcmp(what, "psi");
+    static const int ok[] = {O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_MODEL, O_DENSITY, O_R};
+    only(a, what, ok, psi ? 7 : 6);
+    double W = need(a, O_ALBEDO, "--albedo", 0, 0, 1, 0);
+    double st_ = need(a, O_SIGMAT, "--sigma-t", 0, 1, INFINITY, 1);
+    double B = need(a, O_BSPREAD, "--B", 0, 1, INFINITY, 1);
+    double z = need(a, O_Z, "--z", 0, psi, INFINITY, 1);
+    double r = psi ? need(a, O_R, "--r", 0, 1, INFINITY, 1) : 0;
+    nbt_beam_medium m = nbt_beam_homogeneous(st_, W, B);
+    double *zl = NULL, *rl = NULL;
+    if (a->arg[O_DENSITY]) {
+        char err[512];
+        if (nbt_density_read(a->arg[O_DENSITY], &zl, &rl, &m.nlayers, err, sizeof err) != NBT_OK)
+            die_usage("--density: %s", err);
+        m.z = zl;
+        m.rho = rl;
+    }
+    const char *model = a->arg[O_MODEL] ? a->arg[O_MODEL] : "ishimaru";
+    nbt_status st;
+    if (!psi) {
+        nbt_beam_model bm;
+        if (!strcmp(model, "ishimaru"))
+            bm = NBT_BEAM_ISHIMARU;
+        else if (!strcmp(model, "smallangle"))
+            bm = NBT_BEAM_SMALLANGLE;
+        else
+            die_usage("--model: '%s' is not accepted for moments: ishimaru or smallangle", model);
+        double M0, M2, al, be, e;
+        st = nbt_beam_moments(&m, bm, z, &M0, &M2, &e);
+        if (st != NBT_OK && st != NBT_ETOL)
+            die("evaluation failed: %s", nbt_strerror(st));
+        nbt_beam_kernel_params(M0, M2, &al, &be);
+        printf("%.17g %.17g %.17g %.17g\n", M0, M2, al, be);
+    } else {
+        static const char *names[] = {"ishimaru", "smallangle", "lineint", "single", "elek"};
+        static const nbt_psi_model models[] = {NBT_PSI_ISHIMARU, NBT_PSI_SMALLANGLE, NBT_PSI_LINEINT, NBT_PSI_SINGLE,
+                                               NBT_PSI_ELEK};
+        int k = -1;
+        for (int i = 0; i < 5; i++)
+            if (!strcmp(model, names[i]))
+                k = i;
+        if (!strcmp(model, "pi"))
+            die_usage("--model pi: the path-integral width of Shinya et al.'s supplement (eq. 14-16) is not "
+                      "available here; accepted are ishimaru, smallangle, lineint, single, elek");
+        if (k < 0)
+            die_usage("--model: '%s' is not accepted: ishimaru, smallangle, lineint, single or elek", model);
+        double v, e;
+        st = nbt_beam_psi(&m, models[k], z, r, &v, &e);
+        print_result(st, v, e);
+    }
+    free(zl);
+    free(rl);
+    return 0;
+}
+
 int cmd_eval(int argc, char **argv)
 {
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
         if (argc < 2)
-            die_usage("eval: say what to evaluate: H, J, airlight or surface (see 'nbt-gen eval --help')");
+            die_usage("eval: say what to evaluate: H, J, airlight, surface, moments or psi (see 'nbt-gen eval --help')");
         eval_help();
         return 0;
     }
@@ -294,6 +362,8 @@ int cmd_eval(int argc, char **argv)
         nbt_phase_free(p);
         return 0;
     }
+    if (!strcmp(what, "moments") || !strcmp(what, "psi"))
+        return eval_beam(&a, what);
     phys_t ph;
     memset(&ph, 0, sizeof ph);
     if (!strcmp(what, "airlight")) {
@@ -329,5 +399,5 @@ int cmd_eval(int argc, char **argv)
             die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.sg.kappa_t, ph.sg.kappa_s);
         return eval_phys(&a, &ph);
     }
-    die_usage("eval: '%s' is not accepted: H, J, airlight or surface", what);
+    die_usage("eval: '%s' is not accepted: H, J, airlight, surface, moments or psi", what);
 }

@@ -20,6 +20,7 @@ static void help(void)
 
 int main(int argc, char **argv)
 {
+    cli_prog = "nbt-gen";
     if (argc < 2)
         return cmd_default(argc, argv);
     const char *c = argv[1];

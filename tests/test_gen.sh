@@ -34,6 +34,27 @@ close "$1" 1.8707963267948966 1e-14 "eval H_0(0, 0.3)"
 set -- $("$NBT_GEN" eval J --k 0 --n 1 --T 0 --theta 0)
 close "$1" 16.152789708268945 1e-12 "eval J_0^1(0, 0)"
 
+# narrow beam: moments and kernels
+set -- $("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385)
+close "$1" "$(awk 'BEGIN { printf "%.17g", exp(-0.1 * 2.385) * (1 - exp(-0.9 * 2.385)) }')" 1e-12 "eval moments: M0 eq. 25"
+close "$4" "$(awk -v m0="$1" -v m2="$2" 'BEGIN { printf "%.17g", sqrt(1.5 * m2 / m0) }')" 1e-12 "eval moments: beta^2 = 1.5 M2/M0"
+set -- $("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --model smallangle)
+close "$2" "$(awk 'BEGIN { printf "%.17g", exp(-0.2) * 4 / 3 * 0.9 * 0.0685 * 8 }')" 1e-12 "eval moments: random walk"
+printf '0 1\n1.5 1\n' >"$tmp/dens.txt"
+a=$("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385 | cut -d' ' -f2)
+b=$("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385 --density "$tmp/dens.txt" | cut -d' ' -f2)
+close "$b" "$a" 1e-10 "eval moments: equal layers = homogeneous"
+for m in ishimaru smallangle lineint single elek; do
+  set -- $("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model $m)
+  awk -v v="$1" 'BEGIN { exit !(v > 0 && v < 10) }' && ok || bad "eval psi --model $m: $1"
+done
+expect_usage "psi pi model" "supplement" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model pi
+expect_usage "albedo > 1" "--albedo" "$NBT_GEN" eval moments --albedo 1.5 --sigma-t 1 --B 0.0685 --z 2
+expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2
+: >"$tmp/empty.txt"
+expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
+rm -f "$tmp/dens.txt" "$tmp/empty.txt"
+
 # airlight: direct vs series vs table
 A="--g 0.7 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.4 --dvp 20"
 d=$("$NBT_GEN" eval airlight $A --method direct | cut -d' ' -f1)

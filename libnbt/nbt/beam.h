@@ -72,6 +72,13 @@ typedef enum {
 nbt_status nbt_beam_psi(const nbt_beam_medium *m, nbt_psi_model model, double z, double r, double *psi,
                         double *err);
 
+/* Read a layered density profile: lines "z rho" ('#' comments), z
+ * increasing from exactly 0, rho >= 0; layer i is [z_i, z_{i+1}), the last
+ * unbounded. On success *z and *rho are malloc'd (free both) and *n >= 1;
+ * on failure err holds one line naming the file, the line and what is
+ * accepted. */
+nbt_status nbt_density_read(const char *path, double **z, double **rho, size_t *n, char *err, size_t errlen);
+
 /* The unscattered (direct) part on plane z: a delta at r = 0 of weight exp(-tau(z)). */
 double nbt_beam_direct(const nbt_beam_medium *m, double z);
 

@@ -1,0 +1,34 @@
+/* fit/main.c: nbt-fit, photon counting and (later) kernel fits. */
+#include <config.h>
+#include <stdio.h>
+#include <string.h>
+#include <nbt/nbt.h>
+#include "../gen/cli.h"
+#include "commands.h"
+
+static void help(void)
+{
+    puts("Usage: nbt-fit mc [...]     photon counting: a pencil beam in a layered medium or a slab\n"
+         "       nbt-fit --version\n\n"
+         "'nbt-fit COMMAND --help' describes each command. Exit status: 0 success,\n"
+         "1 failure, 2 bad usage.");
+}
+
+int main(int argc, char **argv)
+{
+    cli_prog = "nbt-fit";
+    if (argc < 2)
+        die_usage("say what to do: mc (see 'nbt-fit --help')");
+    const char *c = argv[1];
+    if (!strcmp(c, "--help") || !strcmp(c, "-h")) {
+        help();
+        return 0;
+    }
+    if (!strcmp(c, "--version")) {
+        printf("nbt-fit (nbt) %s\n", nbt_version());
+        return 0;
+    }
+    if (!strcmp(c, "mc"))
+        return cmd_mc(argc - 1, argv + 1);
+    die_usage("unknown command '%s': mc (see 'nbt-fit --help')", c);
+}

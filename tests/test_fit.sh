@@ -1,0 +1,61 @@
+#!/bin/sh
+# tests/test_fit.sh: nbt-fit mc end to end: output format, slab values,
+# identical output for any thread count, bad input (exit 2, one line, no file).
+NBT_FIT=${NBT_FIT:-./nbt-fit}
+case $NBT_FIT in /*) ;; *) NBT_FIT=$(pwd)/$NBT_FIT ;; esac
+pass=0; fail=0
+ok()  { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+tmp=$(mktemp -d /tmp/nbt-test-fit.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+expect_usage() {
+  d=$1; pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
+  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
+}
+
+"$NBT_FIT" --version | grep -q "nbt-fit (nbt)" && ok || bad "--version"
+"$NBT_FIT" mc --help | grep -q "z,r_lo,r_hi,psi,psi_stderr" && ok || bad "mc --help"
+
+# slab: R and T lines, within 4 standard errors of van de Hulst (0.09739, 0.66096)
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --phase hg:g=0.75 --photons 400000 --slab 2 >"$tmp/slab" 2>/dev/null
+awk '$1 == "R" { r = ($2 - 0.09739) / $3 } $1 == "T" { t = ($2 - 0.66096) / $3 }
+     END { exit !(r * r < 16 && t * t < 16 && NR == 2) }' "$tmp/slab" && ok || bad "slab R/T: $(cat "$tmp/slab")"
+
+# planes: CSV format and size; the same for 1 and 2 threads
+M="--albedo 0.7 --sigma-t 1.3 --B 0.0685 --photons 20000 --z-planes 1:4:4 --r-bins 7 --seed 11"
+"$NBT_FIT" mc $M --threads 1 -o "$tmp/a.csv" >"$tmp/m1" 2>/dev/null &&
+  "$NBT_FIT" mc $M --threads 2 -o "$tmp/b.csv" >"$tmp/m2" 2>/dev/null && ok || bad "plane runs"
+[ "$(head -1 "$tmp/a.csv")" = "z,r_lo,r_hi,psi,psi_stderr" ] && [ "$(wc -l <"$tmp/a.csv")" -eq 29 ] && ok ||
+  bad "CSV header and 4 x 7 rows"
+cmp -s "$tmp/a.csv" "$tmp/b.csv" && cmp -s "$tmp/m1" "$tmp/m2" && ok || bad "output differs between 1 and 2 threads"
+[ "$(grep -c '^M ' "$tmp/m1")" -eq 4 ] && ok || bad "one moment line per plane"
+# Psi is per unit area: sum psi * annulus area over bins <= M0 of the plane (bins cover r < z only)
+awk -F, 'NR > 1 && $1 == 2 { s += $4 * 3.141592653589793 * ($3 * $3 - $2 * $2) } END { print s }' "$tmp/a.csv" >"$tmp/s"
+m0=$(awk '$2 == 2 { print $3 }' "$tmp/m1")
+awk -v s="$(cat "$tmp/s")" -v m="$m0" 'BEGIN { exit !(s > 0.5 * m && s <= m * (1 + 1e-12)) }' && ok ||
+  bad "binned Psi integrates to at most M0 ($(cat "$tmp/s") vs $m0)"
+# layered: a density file
+printf '# a vacuum gap\n0 1\n1 0\n2 1\n' >"$tmp/d.txt"
+"$NBT_FIT" mc $M --density "$tmp/d.txt" -o "$tmp/d.csv" >/dev/null 2>&1 && [ -s "$tmp/d.csv" ] && ok || bad "--density run"
+
+# bad input
+expect_usage "albedo > 1" "--albedo" "$NBT_FIT" mc --albedo 1.2 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.csv"
+expect_usage "negative sigma_t" "--sigma-t" "$NBT_FIT" mc --albedo 0.5 --sigma-t -1 --B 0.1 --photons 1000 -o "$tmp/x.csv"
+expect_usage "NaN" "--B" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B nan --photons 1000 -o "$tmp/x.csv"
+expect_usage "both phases" "exactly one" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --phase iso --photons 1000 -o "$tmp/x.csv"
+expect_usage "too few photons" "--photons" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 10 -o "$tmp/x.csv"
+expect_usage "bad planes" "--z-planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --z-planes 3:1:4 -o "$tmp/x.csv"
+: >"$tmp/empty.txt"
+expect_usage "empty density file" "empty" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/empty.txt" -o "$tmp/x.csv"
+printf '0 1\n0.5 -2\n' >"$tmp/neg.txt"
+expect_usage "negative density" "line 2" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/neg.txt" -o "$tmp/x.csv"
+expect_usage "EXR not yet" "\.csv" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.exr"
+expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
+expect_usage "unknown command" "frob" "$NBT_FIT" frob
+[ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && ok || bad "rejected runs left output"
+"$NBT_FIT" mc $M -o /nonexistent/dir/x.csv >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
+
+echo "$pass passed, $fail failed"
+[ $fail -eq 0 ]
