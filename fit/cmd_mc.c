@@ -13,14 +13,16 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv\n"
+    puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv|OUT.exr\n"
          "                  [--seed S] [--threads T] [--z-planes FROM:TO:COUNT] [--r-bins N]\n"
          "                  [--r-max-scale F] [--density FILE] [--z-cut Z]\n"
          "       nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N --slab TAU [-o OUT.csv]\n\n"
          "A pencil beam enters at the origin along +z; every forward crossing of a plane z by a\n"
          "scattered photon is counted, per unit area per launched photon, in radial bins over\n"
          "[0, F z) (default F = 1, 50 bins, planes 1:10:10). OUT.csv has the columns\n"
-         "z,r_lo,r_hi,psi,psi_stderr; stdout gets 'M z M0 M0_stderr M2 M2_stderr' per plane.\n"
+         "z,r_lo,r_hi,psi,psi_stderr; OUT.exr is a PSI table (axis 0 r/z at the bin centres,\n"
+         "axis 1 z; R = psi, G = psi_stderr; see nbt-gen info). stdout gets\n"
+         "'M z M0 M0_stderr M2 M2_stderr' per plane.\n"
          "--B B is the Gaussian phase of Shinya et al. eq. 13 (dtheta^2 = 4B); --phase takes\n"
          "iso, rayleigh, hg:g=G, gauss:B=B, table:FILE. --density FILE: lines 'z rho'.\n"
          "--slab TAU: a slab of optical thickness TAU (at density 1); stdout gets\n"
@@ -36,6 +38,78 @@ static void bar(double f, void *data)
             100 * f);
     if (f >= 1)
         fputc('\n', stderr);
+}
+
+static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_result *r)
+{
+    size_t len = strlen(out) + 32;
+    char *tmp = malloc(len);
+    FILE *f = NULL;
+    if (tmp) {
+        snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
+        f = fopen(tmp, "w");
+    }
+    if (!f) {
+        free(tmp);
+        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        return 1;
+    }
+    fprintf(f, "z,r_lo,r_hi,psi,psi_stderr\n");
+    for (size_t j = 0; j < c->nplanes; j++) {
+        double dr = c->r_max_scale * c->z_planes[j] / (double)c->r_bins;
+        for (size_t k = 0; k < c->r_bins; k++)
+            fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g\n", c->z_planes[j], dr * (double)k, dr * (double)(k + 1),
+                    r->psi[j * c->r_bins + k], r->psi_se[j * c->r_bins + k]);
+    }
+    int rc = 0;
+    if (fclose(f) != 0 || rename(tmp, out) != 0) {
+        unlink(tmp);
+        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        rc = 1;
+    }
+    free(tmp);
+    return rc;
+}
+
+/* A PSI table: axis 0 = r/z at the bin centres, axis 1 = z at the planes
+ * (evenly spaced), channels R = psi, G = its standard error. */
+static int write_exr(const char *out, const nbt_mc_config *c, const nbt_mc_result *r, const char *phase, double B,
+                     double tau)
+{
+    size_t nb = c->r_bins, np = c->nplanes;
+    double h = c->r_max_scale / (double)nb;
+    nbt_axis a0 = {0.5 * h, c->r_max_scale - 0.5 * h, NBT_AXIS_LINEAR, 0, nb};
+    nbt_axis a1 = {c->z_planes[0], c->z_planes[np - 1], NBT_AXIS_LINEAR, 0, np};
+    nbt_table *t = nbt_table_alloc(NBT_TABLE_PSI, &a0, &a1, 2);
+    if (!t)
+        die("out of memory");
+    t->k[0] = t->k[1] = -1;
+    char ph[64];
+    if (phase)
+        snprintf(ph, sizeof ph, "%s", phase);
+    else
+        snprintf(ph, sizeof ph, "gauss:B=%g", B);
+    char run[512];
+    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s", c->albedo, c->sigma_t, ph,
+             (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "");
+    size_t n = strlen(run) < sizeof t->phase ? strlen(run) : sizeof t->phase - 1; /* a long table path is cut */
+    memcpy(t->phase, run, n);
+    t->phase[n] = '\0';
+    for (size_t j = 0; j < np; j++)
+        for (size_t k = 0; k < nb; k++) {
+            t->data[(j * nb + k) * 2] = (float)r->psi[j * nb + k];
+            t->data[(j * nb + k) * 2 + 1] = (float)r->psi_se[j * nb + k];
+            t->max_abs[0] = fmax(t->max_abs[0], r->psi[j * nb + k]);
+            t->max_abs[1] = fmax(t->max_abs[1], r->psi_se[j * nb + k]);
+        }
+    t->max_err[0] = t->max_err[1] = NAN; /* data, not an interpolated function: see the G channel */
+    nbt_status st = nbt_table_write_exr(t, out, NBT_EXR_ZIP);
+    nbt_table_free(t);
+    if (st != NBT_OK) {
+        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        return 1;
+    }
+    return 0;
 }
 
 int cmd_mc(int argc, char **argv)
@@ -89,11 +163,12 @@ int cmd_mc(int argc, char **argv)
         die_usage("--slab and --density exclude each other");
     if (!out && tau == 0)
         die_usage("mc: -o OUT.csv is required (except for a --slab run)");
+    int exr = 0;
     if (out) {
         size_t n = strlen(out);
-        if (n < 5 || strcmp(out + n - 4, ".csv"))
-            die_usage("-o: '%s' is not accepted: the output must end in .csv (EXR output of photon counts is "
-                      "not implemented yet)", out);
+        exr = n >= 5 && !strcmp(out + n - 4, ".exr");
+        if (n < 5 || (strcmp(out + n - 4, ".csv") && !exr))
+            die_usage("-o: '%s' is not accepted: the output must end in .csv or .exr", out);
     }
     nbt_phase *ph = NULL;
     char err[512];
@@ -112,6 +187,8 @@ int cmd_mc(int argc, char **argv)
             !isfinite(to) || count < 1 || count > 10000 || (count > 1 && !(to > from)))
             die_usage("--z-planes: '%s' is not accepted: expected FROM:TO:COUNT with 0 < FROM <= TO, "
                       "1 <= COUNT <= 10000 (FROM < TO when COUNT > 1)", planes);
+        if (exr && (count < 2 || c.r_bins < 2))
+            die_usage("-o %s: an EXR table needs at least 2 planes and 2 r bins", out);
         zp = malloc((size_t)count * sizeof(double));
         if (!zp)
             die("out of memory");
@@ -136,32 +213,12 @@ int cmd_mc(int argc, char **argv)
     if (st != NBT_OK)
         die("photon counting failed: %s", nbt_strerror(st));
     int rc = 0;
-    if (out) {
-        size_t len = strlen(out) + 32;
-        char *tmp = malloc(len);
-        FILE *f = NULL;
-        if (tmp) {
-            snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
-            f = fopen(tmp, "w");
-        }
-        if (!f)
-            die("cannot write '%s'", out);
-        fprintf(f, "z,r_lo,r_hi,psi,psi_stderr\n");
-        for (size_t j = 0; j < c.nplanes; j++) {
-            double dr = c.r_max_scale * zp[j] / (double)c.r_bins;
-            for (size_t k = 0; k < c.r_bins; k++)
-                fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g\n", zp[j], dr * (double)k, dr * (double)(k + 1),
-                        r->psi[j * c.r_bins + k], r->psi_se[j * c.r_bins + k]);
-        }
-        if (fclose(f) != 0 || rename(tmp, out) != 0) {
-            unlink(tmp);
-            fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
-            rc = 1;
-        }
-        free(tmp);
-        for (size_t j = 0; j < c.nplanes && rc == 0; j++)
-            printf("M %.17g %.17g %.17g %.17g %.17g\n", zp[j], r->M0[j], r->M0_se[j], r->M2[j], r->M2_se[j]);
-    }
+    if (out && exr)
+        rc = write_exr(out, &c, r, phase ? phase : NULL, B, tau);
+    else if (out)
+        rc = write_csv(out, &c, r);
+    for (size_t j = 0; j < c.nplanes && out && rc == 0; j++)
+        printf("M %.17g %.17g %.17g %.17g %.17g\n", zp[j], r->M0[j], r->M0_se[j], r->M2[j], r->M2_se[j]);
     if (tau > 0 && rc == 0) {
         printf("R %.17g %.17g\n", r->R, r->R_se);
         printf("T %.17g %.17g\n", r->T, r->T_se);

@@ -39,9 +39,9 @@ int cmd_info(int argc, char **argv)
     nbt_status st = nbt_table_read_exr(path, &t, err, sizeof err);
     if (st != NBT_OK)
         die("%s", err);
-    const char *n0 = t->kind == NBT_TABLE_H ? "u" : "T", *n1 = t->kind == NBT_TABLE_H ? "v" : "theta";
+    const char *n0 = nbt_table_axis_name(t->kind, 0), *n1 = nbt_table_axis_name(t->kind, 1);
     printf("file        %s\n", path);
-    printf("kind        %s\n", t->kind == NBT_TABLE_H ? "H" : "J");
+    printf("kind        %s\n", nbt_table_kind_name(t->kind));
     if (t->kind == NBT_TABLE_J)
         printf("n           %d\n", t->n);
     for (int a = 0; a < 2; a++)
@@ -50,18 +50,24 @@ int cmd_info(int argc, char **argv)
     if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P)
         printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
     printf("storage     %s\n", t->half ? "half" : "float");
-    printf("phase       %s\n", t->phase[0] ? t->phase : "legendre");
+    printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
     static const char *CH = "RGBA";
     for (size_t ch = 0; ch < t->nch; ch++) {
         char what[32];
-        if (t->k[ch] < 0)
+        if (t->kind == NBT_TABLE_PSI)
+            snprintf(what, sizeof what, ch == 0 ? "psi" : "psi_stderr");
+        else if (t->k[ch] < 0)
             snprintf(what, sizeof what, "fixed phase");
         else
             snprintf(what, sizeof what, "k=%d", t->k[ch]);
-        printf("channel %c   %-11s max |value| %.6g  max interp err %.3e\n", CH[ch], what, t->max_abs[ch],
-               t->max_err[ch]);
+        if (t->kind == NBT_TABLE_PSI)
+            printf("channel %c   %-11s max |value| %.6g\n", CH[ch], what, t->max_abs[ch]);
+        else
+            printf("channel %c   %-11s max |value| %.6g  max interp err %.3e\n", CH[ch], what, t->max_abs[ch],
+                   t->max_err[ch]);
     }
-    printf("quad tol    %.3g (largest node error estimate %.3g)\n", t->quad_tol, t->quad_err);
+    if (t->kind != NBT_TABLE_PSI)
+        printf("quad tol    %.3g (largest node error estimate %.3g)\n", t->quad_tol, t->quad_err);
     if (at) {
         double v[NBT_TABLE_MAX_CH];
         nbt_table_lookup(t, x, y, v);

@@ -338,8 +338,8 @@ int tableset_write(const tableset *ts, const char *stem, int preview)
         for (size_t i = 0; i < ts->count; i++) {
             const nbt_table *t = ts->t[i];
             char d0[96], d1[96];
-            axis_desc(&t->axis[0], t->kind == NBT_TABLE_H ? "u" : "T", d0, sizeof d0);
-            axis_desc(&t->axis[1], t->kind == NBT_TABLE_H ? "v" : "theta", d1, sizeof d1);
+            axis_desc(&t->axis[0], nbt_table_axis_name(t->kind, 0), d0, sizeof d0);
+            axis_desc(&t->axis[1], nbt_table_axis_name(t->kind, 1), d1, sizeof d1);
             printf("%-22s %4zux%-4zu %s %s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
                    t->axis[0].n, t->axis[1].n, d0, d1, fmax(fmax(t->max_err[0], t->nch > 1 ? t->max_err[1] : 0),
                    fmax(t->nch > 2 ? t->max_err[2] : 0, t->nch > 3 ? t->max_err[3] : 0)),

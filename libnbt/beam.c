@@ -38,7 +38,7 @@ nbt_status nbt_beam_check(const nbt_beam_medium *m)
     }
     if (fabs(sw - 1) > 1e-12)
         NBT_FAIL(NBT_EDOM, "beam: lobe weights must sum to 1");
-    if (m->nlayers > 0) {
+    if (m->nlayers > 0 && !m->rho_fn) {
         if (!m->z || !m->rho || m->z[0] != 0)
             NBT_FAIL(NBT_EDOM, "beam: layers need z[0] = 0 and a density per layer");
         for (size_t i = 0; i < m->nlayers; i++) {
@@ -55,6 +55,10 @@ nbt_status nbt_beam_check(const nbt_beam_medium *m)
 
 static double rho_at(const nbt_beam_medium *m, double z)
 {
+    if (m->rho_fn) {
+        double r = m->rho_fn(z, m->rho_data);
+        return r > 0 && isfinite(r) ? r : 0.0;
+    }
     if (m->nlayers == 0)
         return 1.0;
     size_t i = m->nlayers - 1;
@@ -63,8 +67,25 @@ static double rho_at(const nbt_beam_medium *m, double z)
     return m->rho[i];
 }
 
+static int rho_f(double z, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    f[0] = rho_at(vp, z);
+    return 0;
+}
+
 double nbt_beam_zeta(const nbt_beam_medium *m, double z)
 {
+    if (m->rho_fn) {
+        nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 200);
+        double v = NAN, e;
+        if (ws && z > 0)
+            nbt_quad_gk(ws, rho_f, (void *)m, 1, 0.0, z, 1e-15, 1e-12, &v, &e);
+        else if (z <= 0)
+            v = 0;
+        nbt_quad_ws_free(ws);
+        return v;
+    }
     if (m->nlayers == 0)
         return z;
     double s = 0;
@@ -87,6 +108,8 @@ static double bmix(const nbt_beam_medium *m)
 static size_t breakpoints(const nbt_beam_medium *m, double z, double *pts, size_t max)
 {
     size_t n = 0;
+    if (m->rho_fn)
+        return 0;
     for (size_t i = 1; i < m->nlayers && n < max; i++)
         if (m->z[i] > 0 && m->z[i] < z)
             pts[n++] = m->z[i];
@@ -136,7 +159,7 @@ nbt_status nbt_beam_moments(const nbt_beam_medium *m, nbt_beam_model model, doub
     *M0 = exp(-sa * zeta) * -expm1(-ss * zeta);
     if (err)
         *err = 0;
-    if (m->nlayers == 0) {
+    if (m->nlayers == 0 && !m->rho_fn) {
         double e = exp(-sa * z);
         if (model == NBT_BEAM_SMALLANGLE) {
             *M2 = e * 4.0 / 3.0 * ss * bm * z * z * z;
@@ -274,7 +297,7 @@ nbt_status nbt_beam_psi(const nbt_beam_medium *m, nbt_psi_model model, double z,
         return st;
     }
     case NBT_PSI_SINGLE:
-        if (m->nlayers == 0) {
+        if (m->nlayers == 0 && !m->rho_fn) {
             double s = 0;
             for (size_t i = 0; i < m->nlobes; i++)
                 s += m->w[i] / (2.0 * sqrt(NBT_PI * m->B[i])) * G(r / (z * sqrt(2.0 * m->B[i])));

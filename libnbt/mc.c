@@ -64,6 +64,7 @@ typedef struct {
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
     double *acc;        /* NBATCH * stride */
     atomic_uint done;
+    atomic_int over;    /* rho_fn exceeded rho_max somewhere */
 } mc_ctx;
 
 /* Tally forward crossings of planes in (z0, z1] along a move. */
@@ -107,46 +108,71 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
         size_t li = 0;
         int scattered = 0;
         for (;;) {
-            double tau = -log1p(-rng_u(&rs)); /* optical depth to the next interaction */
             int alive = 1;
-            while (alive && tau > 0) {
-                double rho = c->rho[li], zb;
-                int up = uz > 0;
-                if (uz > 0)
-                    zb = c->b[li + 1];
-                else if (uz < 0)
-                    zb = c->b[li];
-                else
-                    zb = NAN;
-                double db = uz != 0 ? (zb - z) / uz : INFINITY;
-                double dn = rho > 0 ? tau / (cf->sigma_t * rho) : INFINITY;
-                double d = dn < db ? dn : db;
-                if (isinf(d)) { /* horizontal flight in vacuum: never returns */
-                    alive = 0;
-                    break;
-                }
-                double z1 = dn < db ? z + d * uz : zb;
-                if (scattered && uz > 0 && cf->nplanes)
-                    tally(c, a, x, y, z, z1, ux, uy, uz);
-                x += d * ux;
-                y += d * uy;
-                z = z1;
-                if (dn < db) {
-                    tau = 0;
-                    break;
-                }
-                tau -= cf->sigma_t * rho * db;
-                if (up) {
-                    if (++li == c->nlay) { /* through the top */
-                        if (c->slab)
-                            a[tail + 1] += 1.0;
+            if (cf->rho_fn) {
+                /* delta tracking: tentative collisions at the majorant rate,
+                 * real with probability rho(z)/rho_max */
+                for (;;) {
+                    double d = -log1p(-rng_u(&rs)) / (cf->sigma_t * cf->rho_max);
+                    double z1 = z + d * uz;
+                    if (z1 < 0 || z1 > c->top) { /* leaves through z = 0, or dropped below z_cut */
+                        if (scattered && uz > 0 && cf->nplanes)
+                            tally(c, a, x, y, z, fmin(z1, c->top), ux, uy, uz);
                         alive = 0;
+                        break;
                     }
-                } else {
-                    if (li-- == 0) { /* out through z = 0 */
-                        if (c->slab)
-                            a[tail] += 1.0;
+                    if (scattered && uz > 0 && cf->nplanes)
+                        tally(c, a, x, y, z, z1, ux, uy, uz);
+                    x += d * ux;
+                    y += d * uy;
+                    z = z1;
+                    double rho = cf->rho_fn(z, cf->rho_data);
+                    if (rho > cf->rho_max)
+                        atomic_store(&c->over, 1);
+                    if (rng_u(&rs) * cf->rho_max < rho)
+                        break;
+                }
+            } else {
+                double tau = -log1p(-rng_u(&rs)); /* optical depth to the next interaction */
+                while (alive && tau > 0) {
+                    double rho = c->rho[li], zb;
+                    int up = uz > 0;
+                    if (uz > 0)
+                        zb = c->b[li + 1];
+                    else if (uz < 0)
+                        zb = c->b[li];
+                    else
+                        zb = NAN;
+                    double db = uz != 0 ? (zb - z) / uz : INFINITY;
+                    double dn = rho > 0 ? tau / (cf->sigma_t * rho) : INFINITY;
+                    double d = dn < db ? dn : db;
+                    if (isinf(d)) { /* horizontal flight in vacuum: never returns */
                         alive = 0;
+                        break;
+                    }
+                    double z1 = dn < db ? z + d * uz : zb;
+                    if (scattered && uz > 0 && cf->nplanes)
+                        tally(c, a, x, y, z, z1, ux, uy, uz);
+                    x += d * ux;
+                    y += d * uy;
+                    z = z1;
+                    if (dn < db) {
+                        tau = 0;
+                        break;
+                    }
+                    tau -= cf->sigma_t * rho * db;
+                    if (up) {
+                        if (++li == c->nlay) { /* through the top */
+                            if (c->slab)
+                                a[tail + 1] += 1.0;
+                            alive = 0;
+                        }
+                    } else {
+                        if (li-- == 0) { /* out through z = 0 */
+                            if (c->slab)
+                                a[tail] += 1.0;
+                            alive = 0;
+                        }
                     }
                 }
             }
@@ -202,7 +228,11 @@ static nbt_status check(const nbt_mc_config *c)
                 NBT_FAIL(NBT_EDOM, "mc: tally planes must be finite, > 0 and increasing");
     } else if (c->slab == 0)
         NBT_FAIL(NBT_EINVAL, "mc: nothing to tally (no planes, no slab)");
-    if (c->nlayers > 0 && c->slab == 0) {
+    if (c->rho_fn && !(c->rho_max > 0 && isfinite(c->rho_max)))
+        NBT_FAIL(NBT_EDOM, "mc: a density callback needs a finite bound rho_max > 0");
+    if (c->rho_fn && c->slab > 0)
+        NBT_FAIL(NBT_EINVAL, "mc: a density callback and a slab exclude each other");
+    if (c->nlayers > 0 && c->slab == 0 && !c->rho_fn) {
         if (!c->z || !c->rho || c->z[0] != 0)
             NBT_FAIL(NBT_EDOM, "mc: layers need z[0] = 0 and a density per layer");
         for (size_t i = 0; i < c->nlayers; i++)
@@ -255,7 +285,8 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
     clock_gettime(CLOCK_MONOTONIC, &t0);
     mc_ctx c = {.cfg = cf};
     atomic_init(&c.done, 0);
-    size_t nl = cf->slab > 0 ? 1 : (cf->nlayers ? cf->nlayers : 1);
+    atomic_init(&c.over, 0);
+    size_t nl = cf->slab > 0 || cf->rho_fn ? 1 : (cf->nlayers ? cf->nlayers : 1);
     c.nlay = nl;
     c.slab = cf->slab > 0;
     c.b = malloc((nl + 1) * sizeof(double));
@@ -285,8 +316,9 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
         c.rho[0] = 1;
     } else {
         for (size_t i = 0; i < nl; i++) {
-            c.b[i] = cf->nlayers ? cf->z[i] : 0.0;
-            c.rho[i] = cf->nlayers ? cf->rho[i] : 1.0;
+            int lay = cf->nlayers && !cf->rho_fn;
+            c.b[i] = lay ? cf->z[i] : 0.0;
+            c.rho[i] = lay ? cf->rho[i] : 1.0;
         }
         double last = cf->nplanes ? cf->z_planes[cf->nplanes - 1] : 0;
         double zc = cf->z_cut > 0 ? cf->z_cut : 2.0 * last + 20.0 / cf->sigma_t;
@@ -294,7 +326,10 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
             zc = c.b[nl - 1] + 20.0 / cf->sigma_t;
         c.b[nl] = zc;
     }
+    c.top = c.b[nl];
     st = nbt__parallel_for(NBATCH, cf->threads, run_batch, &c);
+    if (st == NBT_OK && atomic_load(&c.over))
+        st = nbt__fail(NBT_EDOM, "mc: the density callback exceeded rho_max");
     if (st == NBT_OK) {
         r->nplanes = cf->nplanes;
         r->r_bins = cf->r_bins;

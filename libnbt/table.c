@@ -73,6 +73,17 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
     return NBT_OK;
 }
 
+const char *nbt_table_kind_name(nbt_table_kind k)
+{
+    return k == NBT_TABLE_H ? "H" : k == NBT_TABLE_J ? "J" : "PSI";
+}
+
+const char *nbt_table_axis_name(nbt_table_kind k, int axis)
+{
+    static const char *n[3][2] = {{"u", "v"}, {"T", "theta"}, {"r/z", "z"}};
+    return n[k == NBT_TABLE_H ? 0 : k == NBT_TABLE_J ? 1 : 2][axis ? 1 : 0];
+}
+
 static int axis_ok(const nbt_axis *a)
 {
     return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&

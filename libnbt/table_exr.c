@@ -99,12 +99,11 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_set_version(ctx, part, 1);
     /* metadata: enough to use the file alone */
-    const char *names[2][2] = {{"u", "v"}, {"T", "theta"}};
     if (rv == EXR_ERR_SUCCESS)
-        rv = exr_attr_set_string(ctx, part, "nbt.kind", t->kind == NBT_TABLE_H ? "H" : "J");
+        rv = exr_attr_set_string(ctx, part, "nbt.kind", nbt_table_kind_name(t->kind));
     for (int a = 0; a < 2 && rv == EXR_ERR_SUCCESS; a++) {
         const nbt_axis *ax = &t->axis[a];
-        rv = exr_attr_set_string(ctx, part, axis_attr(a, "name", an, sizeof an), names[t->kind][a]);
+        rv = exr_attr_set_string(ctx, part, axis_attr(a, "name", an, sizeof an), nbt_table_axis_name(t->kind, a));
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
         if (rv == EXR_ERR_SUCCESS)
@@ -224,11 +223,11 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
     nbt_table_kind kind = NBT_TABLE_H;
     char an[64];
     if (exr_attr_get_string(ctx, 0, "nbt.kind", &len, &s) != EXR_ERR_SUCCESS ||
-        (strcmp(s, "H") && strcmp(s, "J"))) {
-        st = rd_fail(err, errlen, path, "no nbt.kind attribute: not a table written by nbt");
+        (strcmp(s, "H") && strcmp(s, "J") && strcmp(s, "PSI"))) {
+        st = rd_fail(err, errlen, path, "no nbt.kind attribute (H, J or PSI): not a table written by nbt");
         goto done;
     }
-    kind = s[0] == 'H' ? NBT_TABLE_H : NBT_TABLE_J;
+    kind = !strcmp(s, "H") ? NBT_TABLE_H : !strcmp(s, "J") ? NBT_TABLE_J : NBT_TABLE_PSI;
     if (exr_get_data_window(ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_channels(ctx, 0, &cl) != EXR_ERR_SUCCESS) {
         st = rd_fail(err, errlen, path, "unreadable data window or channel list");
         goto done;

@@ -25,6 +25,18 @@ static int rint_f(double t, void *vp, unsigned fdim, double *f)
     return 0;
 }
 
+static double rho_smooth(double z, void *d)
+{
+    (void)d;
+    return 1.0 + 0.5 * sin(z);
+}
+static double rho_one(double z, void *d)
+{
+    (void)d;
+    (void)z;
+    return 1.0;
+}
+
 static double rmoment(nbt_quad_ws *ws, rint_ctx *c, int power)
 {
     double r, e;
@@ -111,6 +123,21 @@ int main(void)
     nbt_beam_psi(&lay, NBT_PSI_SINGLE, 2.385, 0.3, &psl, NULL);
     nbt_beam_psi(&hh, NBT_PSI_SINGLE, 2.385, 0.3, &psh, NULL);
     t_rel(psl, psh, 1e-8, "single scattering: layered quadrature = closed form");
+    /* a density callback: constant 1 = homogeneous; a smooth profile against
+     * the random walk's integral done here independently */
+    nbt_beam_medium cb = hh;
+    cb.rho_fn = rho_one;
+    nbt_beam_moments(&cb, NBT_BEAM_ISHIMARU, 2.385, &M0, &M2, NULL);
+    nbt_beam_moments(&hh, NBT_BEAM_ISHIMARU, 2.385, &M0a, &M2a, NULL);
+    t_rel(M2, M2a, 1e-10, "callback rho = 1: eq. 29 = eq. 26");
+    t_rel(M0, M0a, 1e-12, "callback rho = 1: M0");
+    cb.rho_fn = rho_smooth;
+    nbt_beam_moments(&cb, NBT_BEAM_SMALLANGLE, 3.0, &M0, &M2, NULL);
+    /* zeta(3) = 3 + 0.5 (1 - cos 3); int_0^3 (1 + 0.5 sin y)(3 - y)^2 dy = 9 + 0.5 (9 - 2 + 2 cos 3 ... ) by parts:
+     * int_0^3 sin(y) (3-y)^2 dy = 9 - 2 + 2 cos 3 = 7 + 2 cos 3 */
+    double zeta3 = 3 + 0.5 * (1 - cos(3.0)), I = 9 + 0.5 * (7 + 2 * cos(3.0));
+    t_rel(M2, exp(-0.1 * zeta3) * 4 * 0.0685 * 0.9 * I, 1e-10, "callback rho = 1 + sin(z)/2: random walk closed form");
+    t_rel(M0, exp(-0.1 * zeta3) * (1 - exp(-0.9 * zeta3)), 1e-11, "callback: M0 from zeta");
     /* edges */
     nbt_beam_medium z0 = nbt_beam_homogeneous(1.0, 0.0, 0.0685);
     nbt_beam_moments(&z0, NBT_BEAM_ISHIMARU, 2, &M0, &M2, NULL);

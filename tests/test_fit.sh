@@ -36,6 +36,14 @@ awk -F, 'NR > 1 && $1 == 2 { s += $4 * 3.141592653589793 * ($3 * $3 - $2 * $2) }
 m0=$(awk '$2 == 2 { print $3 }' "$tmp/m1")
 awk -v s="$(cat "$tmp/s")" -v m="$m0" 'BEGIN { exit !(s > 0.5 * m && s <= m * (1 + 1e-12)) }' && ok ||
   bad "binned Psi integrates to at most M0 ($(cat "$tmp/s") vs $m0)"
+# EXR: a PSI table holding the same numbers (as float) as the CSV
+"$NBT_FIT" mc $M -o "$tmp/a.exr" >/dev/null 2>&1 && ok || bad "EXR output"
+NBT_GEN=${NBT_GEN:-$(dirname "$NBT_FIT")/nbt-gen}
+"$NBT_GEN" info "$tmp/a.exr" --at 0.5,3 >"$tmp/info" 2>&1 && grep -q "kind        PSI" "$tmp/info" && ok || bad "info on a PSI table: $(cat "$tmp/info")"
+# bin 3 of 7 has its centre at r/z = 0.5; plane z = 3
+want=$(awk -F, '$1 == 3 && $2 < 1.5 && $3 > 1.5 { printf "%.9g", $4 }' "$tmp/a.csv")
+got=$(sed -n 's/^at .*: \([^ ]*\) .*/\1/p' "$tmp/info")
+awk -v a="$got" -v b="$want" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 1e-6 * b) }' && ok || bad "EXR node = CSV bin: $got vs $want"
 # layered: a density file
 printf '# a vacuum gap\n0 1\n1 0\n2 1\n' >"$tmp/d.txt"
 "$NBT_FIT" mc $M --density "$tmp/d.txt" -o "$tmp/d.csv" >/dev/null 2>&1 && [ -s "$tmp/d.csv" ] && ok || bad "--density run"
@@ -51,10 +59,11 @@ expect_usage "bad planes" "--z-planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --
 expect_usage "empty density file" "empty" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/empty.txt" -o "$tmp/x.csv"
 printf '0 1\n0.5 -2\n' >"$tmp/neg.txt"
 expect_usage "negative density" "line 2" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/neg.txt" -o "$tmp/x.csv"
-expect_usage "EXR not yet" "\.csv" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.exr"
+expect_usage "not csv or exr" "\.exr" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.png"
+expect_usage "EXR with one plane" "2 planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --z-planes 1:1:1 -o "$tmp/x.exr"
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
-[ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && ok || bad "rejected runs left output"
+[ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
 "$NBT_FIT" mc $M -o /nonexistent/dir/x.csv >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
 
 echo "$pass passed, $fail failed"

@@ -19,6 +19,12 @@ static int ann_f(double r, void *vp, unsigned fdim, double *f)
     return 0;
 }
 
+static double rho_smooth(double z, void *d)
+{
+    (void)d;
+    return 1.0 + 0.5 * sin(z);
+}
+
 int main(void)
 {
     /* van de Hulst (as quoted in the MCML manual): albedo 0.9, tau 2, HG g 0.75, n = 1 */
@@ -130,6 +136,7 @@ int main(void)
     c.albedo = 0.5;
     c.photons = 1000000;
     nbt_mc_run(&c, &r1);
+    nbt_mc_config bad_base = c;
     m.albedo = 0.5;
     m.nlayers = 3;
     m.z = zl;
@@ -138,6 +145,29 @@ int main(void)
     nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, 3.0, &M0, &M2, NULL);
     t_abs(r1->M0[0], M0, 3 * r1->M0_se[0] + 0.005 * M0, "vacuum gap: M0 = e^-sa zeta (1 - e^-ss zeta): %.5g vs %.5g", r1->M0[0], M0);
     nbt_mc_result_free(r1);
+
+    /* a continuous density by delta tracking: M0 depends on zeta only */
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 0.5;
+    c.phase = ga;
+    c.rho_fn = rho_smooth;
+    c.rho_max = 1.5;
+    c.nplanes = 1;
+    c.z_planes = p3;
+    c.r_bins = 4;
+    c.r_max_scale = 0.1;
+    c.photons = 1000000;
+    c.seed = 3;
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "delta-tracking run");
+    double zeta3 = 3 + 0.5 * (1 - cos(3.0)), M0c = exp(-0.5 * zeta3) * (1 - exp(-0.5 * zeta3));
+    t_abs(r1->M0[0], M0c, 3 * r1->M0_se[0] + 0.005 * M0c, "callback density: M0 %.5g vs %.5g", r1->M0[0], M0c);
+    nbt_mc_result_free(r1);
+    c.rho_max = 1.2;
+    t_true(nbt_mc_run(&c, &r1) == NBT_EDOM && r1 == NULL, "a callback above rho_max is detected");
+    c.rho_max = 0;
+    t_true(nbt_mc_run(&c, &r1) == NBT_EDOM, "a callback without a bound is rejected");
+    c = bad_base;
 
     /* bad configurations */
     nbt_mc_config bad = c;

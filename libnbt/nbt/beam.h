@@ -27,6 +27,10 @@ typedef struct {
     size_t nlayers;          /* 0: homogeneous, rho = 1 */
     const double *z;         /* layer i is [z[i], z[i+1]) (the last unbounded); z[0] = 0, increasing */
     const double *rho;       /* density per layer, >= 0, finite */
+    /* or a continuous density (overrides the layers when set): rho_fn(z) >= 0,
+     * integrated by adaptive quadrature (smooth or with few kinks) */
+    double (*rho_fn)(double z, void *data);
+    void *rho_data;
 } nbt_beam_medium;
 
 /* A homogeneous medium with one Gaussian lobe. */

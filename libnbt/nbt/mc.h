@@ -33,6 +33,12 @@ typedef struct {
     const nbt_phase *phase;  /* any phase function; sampled exactly */
     size_t nlayers;          /* 0: rho = 1 for z >= 0 */
     const double *z, *rho;   /* layers: z[0] = 0 < z[1] < ..., density per layer */
+    /* or a continuous density for z >= 0 (overrides the layers): sampled by
+     * delta (Woodcock) tracking against the bound rho_max >= rho_fn(z);
+     * a value above the bound makes the run fail with NBT_EDOM */
+    double (*rho_fn)(double z, void *data);
+    void *rho_data;
+    double rho_max;
     double slab;             /* > 0: slab of this thickness (overrides layers), R and T tallied */
     size_t nplanes;          /* tally planes (may be 0 with a slab) */
     const double *z_planes;  /* increasing, > 0 */

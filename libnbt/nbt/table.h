@@ -41,15 +41,21 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
 #define NBT_TABLE_MAX_CH 4
 
-typedef enum { NBT_TABLE_H, NBT_TABLE_J } nbt_table_kind;
+/* H: airlight H_k(u, v); J: surface J_k^n(T, theta); PSI: photon counts
+ * Psi(r/z, z) with its standard error (nbt-fit mc), bins at the nodes. */
+typedef enum { NBT_TABLE_H, NBT_TABLE_J, NBT_TABLE_PSI } nbt_table_kind;
+
+/* "H", "J", "PSI"; and the names of the two axes ("u", "v"; "T", "theta"; "r/z", "z"). */
+const char *nbt_table_kind_name(nbt_table_kind k);
+const char *nbt_table_axis_name(nbt_table_kind k, int axis);
 
 typedef struct {
     nbt_table_kind kind;
-    nbt_axis axis[2];      /* H: axis[0] = u, axis[1] = v;  J: axis[0] = T, axis[1] = theta */
+    nbt_axis axis[2];      /* H: u, v;  J: T, theta;  PSI: r/z, z */
     size_t nch;            /* channels, 1..4 (RGBA) */
     int k[NBT_TABLE_MAX_CH];     /* Legendre order per channel; -1: fixed phase (see phase) */
     int n;                 /* J: cosine exponent (1 = Lambert, >1 Phong); H: 0 */
-    char phase[128];       /* fixed-phase channels: the phase SPEC; else "" */
+    char phase[128];       /* fixed-phase channels: the phase SPEC; PSI: the run; else "" */
     double quad_tol;       /* relative tolerance of the quadrature at the nodes */
     double quad_err;       /* largest estimated quadrature error at a node (absolute) */
     double max_err[NBT_TABLE_MAX_CH];  /* estimated max |bilinear - exact| per channel */
