@@ -1,8 +1,6 @@
 /* libnbt/beam.c: narrow beam moments and kernels (Shinya et al. sec. 3). */
 #include <config.h>
-#include <errno.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <nbt/beam.h>
@@ -332,66 +330,18 @@ double nbt_beam_direct(const nbt_beam_medium *m, double z)
     return exp(-m->sigma_t * nbt_beam_zeta(m, z));
 }
 
-nbt_status nbt_density_read(const char *path, double **zo, double **ro, size_t *no, char *err, size_t errlen)
+static const char *density_row(size_t i, double z, double rho, double prev)
 {
-    *zo = *ro = NULL;
-    *no = 0;
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        snprintf(err, errlen, "density file '%s' cannot be opened: %s", path, strerror(errno));
-        return NBT_EIO;
-    }
-    size_t n = 0, cap = 16;
-    double *z = malloc(cap * sizeof(double)), *rho = malloc(cap * sizeof(double));
-    char line[512];
-    int ln = 0;
-    nbt_status st = z && rho ? NBT_OK : NBT_ENOMEM;
-    while (st == NBT_OK && fgets(line, sizeof line, f)) {
-        ln++;
-        char *h = strchr(line, '#'), extra;
-        if (h)
-            *h = '\0';
-        double a, b;
-        int got = sscanf(line, "%lf %lf %c", &a, &b, &extra);
-        if (got <= 0)
-            continue;
-        if (got != 2 || !isfinite(a) || !isfinite(b) || b < 0 || (n == 0 && a != 0) || (n > 0 && !(a > z[n - 1]))) {
-            snprintf(err, errlen,
-                     "density file '%s' line %d: expected 'z rho' with z increasing from 0 and rho >= 0, finite",
-                     path, ln);
-            st = NBT_EFORMAT;
-            break;
-        }
-        if (n == cap) {
-            cap *= 2;
-            double *z2 = realloc(z, cap * sizeof(double)), *r2 = z2 ? realloc(rho, cap * sizeof(double)) : NULL;
-            if (z2)
-                z = z2;
-            if (r2)
-                rho = r2;
-            if (!z2 || !r2) {
-                st = NBT_ENOMEM;
-                break;
-            }
-        }
-        z[n] = a;
-        rho[n] = b;
-        n++;
-    }
-    fclose(f);
-    if (st == NBT_OK && n == 0) {
-        snprintf(err, errlen, "density file '%s' is empty: expected lines 'z rho', the first with z = 0", path);
-        st = NBT_EFORMAT;
-    }
-    if (st == NBT_ENOMEM)
-        snprintf(err, errlen, "out of memory");
-    if (st != NBT_OK) {
-        free(z);
-        free(rho);
-        return st;
-    }
-    *zo = z;
-    *ro = rho;
-    *no = n;
-    return NBT_OK;
+    if (i == 0 && z != 0)
+        return "the first z must be 0 in";
+    if (i > 0 && !(z > prev))
+        return "z must increase in";
+    if (rho < 0)
+        return "rho must be >= 0 in";
+    return NULL;
+}
+
+nbt_status nbt_density_read(const char *path, double **z, double **rho, size_t *n, char *err, size_t errlen)
+{
+    return nbt__read_columns(path, "density file", "z rho", density_row, z, rho, n, err, errlen);
 }

@@ -57,6 +57,14 @@ nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
 int nbt__table_series_diff(const nbt_table *const *tables, size_t ntables, const double *b,
                            size_t nterms, double x0, double y0, double y1, double *sum);
 
+/* Read a text file of rows "x y" ('#' comments, blank lines skipped). check
+ * (may be NULL) returns why row i (previous x: prev) is rejected, or NULL.
+ * Errors name the file, the line and `names` (e.g. "z rho"); on success *x
+ * and *y are malloc'd and *n >= 1. */
+typedef const char *(*nbt__row_check)(size_t i, double x, double y, double prev);
+nbt_status nbt__read_columns(const char *path, const char *what, const char *names, nbt__row_check check,
+                             double **x, double **y, size_t *n, char *err, size_t errlen);
+
 /* Run fn(i, thread, ctx) for i in [0, n) on up to nthreads threads (0: all
  * online CPUs). Stops early and returns the first non-OK status. */
 typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);

@@ -417,62 +417,17 @@ static int parse_double(const char *s, double *out)
 
 static nbt_status read_table_file(const char *path, nbt_phase **out, char *err, size_t errlen)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        snprintf(err, errlen, "phase table '%s' cannot be opened: %s", path, strerror(errno));
-        return NBT_EIO;
-    }
-    size_t n = 0, cap = 64;
-    double *mu = malloc(cap * sizeof(double)), *p = malloc(cap * sizeof(double));
-    char line[512];
-    nbt_status st = NBT_OK;
-    int lineno = 0;
-    while (mu && p && fgets(line, sizeof line, f)) {
-        lineno++;
-        char *h = strchr(line, '#');
-        if (h)
-            *h = '\0';
-        double a, b;
-        char extra;
-        int got = sscanf(line, "%lf %lf %c", &a, &b, &extra);
-        if (got <= 0)
-            continue;
-        if (got != 2 || !isfinite(a) || !isfinite(b)) {
-            snprintf(err, errlen, "phase table '%s' line %d: expected two numbers 'mu p'", path, lineno);
-            st = NBT_EFORMAT;
-            break;
-        }
-        if (n == cap) {
-            cap *= 2;
-            double *m2 = realloc(mu, cap * sizeof(double));
-            if (m2)
-                mu = m2;
-            double *p2 = realloc(p, cap * sizeof(double));
-            if (p2)
-                p = p2;
-            if (!m2 || !p2) {
-                st = NBT_ENOMEM;
-                snprintf(err, errlen, "out of memory");
-                break;
-            }
-        }
-        mu[n] = a;
-        p[n] = b;
-        n++;
-    }
-    fclose(f);
-    if (!mu || !p) {
-        st = NBT_ENOMEM;
-        snprintf(err, errlen, "out of memory");
-    }
-    if (st == NBT_OK) {
-        *out = nbt_phase_tabulated(n, mu, p);
-        if (!*out) {
-            snprintf(err, errlen,
-                     "phase table '%s': need >= 2 rows 'mu p' with mu strictly increasing from -1 to 1 "
-                     "and p >= 0, not all zero (got %zu rows)", path, n);
-            st = NBT_EFORMAT;
-        }
+    double *mu, *p;
+    size_t n;
+    nbt_status st = nbt__read_columns(path, "phase table", "mu p", NULL, &mu, &p, &n, err, errlen);
+    if (st != NBT_OK)
+        return st;
+    *out = nbt_phase_tabulated(n, mu, p);
+    if (!*out) {
+        snprintf(err, errlen,
+                 "phase table '%s': need >= 2 rows 'mu p' with mu strictly increasing from -1 to 1 "
+                 "and p >= 0, not all zero (got %zu rows)", path, n);
+        st = NBT_EFORMAT;
     }
     free(mu);
     free(p);

@@ -1,19 +1,8 @@
 #!/bin/sh
 # tests/test_fit.sh: nbt-fit mc end to end: output format, slab values,
 # identical output for any thread count, bad input (exit 2, one line, no file).
-NBT_FIT=${NBT_FIT:-./nbt-fit}
-case $NBT_FIT in /*) ;; *) NBT_FIT=$(pwd)/$NBT_FIT ;; esac
-pass=0; fail=0
-ok()  { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-tmp=$(mktemp -d /tmp/nbt-test-fit.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-expect_usage() {
-  d=$1; pat=$2; shift 2
-  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
-  if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
-  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
-}
+. "${top_srcdir:-.}/tests/testlib.sh"
+NBT_FIT=$(abspath "${NBT_FIT:-./nbt-fit}")
 
 "$NBT_FIT" --version | grep -q "nbt-fit (nbt)" && ok || bad "--version"
 "$NBT_FIT" mc --help | grep -q "z,r_lo,r_hi,psi,psi_stderr" && ok || bad "mc --help"
@@ -66,5 +55,4 @@ expect_usage "unknown command" "frob" "$NBT_FIT" frob
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
 "$NBT_FIT" mc $M -o /nonexistent/dir/x.csv >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
 
-echo "$pass passed, $fail failed"
-[ $fail -eq 0 ]
+finish

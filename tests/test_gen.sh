@@ -2,26 +2,8 @@
 # tests/test_gen.sh: nbt-gen end to end: values against the library's closed
 # forms, methods against each other, bad input (exit 2, one message naming
 # the option, no output left), table files readable and complete.
-NBT_GEN=${NBT_GEN:-./nbt-gen}
-case $NBT_GEN in /*) ;; *) NBT_GEN=$(pwd)/$NBT_GEN ;; esac
-pass=0; fail=0
-ok()   { pass=$((pass + 1)); }
-bad()  { fail=$((fail + 1)); echo "FAIL: $*"; }
-tmp=$(mktemp -d /tmp/nbt-test-gen.XXXXXX)
-trap 'rm -rf "$tmp"' EXIT
-
-# expect_usage DESCRIPTION PATTERN CMD...: exit 2, one line on stderr matching PATTERN
-expect_usage() {
-  d=$1; pat=$2; shift 2
-  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
-  if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
-  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
-}
-# close A B RELTOL DESCRIPTION
-close() {
-  if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
-  then ok; else bad "$4: $1 vs $2 (rel tol $3)"; fi
-}
+. "${top_srcdir:-.}/tests/testlib.sh"
+NBT_GEN=$(abspath "${NBT_GEN:-./nbt-gen}")
 
 "$NBT_GEN" --version | grep -q "nbt-gen (nbt)" && ok || bad "--version"
 "$NBT_GEN" --help | grep -q "Usage" && ok || bad "--help"
@@ -142,5 +124,4 @@ printf 'kappa_t = 0.1\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01
   [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
   bad "default scene: $(cat "$tmp/err")"
 
-echo "$pass passed, $fail failed"
-[ $fail -eq 0 ]
+finish

@@ -1,0 +1,24 @@
+# tests/testlib.sh: the harness of the command-line tests (sourced).
+# ok / bad DESCRIPTION count checks; expect_usage DESCRIPTION PATTERN CMD...
+# asserts exit status 2 and one line on stderr matching PATTERN; close A B TOL
+# DESCRIPTION compares numbers; finish prints "N passed, M failed".
+pass=0; fail=0
+ok()  { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+tmp=$(mktemp -d /tmp/nbt-test.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+abspath() { case $1 in /*) echo "$1" ;; *) echo "$(pwd)/$1" ;; esac; }
+expect_usage() {
+  d=$1; pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
+  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
+}
+close() {
+  if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
+  then ok; else bad "$4: $1 vs $2 (rel tol $3)"; fi
+}
+finish() {
+  echo "$pass passed, $fail failed"
+  [ $fail -eq 0 ]
+}
