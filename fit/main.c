@@ -9,6 +9,8 @@
 static void help(void)
 {
     puts("Usage: nbt-fit mc [...]     photon counting: a pencil beam in a layered medium or a slab\n"
+         "       nbt-fit kernel [...] fit alpha, beta of the narrow-beam kernel to photon counts\n"
+         "       nbt-fit phase [...]  fit a sum of Gaussian lobes to a phase function\n"
          "       nbt-fit --version\n\n"
          "'nbt-fit COMMAND --help' describes each command. Exit status: 0 success,\n"
          "1 failure, 2 bad usage.");
@@ -30,5 +32,13 @@ int main(int argc, char **argv)
     }
     if (!strcmp(c, "mc"))
         return cmd_mc(argc - 1, argv + 1);
-    die_usage("unknown command '%s': mc (see 'nbt-fit --help')", c);
+    if (!strcmp(c, "kernel") || !strcmp(c, "phase")) {
+#ifdef HAVE_CERES
+        return !strcmp(c, "kernel") ? cmd_kernel(argc - 1, argv + 1) : cmd_phase(argc - 1, argv + 1);
+#else
+        die("'%s' needs Ceres, which this build was configured without (install libceres-dev "
+            "libeigen3-dev libgoogle-glog-dev and re-run configure)", c);
+#endif
+    }
+    die_usage("unknown command '%s': mc, kernel, phase (see 'nbt-fit --help')", c);
 }

@@ -454,6 +454,20 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
             return NBT_EDOM;
         }
         *out = nbt_phase_gauss(v);
+    } else if (!strncmp(spec, "sog:", 4)) {
+        double *w, *B;
+        size_t n;
+        nbt_status st = nbt__read_columns(spec + 4, "sum-of-Gaussians file", "w B", NULL, &w, &B, &n, err, errlen);
+        if (st != NBT_OK)
+            return st;
+        *out = nbt_phase_sog(n, w, B);
+        free(w);
+        free(B);
+        if (!*out) {
+            snprintf(err, errlen, "phase '%s': need rows 'w B' with w >= 0 (not all 0) and B > 0", spec);
+            return NBT_EFORMAT;
+        }
+        return NBT_OK;
     } else if (!strncmp(spec, "table:", 6)) {
         if (!spec[6]) {
             snprintf(err, errlen, "phase '%s': expected table:FILE", spec);
@@ -462,7 +476,7 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         return read_table_file(spec + 6, out, err, errlen);
     } else {
         snprintf(err, errlen,
-                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (B>0), table:FILE",
+                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (B>0), table:FILE, sog:FILE",
                  spec);
         return NBT_EFORMAT;
     }

@@ -37,6 +37,56 @@ awk -v a="$got" -v b="$want" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 
 printf '# a vacuum gap\n0 1\n1 0\n2 1\n' >"$tmp/d.txt"
 "$NBT_FIT" mc $M --density "$tmp/d.txt" -o "$tmp/d.csv" >/dev/null 2>&1 && [ -s "$tmp/d.csv" ] && ok || bad "--density run"
 
+# ---- fits (Ceres) ----
+if ! "$NBT_FIT" kernel --help >/dev/null 2>"$tmp/err"; then
+  # a build without Ceres must say so clearly; CI configures --with-ceres, so this is not CI's path
+  grep -q "needs Ceres" "$tmp/err" && ok || bad "kernel without Ceres: $(cat "$tmp/err")"
+  echo "NOTE: nbt-fit was built without Ceres: kernel and phase fits checked only for their refusal"
+else
+  # phase: known lobes come back
+  "$NBT_FIT" phase --target gauss:B=0.05 --terms 1 >"$tmp/p1" 2>&1 || bad "phase K=1"
+  set -- $(grep '^w ' "$tmp/p1")
+  close "$2" 1 1e-9 "one lobe: w = 1"; close "$4" 0.05 1e-6 "one lobe: B = 0.05"
+  printf '# two lobes\n0.3 0.01\n0.7 0.2\n' >"$tmp/two.sog"
+  "$NBT_FIT" phase --target "sog:$tmp/two.sog" --terms 2 -o "$tmp/fit.sog" >"$tmp/p2" 2>&1 || bad "phase K=2"
+  sort -g -k2 "$tmp/fit.sog" | grep -v '^#' >"$tmp/fit.sorted"
+  set -- $(head -1 "$tmp/fit.sorted"); close "$1" 0.3 1e-5 "two lobes: w1"; close "$2" 0.01 1e-5 "two lobes: B1"
+  set -- $(tail -1 "$tmp/fit.sorted"); close "$1" 0.7 1e-5 "two lobes: w2"; close "$2" 0.2 1e-5 "two lobes: B2"
+  "$NBT_FIT" phase --target hg:g=0.8 --terms 4 -o "$tmp/hg.sog" >"$tmp/p3" 2>&1
+  awk '/^K / { if (NR > 1 && $4 > prev * (1 + 1e-9)) bad = 1; prev = $4 } END { exit bad || prev > 0.01 }' "$tmp/p3" && ok ||
+    bad "HG 0.8: errors fall with K to < 1%: $(cat "$tmp/p3")"
+  "${NBT_GEN:-$(dirname "$NBT_FIT")/nbt-gen}" eval H --phase "sog:$tmp/hg.sog" --u 1 --v 0.5 >/dev/null && ok || bad "sog:FILE accepted"
+  expect_usage "phase without target" "--target" "$NBT_FIT" phase --terms 2
+  expect_usage "phase terms 0" "--terms" "$NBT_FIT" phase --target iso --terms 0
+  expect_usage "phase bad target" "mie" "$NBT_FIT" phase --target mie --terms 2
+
+  # kernel: photon counts at dtheta = 30 deg, albedo 0.7
+  K="--albedo 0.7 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12"
+  "$NBT_FIT" mc $K --seed 21 -o "$tmp/k1.csv" >/dev/null 2>&1 && "$NBT_FIT" mc $K --seed 22 -o "$tmp/k2.exr" >/dev/null 2>&1 || bad "mc for kernel"
+  "$NBT_FIT" kernel "$tmp/k1.csv" --albedo 0.7 --sigma-t 1 --B 0.0685 -o "$tmp/kfit.csv" 2>"$tmp/krms" && ok || bad "kernel fit: $(cat "$tmp/krms")"
+  [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after" ] &&
+    [ "$(wc -l <"$tmp/kfit.csv")" -eq 5 ] && ok || bad "kernel CSV: header and one row per plane"
+  awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/krms" && ok || bad "the fitted kernel beats the moment kernel: $(cat "$tmp/krms")"
+  "$NBT_FIT" kernel "$tmp/k2.exr" --shape erfc+gauss -o "$tmp/kg.csv" 2>"$tmp/kgrms" && ok || bad "erfc+gauss on EXR input (medium from metadata): $(cat "$tmp/kgrms")"
+  awk '/^RMS/ { exit !($6 + 0 < 0.5 * $4 && $6 + 0 < 0.06) }' "$tmp/kgrms" && ok || bad "erfc+gauss within 6%: $(cat "$tmp/kgrms")"
+  # the smooth correction, fitted on two runs, judged on a third it has not seen
+  "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 23 -o "$tmp/k3.exr" >/dev/null 2>&1
+  "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 24 -o "$tmp/k4.exr" >/dev/null 2>&1
+  "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/corr.txt" -o "$tmp/kc.csv" 2>/dev/null && [ -s "$tmp/corr.txt" ] && ok || bad "--correction"
+  "$NBT_FIT" kernel "$tmp/k2.exr" --apply "$tmp/corr.txt" >"$tmp/app" 2>&1 &&
+    awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/app" && ok || bad "the correction helps on a held-out run: $(cat "$tmp/app")"
+  # degenerate data
+  printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,0,0\n1,0.5,1,0,0\n1,1,1.5,0,0\n1,1.5,2,0,0\n1,2,2.5,0,0\n1,2.5,3,0,0\n' >"$tmp/zero.csv"
+  expect_usage "all-zero histogram" "all-zero" "$NBT_FIT" kernel "$tmp/zero.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"
+  printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,2,0.1\n' >"$tmp/one.csv"
+  expect_usage "one bin" "bins per plane" "$NBT_FIT" kernel "$tmp/one.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"
+  printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,nan,0.1\n' >"$tmp/nan.csv"
+  expect_usage "NaN" "line 2" "$NBT_FIT" kernel "$tmp/nan.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"
+  expect_usage "unknown medium" "--albedo" "$NBT_FIT" kernel "$tmp/k1.csv" -o "$tmp/z.csv"
+  expect_usage "bad shape" "--shape" "$NBT_FIT" kernel "$tmp/k1.csv" --shape spline -o "$tmp/z.csv"
+  [ ! -e "$tmp/z.csv" ] && ok || bad "rejected fits left output"
+fi
+
 # bad input
 expect_usage "albedo > 1" "--albedo" "$NBT_FIT" mc --albedo 1.2 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.csv"
 expect_usage "negative sigma_t" "--sigma-t" "$NBT_FIT" mc --albedo 0.5 --sigma-t -1 --B 0.1 --photons 1000 -o "$tmp/x.csv"

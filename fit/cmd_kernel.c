@@ -1,0 +1,493 @@
+/* fit/cmd_kernel.c: "nbt-fit kernel": per-plane alpha, beta of
+ * Psi = alpha/r G(r/beta) fitted to photon counts (weighted by their
+ * standard errors, from the moment solution), and a smooth correction of the
+ * moment kernel over depth, albedo and phase width fitted to several runs. */
+#include <config.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include "../gen/cli.h"
+#include "ceres_shim.h"
+#include "commands.h"
+#include "kernel_model.h"
+#include "psi_data.h"
+
+static void help(void)
+{
+    puts("Usage: nbt-fit kernel MC.csv|MC.exr [MORE ...] [-o FIT.csv] [--albedo W --sigma-t ST --B B]\n"
+         "                      [--shape erfc|erfc2] [--weight stderr|rms] [--loss none|huber|cauchy]\n"
+         "                      [--correction OUT.txt | --apply CORR.txt]\n\n"
+         "Per plane z, fits alpha(z), beta(z) of Psi = alpha/r G(r/beta) to photon counts (nbt-fit mc\n"
+         "output), averaged over each annulus as counted, weighted by the standard errors (or, with\n"
+         "--weight rms, by the RMS metric's weights 2 pi r), starting\n"
+         "from the moment solution (eq. 25/26). FIT.csv (default stdout): z,alpha,beta,alpha_stderr,\n"
+         "beta_stderr,rms_before,rms_after, one block per input (erfc2, a narrow plus a broad kernel,\n"
+         "adds alpha2,beta2; erfc+gauss, plus a diffuse 2-D Gaussian M exp(-r^2/2s^2)/(2 pi s^2), adds\n"
+         "M,s; with their errors). rms: sqrt(sum (model - mc)^2 / sum mc^2)\n"
+         "of 2 pi r Psi over the plane; 'RMS FILE moment X fitted Y' lines on stderr cover all planes.\n"
+         "The medium comes from an EXR's metadata or --albedo/--sigma-t/--B (Gaussian phase).\n"
+         "--correction OUT.txt: fit log(beta/beta_moment) and log(alpha/alpha_moment) as polynomials in\n"
+         "x = ln(sigma_t z) (and albedo a, b = ln B where the inputs differ in them) to all inputs;\n"
+         "--apply CORR.txt: report the RMS of a correction on inputs it was not fitted to.");
+}
+
+typedef struct {
+    const psi_data *d;
+    size_t j;
+    double floor_se;
+    int ncomp; /* 1: erfc; 2: erfc2 (alpha1, beta1, alpha2, beta2); 3: erfc+gauss (alpha, beta, M, s) */
+    int rms;   /* weight by 2 pi r / sqrt(sum (2 pi r mc)^2), the RMS metric, instead of 1/stderr */
+    double rms_scale;
+} plane_ctx;
+
+/* the shape's annulus mean and its gradient (np = 2 ncomp entries) */
+static double shape_annulus(int shape, const double *p, double lo, double hi, double *grad)
+{
+    double m = kernel_annulus(p[0], p[1], lo, hi, grad ? &grad[0] : NULL, grad ? &grad[1] : NULL);
+    if (shape == 2)
+        m += kernel_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
+    else if (shape == 3)
+        m += gauss_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
+    return m;
+}
+
+static int shape_params(int shape)
+{
+    return shape == 1 ? 2 : 4;
+}
+
+static int plane_res(const double *p, double *r, double *jac, void *vp)
+{
+    const plane_ctx *c = vp;
+    const psi_data *d = c->d;
+    size_t nb = d->nbins;
+    int np = shape_params(c->ncomp);
+    for (size_t k = 0; k < nb; k++) {
+        size_t i = c->j * nb + k;
+        double se = c->rms ? 1.0 / (M_PI * (d->lo[i] + d->hi[i]) * c->rms_scale)
+                           : (d->se[i] > 0 ? d->se[i] : c->floor_se), g[4];
+        double m = shape_annulus(c->ncomp, p, d->lo[i], d->hi[i], g);
+        r[k] = (m - d->psi[i]) / se;
+        if (jac)
+            for (int q = 0; q < np; q++)
+                jac[(size_t)np * k + (size_t)q] = g[q] / se;
+    }
+    return 0;
+}
+
+/* the moment kernel of the medium at z */
+static void moment_kernel(const psi_data *d, double z, double *alpha, double *beta)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(d->sigma_t, d->albedo, d->B);
+    double M0, M2;
+    nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, alpha, beta);
+}
+
+/* sum (2 pi r_c (model - mc))^2 and sum (2 pi r_c mc)^2 over plane j, for
+ * a shape of ncomp erfc components p = (alpha1, beta1, ...) */
+static void shape_rms_parts(const psi_data *d, size_t j, int ncomp, const double *p, double *num, double *den)
+{
+    for (size_t k = 0; k < d->nbins; k++) {
+        size_t i = j * d->nbins + k;
+        double rc = 0.5 * (d->lo[i] + d->hi[i]), w = 2 * M_PI * rc;
+        double m = p[0] > 0 && p[1] > 0 ? shape_annulus(ncomp, p, d->lo[i], d->hi[i], NULL) : 0;
+        *num += w * w * (m - d->psi[i]) * (m - d->psi[i]);
+        *den += w * w * d->psi[i] * d->psi[i];
+    }
+}
+
+static void plane_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
+{
+    double p[2] = {alpha, beta};
+    shape_rms_parts(d, j, 1, p, num, den);
+}
+
+/* ---- the correction, fitted to all runs ---- */
+
+typedef struct {
+    psi_data *runs;
+    size_t nruns;
+    int active[CORR_TERMS];
+    double *scale; /* per run: 1/sqrt(sum (2 pi r mc)^2) */
+} corr_ctx;
+
+static void unpack(const corr_ctx *c, const double *p, double *cb, double *ca)
+{
+    int n = 0;
+    for (int i = 0; i < CORR_TERMS; i++)
+        cb[i] = c->active[i] ? p[n++] : 0;
+    for (int i = 0; i < CORR_TERMS; i++)
+        ca[i] = c->active[i] ? p[n++] : 0;
+}
+
+static void corrected(const psi_data *d, double z, const double *cb, const double *ca, double *alpha, double *beta)
+{
+    double t[CORR_TERMS], lb = 0, la = 0;
+    moment_kernel(d, z, alpha, beta);
+    correction_terms(d->sigma_t, z, d->albedo, d->B, t);
+    for (int i = 0; i < CORR_TERMS; i++) {
+        lb += cb[i] * t[i];
+        la += ca[i] * t[i];
+    }
+    *alpha *= exp(la);
+    *beta *= exp(lb);
+}
+
+static int corr_res(const double *p, double *r, double *jac, void *vp)
+{
+    (void)jac;
+    const corr_ctx *c = vp;
+    double cb[CORR_TERMS], ca[CORR_TERMS];
+    unpack(c, p, cb, ca);
+    size_t n = 0;
+    for (size_t q = 0; q < c->nruns; q++) {
+        const psi_data *d = &c->runs[q];
+        for (size_t j = 0; j < d->nplanes; j++) {
+            double a, b;
+            corrected(d, d->z[j], cb, ca, &a, &b);
+            for (size_t k = 0; k < d->nbins; k++) {
+                size_t i = j * d->nbins + k;
+                double w = M_PI * (d->lo[i] + d->hi[i]);
+                r[n++] = c->scale[q] * w * (kernel_annulus(a, b, d->lo[i], d->hi[i], NULL, NULL) - d->psi[i]);
+            }
+        }
+    }
+    return 0;
+}
+
+static int write_correction(const char *path, const corr_ctx *c, const double *cb, const double *ca)
+{
+    size_t len = strlen(path) + 32;
+    char *tmp = malloc(len);
+    FILE *f = NULL;
+    if (tmp) {
+        snprintf(tmp, len, "%s.tmp%ld", path, (long)getpid());
+        f = fopen(tmp, "w");
+    }
+    if (!f) {
+        free(tmp);
+        return 1;
+    }
+    double alo = INFINITY, ahi = -INFINITY, blo = INFINITY, bhi = -INFINITY, tlo = INFINITY, thi = -INFINITY;
+    for (size_t q = 0; q < c->nruns; q++) {
+        const psi_data *d = &c->runs[q];
+        alo = fmin(alo, d->albedo);
+        ahi = fmax(ahi, d->albedo);
+        blo = fmin(blo, d->B);
+        bhi = fmax(bhi, d->B);
+        tlo = fmin(tlo, d->sigma_t * d->z[0]);
+        thi = fmax(thi, d->sigma_t * d->z[d->nplanes - 1]);
+    }
+    fprintf(f, "# nbt kernel correction (nbt-fit kernel --correction)\n"
+               "# log(beta/beta_m) = sum beta_i t_i, log(alpha/alpha_m) = sum alpha_i t_i, alpha_m, beta_m from eq. 25/26\n"
+               "# t = 1, x, x^2, a, a x, b, b x with x = ln(sigma_t z), a = albedo, b = ln B\n"
+               "# fitted on %zu runs: albedo [%g, %g], B [%g, %g], sigma_t z [%g, %g]\n",
+            c->nruns, alo, ahi, blo, bhi, tlo, thi);
+    fprintf(f, "beta");
+    for (int i = 0; i < CORR_TERMS; i++)
+        fprintf(f, " %.17g", cb[i]);
+    fprintf(f, "\nalpha");
+    for (int i = 0; i < CORR_TERMS; i++)
+        fprintf(f, " %.17g", ca[i]);
+    fprintf(f, "\n");
+    int rc = fclose(f) != 0 || rename(tmp, path) != 0;
+    if (rc)
+        unlink(tmp);
+    free(tmp);
+    return rc;
+}
+
+static void read_correction(const char *path, double *cb, double *ca)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        die_usage("--apply: cannot open '%s'", path);
+    char line[1024];
+    int got = 0;
+    while (fgets(line, sizeof line, f)) {
+        double *dst = !strncmp(line, "beta ", 5) ? cb : !strncmp(line, "alpha ", 6) ? ca : NULL;
+        if (!dst)
+            continue;
+        char *p = strchr(line, ' ');
+        for (int i = 0; i < CORR_TERMS; i++) {
+            char *end;
+            dst[i] = strtod(p, &end);
+            if (end == p || !isfinite(dst[i])) {
+                fclose(f);
+                die_usage("--apply: '%s' is not a correction file (a 'beta'/'alpha' line needs %d numbers)", path,
+                          CORR_TERMS);
+            }
+            p = end;
+        }
+        got |= dst == cb ? 1 : 2;
+    }
+    fclose(f);
+    if (got != 3)
+        die_usage("--apply: '%s' is not a correction file (needs 'beta' and 'alpha' lines)", path);
+}
+
+static double run_rms(const psi_data *d, const double *cb, const double *ca, int use_corr)
+{
+    double num = 0, den = 0, a, b;
+    for (size_t j = 0; j < d->nplanes; j++) {
+        if (use_corr)
+            corrected(d, d->z[j], cb, ca, &a, &b);
+        else
+            moment_kernel(d, d->z[j], &a, &b);
+        plane_rms_parts(d, j, a, b, &num, &den);
+    }
+    return sqrt(num / den);
+}
+
+int cmd_kernel(int argc, char **argv)
+{
+    static const struct option opts[] = {
+        {"output", required_argument, 0, 'o'}, {"albedo", required_argument, 0, 'a'},
+        {"sigma-t", required_argument, 0, 's'}, {"B", required_argument, 0, 'B'},
+        {"shape", required_argument, 0, 'S'},  {"loss", required_argument, 0, 'l'},
+        {"correction", required_argument, 0, 'c'}, {"apply", required_argument, 0, 'A'},
+        {"weight", required_argument, 0, 'w'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    const char *out = NULL, *corr_out = NULL, *apply = NULL;
+    int ncomp = 1, rmsw = 0;
+    double albedo = NAN, sigma_t = NAN, B = NAN;
+    nbt_fit_options fo;
+    nbt_fit_options_default(&fo);
+    fo.analytic_jacobian = 1;
+    fo.covariance = 1;
+    int o;
+    optind = 1;
+    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+        switch (o) {
+        case 'o': out = optarg; break;
+        case 'a': albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); break;
+        case 's': sigma_t = opt_double("--sigma-t", optarg, 0, 1, 1e12, 0); break;
+        case 'B': B = opt_double("--B", optarg, 0, 1, 1e6, 0); break;
+        case 'S':
+            if (!strcmp(optarg, "erfc"))
+                ncomp = 1;
+            else if (!strcmp(optarg, "erfc2"))
+                ncomp = 2;
+            else if (!strcmp(optarg, "erfc+gauss"))
+                ncomp = 3;
+            else
+                die_usage("--shape: '%s' is not accepted: erfc (alpha/r G(r/beta)), erfc2 (a sum of two) or "
+                          "erfc+gauss (plus a 2-D Gaussian M exp(-r^2/2s^2)/(2 pi s^2))", optarg);
+            break;
+        case 'l':
+            if (!strcmp(optarg, "none"))
+                fo.loss = NBT_FIT_LOSS_NONE;
+            else if (!strcmp(optarg, "huber"))
+                fo.loss = NBT_FIT_LOSS_HUBER;
+            else if (!strcmp(optarg, "cauchy"))
+                fo.loss = NBT_FIT_LOSS_CAUCHY;
+            else
+                die_usage("--loss: '%s' is not accepted: none, huber or cauchy", optarg);
+            break;
+        case 'w':
+            if (!strcmp(optarg, "stderr"))
+                rmsw = 0;
+            else if (!strcmp(optarg, "rms"))
+                rmsw = 1;
+            else
+                die_usage("--weight: '%s' is not accepted: stderr (statistical) or rms (the RMS metric)", optarg);
+            break;
+        case 'c': corr_out = optarg; break;
+        case 'A': apply = optarg; break;
+        case 'h': help(); return 0;
+        default: die_usage("see 'nbt-fit kernel --help'");
+        }
+    }
+    size_t nruns = (size_t)(argc - optind);
+    if (nruns == 0)
+        die_usage("kernel: give at least one photon-counting file (nbt-fit mc -o FILE)");
+    if (corr_out && apply)
+        die_usage("--correction and --apply exclude each other");
+    psi_data *runs = calloc(nruns, sizeof *runs);
+    if (!runs)
+        die("out of memory");
+    char err[512];
+    for (size_t q = 0; q < nruns; q++) {
+        psi_data *d = &runs[q];
+        if (psi_data_read(argv[optind + q], d, err, sizeof err))
+            die_usage("%s", err);
+        if (!isnan(albedo))
+            d->albedo = albedo;
+        if (!isnan(sigma_t))
+            d->sigma_t = sigma_t;
+        if (!isnan(B))
+            d->B = B;
+        if (isnan(d->albedo) || isnan(d->sigma_t) || isnan(d->B))
+            die_usage("%s: the medium is unknown: give --albedo, --sigma-t and --B", d->name);
+        if (d->nbins < (size_t)(shape_params(ncomp) + 1))
+            die_usage("%s: %zu bins per plane: this shape needs at least %d", d->name, d->nbins, shape_params(ncomp) + 1);
+    }
+    if (apply) {
+        double cb[CORR_TERMS], ca[CORR_TERMS];
+        read_correction(apply, cb, ca);
+        for (size_t q = 0; q < nruns; q++)
+            printf("RMS %s moment %.4f corrected %.4f\n", runs[q].name, run_rms(&runs[q], NULL, NULL, 0),
+                   run_rms(&runs[q], cb, ca, 1));
+        for (size_t q = 0; q < nruns; q++)
+            psi_data_free(&runs[q]);
+        free(runs);
+        return 0;
+    }
+    FILE *f = stdout;
+    char *tmp = NULL;
+    if (out) {
+        size_t len = strlen(out) + 32;
+        tmp = malloc(len);
+        if (tmp) {
+            snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
+            f = fopen(tmp, "w");
+        }
+        if (!f || !tmp)
+            die("cannot write '%s'", out);
+    }
+    if (ncomp == 1)
+        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after\n");
+    else if (ncomp == 2)
+        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,alpha2,beta2,alpha2_stderr,beta2_stderr,rms_before,rms_after\n");
+    else
+        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,M,s,M_stderr,s_stderr,rms_before,rms_after\n");
+    int rc = 0;
+    for (size_t q = 0; q < nruns && rc == 0; q++) {
+        psi_data *d = &runs[q];
+        double nb_all = 0, na_all = 0, den_all = 0;
+        for (size_t j = 0; j < d->nplanes; j++) {
+            double floor_se = INFINITY;
+            for (size_t k = 0; k < d->nbins; k++)
+                if (d->se[j * d->nbins + k] > 0)
+                    floor_se = fmin(floor_se, d->se[j * d->nbins + k]);
+            if (isinf(floor_se)) {
+                if (out)
+                    unlink(tmp);
+                die_usage("%s: plane z = %g has no photons counted (all-zero histogram): cannot fit", d->name, d->z[j]);
+            }
+            double p[4], lo[4] = {0, 1e-9 * d->z[j], 0, 1e-9 * d->z[j]}, hi[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
+            moment_kernel(d, d->z[j], &p[0], &p[1]);
+            double a0 = p[0], b0 = p[1];
+            if (!(p[0] > 0 && p[1] > 0)) { /* no scattering in theory: start from the data's scale */
+                p[0] = d->psi[j * d->nbins] * d->hi[j * d->nbins];
+                p[1] = 0.3 * d->z[j];
+            }
+            plane_ctx pc = {d, j, floor_se, ncomp, rmsw, 0};
+            {
+                double n00 = 0, d00 = 0;
+                plane_rms_parts(d, j, 0, 0, &n00, &d00);
+                pc.rms_scale = 1 / sqrt(d00);
+            }
+            nbt_fit_summary s;
+            int np = shape_params(ncomp);
+            /* two-part shapes have local minima: start from several splits of
+             * the light (fraction f in the second part, width w times beta) */
+            static const double fs[4] = {0.5, 0.2, 0.8, 0.5}, ws[4] = {2.0, 1.0, 1.0, 0.5};
+            int nstart = ncomp == 1 ? 1 : 4, got = 0;
+            double best[4] = {0}, bestcost = INFINITY, base[2] = {p[0], p[1]};
+            nbt_fit_summary bs;
+            memset(&bs, 0, sizeof bs);
+            for (int t = 0; t < nstart; t++) {
+                double x[4] = {base[0], base[1], 0, 0};
+                if (ncomp == 2) { /* a second erfc part, broader or narrower */
+                    x[0] = (1 - fs[t]) * base[0];
+                    x[2] = fs[t] * base[0];
+                    x[3] = ws[t] * base[1];
+                } else if (ncomp == 3) { /* a diffuse Gaussian carrying fraction f of M0 */
+                    x[0] = (1 - fs[t]) * base[0];
+                    x[2] = fs[t] * sqrt(2 * M_PI) * base[0] * base[1];
+                    x[3] = ws[t] * base[1];
+                }
+                if (nbt_fit_solve(np, x, lo, hi, (int)d->nbins, plane_res, &pc, &fo, &s) == 0 && s.final_cost < bestcost) {
+                    bestcost = s.final_cost;
+                    memcpy(best, x, sizeof best);
+                    bs = s;
+                    got = 1;
+                }
+            }
+            if (!got) {
+                fprintf(stderr, "%s: %s: plane z = %g: the fit failed: %s (%s)\n", cli_prog, d->name, d->z[j],
+                        s.termination, s.message);
+                rc = 1;
+                break;
+            }
+            memcpy(p, best, sizeof best);
+            s = bs;
+            /* standard errors: (J^T J)^-1, scaled by chi^2/dof when the model does not fit within the noise */
+            double dof = (double)d->nbins - np, chi2 = 2 * s.final_cost, sc = dof > 0 ? fmax(1.0, chi2 / dof) : 1.0;
+            double se_[4];
+            for (int e = 0; e < np; e++)
+                se_[e] = s.covariance_ok ? sqrt(s.covariance[e * np + e] * sc) : NAN;
+            double n0 = 0, d0 = 0, n1 = 0, d1 = 0;
+            plane_rms_parts(d, j, a0, b0, &n0, &d0);
+            shape_rms_parts(d, j, ncomp, p, &n1, &d1);
+            if (ncomp == 1)
+                fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g\n", d->z[j], p[0], p[1], se_[0], se_[1],
+                        sqrt(n0 / d0), sqrt(n1 / d1));
+            else
+                fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g\n", d->z[j], p[0], p[1],
+                        se_[0], se_[1], p[2], p[3], se_[2], se_[3], sqrt(n0 / d0), sqrt(n1 / d1));
+            nb_all += n0;
+            na_all += n1;
+            den_all += d0;
+        }
+        if (rc == 0)
+            fprintf(stderr, "RMS %s moment %.4f fitted %.4f\n", d->name, sqrt(nb_all / den_all),
+                    sqrt(na_all / den_all));
+    }
+    if (out) {
+        if (fclose(f) != 0 || rc != 0 || rename(tmp, out) != 0) {
+            unlink(tmp);
+            if (rc == 0) {
+                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+                rc = 1;
+            }
+        }
+        free(tmp);
+    }
+    if (rc == 0 && corr_out) {
+        corr_ctx c = {runs, nruns, {1, 1, 1, 0, 0, 0, 0}, calloc(nruns, sizeof(double))};
+        size_t nres = 0;
+        for (size_t q = 0; q < nruns; q++) {
+            double num = 0, den = 0;
+            for (size_t j = 0; j < runs[q].nplanes; j++)
+                plane_rms_parts(&runs[q], j, 0, 0, &num, &den);
+            c.scale[q] = 1 / sqrt(den);
+            nres += runs[q].nplanes * runs[q].nbins;
+            /* albedo and width terms only where the runs differ in them */
+            if (runs[q].albedo != runs[0].albedo)
+                c.active[3] = c.active[4] = 1;
+            if (runs[q].B != runs[0].B)
+                c.active[5] = c.active[6] = 1;
+        }
+        double p[2 * CORR_TERMS] = {0}, cb[CORR_TERMS], ca[CORR_TERMS];
+        int np = 0;
+        for (int i = 0; i < CORR_TERMS; i++)
+            np += 2 * c.active[i];
+        nbt_fit_options co;
+        nbt_fit_options_default(&co);
+        nbt_fit_summary s;
+        if (nbt_fit_solve(np, p, NULL, NULL, (int)nres, corr_res, &c, &co, &s)) {
+            fprintf(stderr, "%s: the correction fit failed: %s (%s)\n", cli_prog, s.termination, s.message);
+            rc = 1;
+        } else {
+            unpack(&c, p, cb, ca);
+            for (size_t q = 0; q < nruns; q++)
+                fprintf(stderr, "RMS %s moment %.4f corrected %.4f\n", runs[q].name, run_rms(&runs[q], NULL, NULL, 0),
+                        run_rms(&runs[q], cb, ca, 1));
+            if (write_correction(corr_out, &c, cb, ca)) {
+                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, corr_out);
+                rc = 1;
+            }
+        }
+        free(c.scale);
+    }
+    for (size_t q = 0; q < nruns; q++)
+        psi_data_free(&runs[q]);
+    free(runs);
+    return rc;
+}

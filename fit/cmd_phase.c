@@ -1,0 +1,201 @@
+/* fit/cmd_phase.c: "nbt-fit phase": a sum of K Gaussian lobes (the phase
+ * function of Shinya et al. eq. 13 on the sphere) fitted to a phase function. */
+#include <config.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include "../gen/cli.h"
+#include "ceres_shim.h"
+#include "commands.h"
+
+#define MAXK 16
+#define NPANEL 8
+#define PNODES 16
+#define NNODE (NPANEL * PNODES)
+
+static void help(void)
+{
+    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt]\n\n"
+         "Fits w_1..w_K >= 0 (sum 1) and B_1..B_K > 0 of p = sum w_i p_G(B_i), p_G the Gaussian\n"
+         "phase function of Shinya et al. eq. 13 on the sphere (as nbt's photon counter samples it),\n"
+         "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), minimising the L2\n"
+         "error over the sphere relative to the target's norm, ||p_K - p|| / ||p||. Prints that error\n"
+         "for every K' = 1..K (each fit starts from the previous one). SOG.txt has lines 'w B' and is\n"
+         "accepted wherever a phase SPEC is, as sog:SOG.txt.");
+}
+
+typedef struct {
+    int K;
+    double th[NNODE], w[NNODE], target[NNODE], norm;
+} phase_ctx;
+
+static double lobe(double B, double th)
+{
+    double ratio = th < 1e-4 ? 1 + th * th / 6 : th / sin(th);
+    return ratio * exp(-th * th / (4 * B)) / (4 * M_PI * B * -expm1(-M_PI * M_PI / (4 * B)));
+}
+
+/* p = (u_1..u_{K-1}, v_1..v_K): w = softmax(0, u), B = exp(v) */
+static void params_to_sog(int K, const double *p, double *w, double *B)
+{
+    double m = 0, s = 0;
+    for (int i = 1; i < K; i++)
+        m = fmax(m, p[i - 1]);
+    for (int i = 0; i < K; i++) {
+        w[i] = exp((i == 0 ? 0 : p[i - 1]) - m);
+        s += w[i];
+        B[i] = exp(p[K - 1 + i]);
+    }
+    for (int i = 0; i < K; i++)
+        w[i] /= s;
+}
+
+static int phase_res(const double *p, double *r, double *jac, void *vp)
+{
+    (void)jac;
+    const phase_ctx *c = vp;
+    double w[MAXK], B[MAXK];
+    params_to_sog(c->K, p, w, B);
+    for (int n = 0; n < NNODE; n++) {
+        double v = 0;
+        for (int i = 0; i < c->K; i++)
+            v += w[i] * lobe(B[i], c->th[n]);
+        r[n] = (v - c->target[n]) * c->w[n] / c->norm;
+    }
+    return 0;
+}
+
+static double fit_error(phase_ctx *c, const double *p)
+{
+    double r[NNODE], s = 0;
+    phase_res(p, r, NULL, c);
+    for (int n = 0; n < NNODE; n++)
+        s += r[n] * r[n];
+    return sqrt(s);
+}
+
+int cmd_phase(int argc, char **argv)
+{
+    static const struct option opts[] = {{"target", required_argument, 0, 't'}, {"terms", required_argument, 0, 'k'},
+                                         {"output", required_argument, 0, 'o'}, {"against", required_argument, 0, 'a'},
+                                         {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
+    const char *target = NULL, *out = NULL;
+    int K = 0, o;
+    optind = 1;
+    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+        switch (o) {
+        case 't': target = optarg; break;
+        case 'k': K = (int)opt_long("--terms", optarg, 1, MAXK); break;
+        case 'o': out = optarg; break;
+        case 'a':
+            die_usage("--against: refitting the phase function to photon counts is not implemented yet");
+        case 'h': help(); return 0;
+        default: die_usage("see 'nbt-fit phase --help'");
+        }
+    }
+    if (optind < argc)
+        die_usage("phase: unexpected argument '%s'", argv[optind]);
+    if (!target || K == 0)
+        die_usage("phase: --target SPEC and --terms K are required");
+    nbt_phase *tp = NULL;
+    char err[512];
+    if (nbt_phase_parse(target, &tp, err, sizeof err) != NBT_OK)
+        die_usage("--target: %s", err);
+    /* Gauss-Legendre panels graded towards the forward peak */
+    static const double edges[NPANEL + 1] = {0, 0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, M_PI};
+    nbt_gl_rule *gl = nbt_gl_rule_alloc(PNODES);
+    if (!gl)
+        die("out of memory");
+    phase_ctx c;
+    memset(&c, 0, sizeof c);
+    double nn = 0;
+    for (int q = 0; q < NPANEL; q++)
+        for (int i = 0; i < PNODES; i++) {
+            int n = q * PNODES + i;
+            double a = edges[q], b = edges[q + 1];
+            c.th[n] = 0.5 * (a + b) + 0.5 * (b - a) * gl->x[i];
+            double dw = 0.5 * (b - a) * gl->w[i] * 2 * M_PI * sin(c.th[n]); /* d omega */
+            c.w[n] = sqrt(dw);
+            c.target[n] = nbt_phase_eval(tp, cos(c.th[n]));
+            nn += c.target[n] * c.target[n] * dw;
+        }
+    nbt_gl_rule_free(gl);
+    c.norm = sqrt(nn);
+    double g = nbt_phase_mean_cosine(tp);
+    double best[2 * MAXK] = {0};
+    best[0] = log(fmax(1e-4, fmin(5.0, (1 - g) / 2))); /* K = 1: one lobe, B ~ (1-g)/2 */
+    nbt_fit_options fo;
+    nbt_fit_options_default(&fo);
+    fo.max_iterations = 500;
+    double werr = 0, w[MAXK], B[MAXK];
+    for (int k = 1; k <= K; k++) {
+        c.K = k;
+        double p[2 * MAXK], cand[2][2 * MAXK];
+        int ncand = k == 1 ? 1 : 2;
+        /* start: the previous fit plus a broad or a narrow new lobe of small weight */
+        for (int t = 0; t < ncand; t++) {
+            double *s = cand[t];
+            if (k == 1) {
+                s[0] = best[0];
+                continue;
+            }
+            int km = k - 1;
+            for (int i = 0; i < km - 1; i++)
+                s[i] = best[i];
+            s[km - 1] = -3;
+            double vmax = -INFINITY, vmin = INFINITY;
+            for (int i = 0; i < km; i++) {
+                s[k - 1 + i] = best[km - 1 + i];
+                vmax = fmax(vmax, best[km - 1 + i]);
+                vmin = fmin(vmin, best[km - 1 + i]);
+            }
+            s[2 * k - 2] = t == 0 ? vmax + log(4.0) : vmin - log(4.0);
+        }
+        double berr = INFINITY;
+        for (int t = 0; t < ncand; t++) {
+            memcpy(p, cand[t], sizeof p);
+            nbt_fit_summary s;
+            nbt_fit_solve(2 * k - 1, p, NULL, NULL, NNODE, phase_res, &c, &fo, &s);
+            double e = fit_error(&c, p);
+            if (s.usable && e < berr) {
+                berr = e;
+                memcpy(best, p, sizeof best);
+            }
+        }
+        if (!isfinite(berr))
+            die("the fit with %d terms failed", k);
+        werr = berr;
+        printf("K %d error %.6g\n", k, berr);
+    }
+    params_to_sog(K, best, w, B);
+    int rc = 0;
+    if (out) {
+        size_t len = strlen(out) + 32;
+        char *tmp = malloc(len);
+        FILE *f = NULL;
+        if (tmp) {
+            snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
+            f = fopen(tmp, "w");
+        }
+        if (!f)
+            die("cannot write '%s'", out);
+        fprintf(f, "# sum of %d Gaussian lobes fitted to %s by nbt-fit phase; L2 error %.6g relative\n# w B\n", K,
+                target, werr);
+        for (int i = 0; i < K; i++)
+            fprintf(f, "%.17g %.17g\n", w[i], B[i]);
+        if (fclose(f) != 0 || rename(tmp, out) != 0) {
+            unlink(tmp);
+            fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+            rc = 1;
+        }
+        free(tmp);
+    } else
+        for (int i = 0; i < K; i++)
+            printf("w %.17g B %.17g\n", w[i], B[i]);
+    nbt_phase_free(tp);
+    return rc;
+}

@@ -1,0 +1,53 @@
+/* fit/kernel_model.c: annulus averages of the heuristic kernel. */
+#include <config.h>
+#include <math.h>
+#include "kernel_model.h"
+
+static double G(double x)
+{
+    return 0.5 * erfc(x / sqrt(2.0));
+}
+
+static double phi(double x)
+{
+    return exp(-0.5 * x * x) / sqrt(2.0 * M_PI);
+}
+
+static double J(double x)
+{
+    return x * G(x) - phi(x) + phi(0);
+}
+
+double kernel_annulus(double alpha, double beta, double lo, double hi, double *da, double *db)
+{
+    double area = M_PI * (hi * hi - lo * lo), xl = lo / beta, xh = hi / beta;
+    double base = 2.0 * M_PI * beta / area * (J(xh) - J(xl));
+    if (da)
+        *da = base;
+    if (db)
+        *db = 2.0 * M_PI * alpha / area * (phi(xl) - phi(xh));
+    return alpha * base;
+}
+
+double gauss_annulus(double M, double s, double lo, double hi, double *dm, double *ds)
+{
+    double area = M_PI * (hi * hi - lo * lo), el = exp(-lo * lo / (2 * s * s)), eh = exp(-hi * hi / (2 * s * s));
+    double base = (el - eh) / area;
+    if (dm)
+        *dm = base;
+    if (ds)
+        *ds = M / area * (el * lo * lo - eh * hi * hi) / (s * s * s);
+    return M * base;
+}
+
+void correction_terms(double sigma_t, double z, double albedo, double B, double *t)
+{
+    double x = log(sigma_t * z), b = log(B);
+    t[0] = 1;
+    t[1] = x;
+    t[2] = x * x;
+    t[3] = albedo;
+    t[4] = albedo * x;
+    t[5] = b;
+    t[6] = b * x;
+}

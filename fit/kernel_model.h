@@ -1,0 +1,21 @@
+/* fit/kernel_model.h: the heuristic kernel averaged over annuli (as photon
+ * counting measures it), with derivatives, and its depth correction. */
+#ifndef NBT_FIT_KERNEL_MODEL_H
+#define NBT_FIT_KERNEL_MODEL_H
+
+/* Mean of Psi = alpha/r G(r/beta) over the annulus lo <= r < hi:
+ * (2 pi alpha beta / area) [J(hi/beta) - J(lo/beta)], J(x) = int_0^x G =
+ * x G(x) - phi(x) + phi(0); d/dalpha and d/dbeta into *da, *db (may be NULL). */
+double kernel_annulus(double alpha, double beta, double lo, double hi, double *da, double *db);
+
+/* Mean of a 2-D Gaussian of total weight M and variance s^2 per axis,
+ * M exp(-r^2/2s^2)/(2 pi s^2), over the annulus; derivatives into *dm, *ds. */
+double gauss_annulus(double M, double s, double lo, double hi, double *dm, double *ds);
+
+/* Correction of the moment kernel: log(beta/beta_m) = sum_i cb[i] t_i,
+ * log(alpha/alpha_m) = sum_i ca[i] t_i with terms t = (1, x, x^2, a, a x, b, b x),
+ * x = ln(sigma_t z), a = albedo, b = ln B. */
+#define CORR_TERMS 7
+void correction_terms(double sigma_t, double z, double albedo, double B, double *t);
+
+#endif

@@ -1,0 +1,20 @@
+/* fit/psi_data.h: photon-counting data (nbt-fit mc output, CSV or EXR) for fitting. */
+#ifndef NBT_FIT_PSI_DATA_H
+#define NBT_FIT_PSI_DATA_H
+
+#include <stddef.h>
+
+typedef struct {
+    size_t nplanes, nbins;       /* every plane has nbins annuli */
+    double *z;                   /* [plane] */
+    double *lo, *hi, *psi, *se;  /* [plane * nbins + bin] */
+    double albedo, sigma_t, B;   /* the medium, NaN when the file does not say */
+    char name[256];
+} psi_data;
+
+/* Read FILE.csv (z,r_lo,r_hi,psi,psi_stderr) or FILE.exr (a PSI table).
+ * Returns 0, or 1 with a one-line reason in err. */
+int psi_data_read(const char *path, psi_data *d, char *err, size_t errlen);
+void psi_data_free(psi_data *d);
+
+#endif
