@@ -22,7 +22,8 @@ static void help(void)
     puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt]\n\n"
          "Fits w_1..w_K >= 0 (sum 1) and B_1..B_K > 0 of p = sum w_i p_G(B_i), p_G the Gaussian\n"
          "phase function of Shinya et al. eq. 13 on the sphere (as nbt's photon counter samples it),\n"
-         "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), minimising the L2\n"
+         "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), 1e-6 <= B <= 1e3,\n"
+         "minimising the L2\n"
          "error over the sphere relative to the target's norm, ||p_K - p|| / ||p||. Prints that error\n"
          "for every K' = 1..K (each fit starts from the previous one). SOG.txt has lines 'w B' and is\n"
          "accepted wherever a phase SPEC is, as sog:SOG.txt.");
@@ -155,11 +156,19 @@ int cmd_phase(int argc, char **argv)
             }
             s[2 * k - 2] = t == 0 ? vmax + log(4.0) : vmin - log(4.0);
         }
+        /* bounds keep lobes physical: weights' logits within +-30, 1e-6 <= B <= 1e3 */
+        double lo[2 * MAXK], hi[2 * MAXK];
+        for (int i = 0; i < 2 * k - 1; i++) {
+            lo[i] = i < k - 1 ? -30 : log(1e-6);
+            hi[i] = i < k - 1 ? 30 : log(1e3);
+        }
         double berr = INFINITY;
         for (int t = 0; t < ncand; t++) {
             memcpy(p, cand[t], sizeof p);
+            for (int i = 0; i < 2 * k - 1; i++)
+                p[i] = fmin(hi[i], fmax(lo[i], p[i]));
             nbt_fit_summary s;
-            nbt_fit_solve(2 * k - 1, p, NULL, NULL, NNODE, phase_res, &c, &fo, &s);
+            nbt_fit_solve(2 * k - 1, p, lo, hi, NNODE, phase_res, &c, &fo, &s);
             double e = fit_error(&c, p);
             if (s.usable && e < berr) {
                 berr = e;
