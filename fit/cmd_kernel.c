@@ -112,37 +112,33 @@ static void plane_rms_parts(const psi_data *d, size_t j, double alpha, double be
 typedef struct {
     psi_data *runs;
     size_t nruns;
-    int active[CORR_TERMS];
+    int active[NBT_KERNEL_CORR_TERMS];
     double *scale; /* per run: 1/sqrt(sum (2 pi r mc)^2) */
 } corr_ctx;
 
 static void unpack(const corr_ctx *c, const double *p, double *cb, double *ca)
 {
     int n = 0;
-    for (int i = 0; i < CORR_TERMS; i++)
+    for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         cb[i] = c->active[i] ? p[n++] : 0;
-    for (int i = 0; i < CORR_TERMS; i++)
+    for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         ca[i] = c->active[i] ? p[n++] : 0;
 }
 
 static void corrected(const psi_data *d, double z, const double *cb, const double *ca, double *alpha, double *beta)
 {
-    double t[CORR_TERMS], lb = 0, la = 0;
-    moment_kernel(d, z, alpha, beta);
-    correction_terms(d->sigma_t, z, d->albedo, d->B, t);
-    for (int i = 0; i < CORR_TERMS; i++) {
-        lb += cb[i] * t[i];
-        la += ca[i] * t[i];
-    }
-    *alpha *= exp(la);
-    *beta *= exp(lb);
+    nbt_kernel_correction c;
+    memcpy(c.beta, cb, sizeof c.beta);
+    memcpy(c.alpha, ca, sizeof c.alpha);
+    nbt_beam_medium m = nbt_beam_homogeneous(d->sigma_t, d->albedo, d->B);
+    nbt_kernel_corrected(&c, &m, z, alpha, beta);
 }
 
 static int corr_res(const double *p, double *r, double *jac, void *vp)
 {
     (void)jac;
     const corr_ctx *c = vp;
-    double cb[CORR_TERMS], ca[CORR_TERMS];
+    double cb[NBT_KERNEL_CORR_TERMS], ca[NBT_KERNEL_CORR_TERMS];
     unpack(c, p, cb, ca);
     size_t n = 0;
     for (size_t q = 0; q < c->nruns; q++) {
@@ -189,10 +185,10 @@ static int write_correction(const char *path, const corr_ctx *c, const double *c
                "# fitted on %zu runs: albedo [%g, %g], B [%g, %g], sigma_t z [%g, %g]\n",
             c->nruns, alo, ahi, blo, bhi, tlo, thi);
     fprintf(f, "beta");
-    for (int i = 0; i < CORR_TERMS; i++)
+    for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         fprintf(f, " %.17g", cb[i]);
     fprintf(f, "\nalpha");
-    for (int i = 0; i < CORR_TERMS; i++)
+    for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         fprintf(f, " %.17g", ca[i]);
     fprintf(f, "\n");
     int rc = fclose(f) != 0 || rename(tmp, path) != 0;
@@ -200,35 +196,6 @@ static int write_correction(const char *path, const corr_ctx *c, const double *c
         unlink(tmp);
     free(tmp);
     return rc;
-}
-
-static void read_correction(const char *path, double *cb, double *ca)
-{
-    FILE *f = fopen(path, "r");
-    if (!f)
-        die_usage("--apply: cannot open '%s'", path);
-    char line[1024];
-    int got = 0;
-    while (fgets(line, sizeof line, f)) {
-        double *dst = !strncmp(line, "beta ", 5) ? cb : !strncmp(line, "alpha ", 6) ? ca : NULL;
-        if (!dst)
-            continue;
-        char *p = strchr(line, ' ');
-        for (int i = 0; i < CORR_TERMS; i++) {
-            char *end;
-            dst[i] = strtod(p, &end);
-            if (end == p || !isfinite(dst[i])) {
-                fclose(f);
-                die_usage("--apply: '%s' is not a correction file (a 'beta'/'alpha' line needs %d numbers)", path,
-                          CORR_TERMS);
-            }
-            p = end;
-        }
-        got |= dst == cb ? 1 : 2;
-    }
-    fclose(f);
-    if (got != 3)
-        die_usage("--apply: '%s' is not a correction file (needs 'beta' and 'alpha' lines)", path);
 }
 
 static double run_rms(const psi_data *d, const double *cb, const double *ca, int use_corr)
@@ -327,8 +294,10 @@ int cmd_kernel(int argc, char **argv)
             die_usage("%s: %zu bins per plane: this shape needs at least %d", d->name, d->nbins, shape_params(ncomp) + 1);
     }
     if (apply) {
-        double cb[CORR_TERMS], ca[CORR_TERMS];
-        read_correction(apply, cb, ca);
+        nbt_kernel_correction kc;
+        if (nbt_kernel_correction_read(apply, &kc, err, sizeof err) != NBT_OK)
+            die_usage("--apply: %s", err);
+        const double *cb = kc.beta, *ca = kc.alpha;
         for (size_t q = 0; q < nruns; q++)
             printf("RMS %s moment %.4f corrected %.4f\n", runs[q].name, run_rms(&runs[q], NULL, NULL, 0),
                    run_rms(&runs[q], cb, ca, 1));
@@ -464,9 +433,9 @@ int cmd_kernel(int argc, char **argv)
             if (runs[q].B != runs[0].B)
                 c.active[5] = c.active[6] = 1;
         }
-        double p[2 * CORR_TERMS] = {0}, cb[CORR_TERMS], ca[CORR_TERMS];
+        double p[2 * NBT_KERNEL_CORR_TERMS] = {0}, cb[NBT_KERNEL_CORR_TERMS], ca[NBT_KERNEL_CORR_TERMS];
         int np = 0;
-        for (int i = 0; i < CORR_TERMS; i++)
+        for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
             np += 2 * c.active[i];
         nbt_fit_options co;
         nbt_fit_options_default(&co);

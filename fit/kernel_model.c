@@ -39,15 +39,3 @@ double gauss_annulus(double M, double s, double lo, double hi, double *dm, doubl
         *ds = M / area * (el * lo * lo - eh * hi * hi) / (s * s * s);
     return M * base;
 }
-
-void correction_terms(double sigma_t, double z, double albedo, double B, double *t)
-{
-    double x = log(sigma_t * z), b = log(B);
-    t[0] = 1;
-    t[1] = x;
-    t[2] = x * x;
-    t[3] = albedo;
-    t[4] = albedo * x;
-    t[5] = b;
-    t[6] = b * x;
-}

@@ -12,10 +12,4 @@ double kernel_annulus(double alpha, double beta, double lo, double hi, double *d
  * M exp(-r^2/2s^2)/(2 pi s^2), over the annulus; derivatives into *dm, *ds. */
 double gauss_annulus(double M, double s, double lo, double hi, double *dm, double *ds);
 
-/* Correction of the moment kernel: log(beta/beta_m) = sum_i cb[i] t_i,
- * log(alpha/alpha_m) = sum_i ca[i] t_i with terms t = (1, x, x^2, a, a x, b, b x),
- * x = ln(sigma_t z), a = albedo, b = ln B. */
-#define CORR_TERMS 7
-void correction_terms(double sigma_t, double z, double albedo, double B, double *t);
-
 #endif

@@ -51,11 +51,15 @@ int cmd_info(int argc, char **argv)
         printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
     printf("storage     %s\n", t->half ? "half" : "float");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
+    if (t->kind == NBT_TABLE_KERNEL)
+        printf("use         Psi(z, r) = alpha/r G(r/beta), alpha = sigma_t R, beta = G/sigma_t at (sigma_t z, albedo)\n");
     static const char *CH = "RGBA";
     for (size_t ch = 0; ch < t->nch; ch++) {
         char what[32];
         if (t->kind == NBT_TABLE_PSI)
             snprintf(what, sizeof what, ch == 0 ? "psi" : "psi_stderr");
+        else if (t->kind == NBT_TABLE_KERNEL)
+            snprintf(what, sizeof what, ch == 0 ? "alpha/sig_t" : "beta*sig_t");
         else if (t->k[ch] < 0)
             snprintf(what, sizeof what, "fixed phase");
         else
@@ -66,7 +70,7 @@ int cmd_info(int argc, char **argv)
             printf("channel %c   %-11s max |value| %.6g  max interp err %.3e\n", CH[ch], what, t->max_abs[ch],
                    t->max_err[ch]);
     }
-    if (t->kind != NBT_TABLE_PSI)
+    if (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J)
         printf("quad tol    %.3g (largest node error estimate %.3g)\n", t->quad_tol, t->quad_err);
     if (at) {
         double v[NBT_TABLE_MAX_CH];

@@ -9,6 +9,7 @@ int cmd_tables(int argc, char **argv); /* "airlight" and "surface" */
 int cmd_scene(int argc, char **argv);
 int cmd_eval(int argc, char **argv);
 int cmd_info(int argc, char **argv);
+int cmd_kernel(int argc, char **argv);
 
 /* What to tabulate: H (airlight) or J^n (surface), Legendre orders
  * 0..nterms-1 in packs of four, or one fixed-phase channel. */

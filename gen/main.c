@@ -13,6 +13,7 @@ static void help(void)
          "       nbt-gen scene FILE      only the tables a scene needs\n"
          "       nbt-gen eval WHAT [...] one value with its error: H, J, airlight, surface\n"
          "       nbt-gen info FILE       a table's metadata and values\n"
+         "       nbt-gen kernel [...]    the narrow-beam kernel's alpha, beta as a table\n"
          "       nbt-gen --version\n\n"
          "'nbt-gen COMMAND --help' describes each command. Exit status: 0 success,\n"
          "1 failure, 2 bad usage.");
@@ -40,5 +41,7 @@ int main(int argc, char **argv)
         return cmd_eval(argc - 1, argv + 1);
     if (!strcmp(c, "info"))
         return cmd_info(argc - 1, argv + 1);
-    die_usage("unknown command '%s': airlight, surface, scene, eval, info (see 'nbt-gen --help')", c);
+    if (!strcmp(c, "kernel"))
+        return cmd_kernel(argc - 1, argv + 1);
+    die_usage("unknown command '%s': airlight, surface, scene, eval, info, kernel (see 'nbt-gen --help')", c);
 }

@@ -1,6 +1,7 @@
 /* libnbt/beam.c: narrow beam moments and kernels (Shinya et al. sec. 3). */
 #include <config.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <nbt/beam.h>
@@ -344,4 +345,73 @@ static const char *density_row(size_t i, double z, double rho, double prev)
 nbt_status nbt_density_read(const char *path, double **z, double **rho, size_t *n, char *err, size_t errlen)
 {
     return nbt__read_columns(path, "density file", "z rho", density_row, z, rho, n, err, errlen);
+}
+
+void nbt_kernel_correction_terms(double tau, double albedo, double B, double *t)
+{
+    double x = log(tau), b = log(B);
+    t[0] = 1;
+    t[1] = x;
+    t[2] = x * x;
+    t[3] = albedo;
+    t[4] = albedo * x;
+    t[5] = b;
+    t[6] = b * x;
+}
+
+nbt_status nbt_kernel_corrected(const nbt_kernel_correction *c, const nbt_beam_medium *m, double z, double *alpha,
+                                double *beta)
+{
+    double M0, M2;
+    nbt_status st = nbt_beam_moments(m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+    if (st != NBT_OK)
+        return st;
+    nbt_beam_kernel_params(M0, M2, alpha, beta);
+    if (!c || !(z > 0))
+        return NBT_OK;
+    double t[NBT_KERNEL_CORR_TERMS], la = 0, lb = 0;
+    nbt_kernel_correction_terms(m->sigma_t * nbt_beam_zeta(m, z), m->albedo, bmix(m), t);
+    for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++) {
+        la += c->alpha[i] * t[i];
+        lb += c->beta[i] * t[i];
+    }
+    *alpha *= exp(la);
+    *beta *= exp(lb);
+    return NBT_OK;
+}
+
+nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c, char *err, size_t errlen)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        snprintf(err, errlen, "kernel correction '%s' cannot be opened", path);
+        return NBT_EIO;
+    }
+    char line[1024];
+    int got = 0, ln = 0;
+    nbt_status st = NBT_OK;
+    while (st == NBT_OK && fgets(line, sizeof line, f)) {
+        ln++;
+        double *dst = !strncmp(line, "beta ", 5) ? c->beta : !strncmp(line, "alpha ", 6) ? c->alpha : NULL;
+        if (!dst)
+            continue;
+        char *p = strchr(line, ' ');
+        for (int i = 0; i < NBT_KERNEL_CORR_TERMS && st == NBT_OK; i++) {
+            char *end;
+            dst[i] = strtod(p, &end);
+            if (end == p || !isfinite(dst[i])) {
+                snprintf(err, errlen, "kernel correction '%s' line %d: expected %d finite numbers", path, ln,
+                         NBT_KERNEL_CORR_TERMS);
+                st = NBT_EFORMAT;
+            }
+            p = end;
+        }
+        got |= dst == c->beta ? 1 : 2;
+    }
+    fclose(f);
+    if (st == NBT_OK && got != 3) {
+        snprintf(err, errlen, "kernel correction '%s': needs a 'beta' and an 'alpha' line", path);
+        st = NBT_EFORMAT;
+    }
+    return st;
 }

@@ -75,13 +75,14 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
 
 const char *nbt_table_kind_name(nbt_table_kind k)
 {
-    return k == NBT_TABLE_H ? "H" : k == NBT_TABLE_J ? "J" : "PSI";
+    static const char *n[4] = {"H", "J", "PSI", "KERNEL"};
+    return n[(int)k >= 0 && (int)k < 4 ? (int)k : 0];
 }
 
 const char *nbt_table_axis_name(nbt_table_kind k, int axis)
 {
-    static const char *n[3][2] = {{"u", "v"}, {"T", "theta"}, {"r/z", "z"}};
-    return n[k == NBT_TABLE_H ? 0 : k == NBT_TABLE_J ? 1 : 2][axis ? 1 : 0];
+    static const char *n[4][2] = {{"u", "v"}, {"T", "theta"}, {"r/z", "z"}, {"tau", "albedo"}};
+    return n[(int)k >= 0 && (int)k < 4 ? (int)k : 0][axis ? 1 : 0];
 }
 
 static int axis_ok(const nbt_axis *a)
@@ -258,4 +259,28 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
     free(ys);
     free(F);
     return st;
+}
+
+typedef struct {
+    nbt_table_fn f;
+    void *ctx;
+    size_t nch;
+} tab_ctx;
+
+static nbt_status tab_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny, double *F,
+                           double *quad_err)
+{
+    const tab_ctx *c = vp;
+    *quad_err = 0;
+    for (size_t j = 0; j < ny; j++)
+        for (size_t i = 0; i < nx; i++)
+            if (c->f(xs[i], ys[j], F + (j * nx + i) * c->nch, c->ctx))
+                NBT_FAIL(NBT_EDOM, "table: the tabulated function failed");
+    return NBT_OK;
+}
+
+nbt_status nbt_table_tabulate(nbt_table *t, nbt_table_fn f, void *ctx, int measure_error)
+{
+    tab_ctx c = {f, ctx, t->nch};
+    return nbt__table_fill(&t, 1, measure_error, tab_fill, &c);
 }

@@ -223,11 +223,11 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
     nbt_table_kind kind = NBT_TABLE_H;
     char an[64];
     if (exr_attr_get_string(ctx, 0, "nbt.kind", &len, &s) != EXR_ERR_SUCCESS ||
-        (strcmp(s, "H") && strcmp(s, "J") && strcmp(s, "PSI"))) {
-        st = rd_fail(err, errlen, path, "no nbt.kind attribute (H, J or PSI): not a table written by nbt");
+        (strcmp(s, "H") && strcmp(s, "J") && strcmp(s, "PSI") && strcmp(s, "KERNEL"))) {
+        st = rd_fail(err, errlen, path, "no nbt.kind attribute (H, J, PSI or KERNEL): not a table written by nbt");
         goto done;
     }
-    kind = !strcmp(s, "H") ? NBT_TABLE_H : !strcmp(s, "J") ? NBT_TABLE_J : NBT_TABLE_PSI;
+    kind = !strcmp(s, "H") ? NBT_TABLE_H : !strcmp(s, "J") ? NBT_TABLE_J : !strcmp(s, "PSI") ? NBT_TABLE_PSI : NBT_TABLE_KERNEL;
     if (exr_get_data_window(ctx, 0, &dw) != EXR_ERR_SUCCESS || exr_get_channels(ctx, 0, &cl) != EXR_ERR_SUCCESS) {
         st = rd_fail(err, errlen, path, "unreadable data window or channel list");
         goto done;

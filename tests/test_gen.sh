@@ -37,6 +37,22 @@ expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1
 expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
 rm -f "$tmp/dens.txt" "$tmp/empty.txt"
 
+# the kernel table: nodes carry eval moments' alpha and beta (sigma_t = 1); a correction scales them
+"$NBT_GEN" kernel --B 0.0685 --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/k.exr" >/dev/null 2>&1 && ok || bad "kernel table"
+set -- $("$NBT_GEN" eval moments --albedo 0.7 --sigma-t 1 --B 0.0685 --z 9)
+ma=$3; mb=$4
+set -- $("$NBT_GEN" info "$tmp/k.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
+close "$1" "$ma" 1e-6 "kernel table alpha at a node"; close "$2" "$mb" 1e-6 "kernel table beta at a node"
+printf 'beta 0.1 0 0 0 0 0 0\nalpha -0.2 0 0 0 0 0 0\n' >"$tmp/c.txt"
+"$NBT_GEN" kernel --B 0.0685 --tau 1:9 --albedo 0.5:0.9 --size 9x5 --correction "$tmp/c.txt" -o "$tmp/kc.exr" >/dev/null 2>&1
+set -- $("$NBT_GEN" info "$tmp/kc.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
+close "$1" "$(awk -v a="$ma" 'BEGIN { printf "%.17g", a * exp(-0.2) }')" 1e-6 "corrected alpha = alpha e^-0.2"
+close "$2" "$(awk -v b="$mb" 'BEGIN { printf "%.17g", b * exp(0.1) }')" 1e-6 "corrected beta = beta e^0.1"
+expect_usage "kernel without B" "--B" "$NBT_GEN" kernel -o "$tmp/x.exr"
+printf 'beta 1 2\n' >"$tmp/badc.txt"
+expect_usage "bad correction file" "line 1" "$NBT_GEN" kernel --B 0.1 --correction "$tmp/badc.txt" -o "$tmp/x.exr"
+rm -f "$tmp/k.exr" "$tmp/k.png" "$tmp/kc.exr" "$tmp/kc.png" "$tmp/c.txt" "$tmp/badc.txt"
+
 # airlight: direct vs series vs table
 A="--g 0.7 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.4 --dvp 20"
 d=$("$NBT_GEN" eval airlight $A --method direct | cut -d' ' -f1)

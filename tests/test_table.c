@@ -42,6 +42,21 @@ static int same_tables(const nbt_table *a, const nbt_table *b)
            a->quad_tol == b->quad_tol && a->quad_err == b->quad_err;
 }
 
+static int quad_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)ctx;
+    out[0] = x0 * x0 + 3 * x1;
+    return 0;
+}
+static int fail_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)x0;
+    (void)x1;
+    (void)out;
+    (void)ctx;
+    return 1;
+}
+
 int main(void)
 {
     /* ---- axis maps ---- */
@@ -136,6 +151,16 @@ int main(void)
     t_true(nbt_table_alloc(NBT_TABLE_H, &(nbt_axis){0, 0, NBT_AXIS_LINEAR, 0, 9}, &maps[4], 1) == NULL,
            "empty axis range rejected");
     t_true(nbt_table_alloc(NBT_TABLE_H, &maps[1], &maps[4], 5) == NULL, "more than 4 channels rejected");
+
+    /* ---- tabulating a function: f = x0^2 + 3 x1 on uniform axes has bilinear
+     * error exactly h^2/4 at the cell midpoints along x0 ---- */
+    nbt_axis u0 = {0, 2, NBT_AXIS_LINEAR, 0, 9}, u1 = {-1, 1, NBT_AXIS_LINEAR, 0, 5};
+    nbt_table *tf = nbt_table_alloc(NBT_TABLE_KERNEL, &u0, &u1, 1);
+    t_true(nbt_table_tabulate(tf, quad_fn, NULL, 1) == NBT_OK, "tabulate");
+    t_rel(tf->max_err[0], 0.25 * 0.25 / 4, 1e-6, "recorded error = h^2/4 for x^2");
+    t_rel(tf->data[(3 * 9 + 4) * 1], 1.0 + 3 * 0.5, 1e-7, "node value");
+    t_true(nbt_table_tabulate(tf, fail_fn, NULL, 0) == NBT_EDOM, "a failing function aborts with NBT_EDOM");
+    nbt_table_free(tf);
 
     /* ---- recorded interpolation error of an H table is honest ---- */
     nbt_axis a0 = {0, 10, NBT_AXIS_LOG1P, 100, 65}, a1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 65};

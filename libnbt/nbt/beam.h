@@ -76,6 +76,22 @@ typedef enum {
 nbt_status nbt_beam_psi(const nbt_beam_medium *m, nbt_psi_model model, double z, double r, double *psi,
                         double *err);
 
+/* A smooth correction of the moment kernel (fitted by nbt-fit kernel
+ * --correction): log(beta/beta_m) = sum beta[i] t_i, log(alpha/alpha_m) =
+ * sum alpha[i] t_i, t = (1, x, x^2, a, a x, b, b x), x = ln(sigma_t z) the
+ * optical depth's log, a the albedo, b = ln B (B_mix for several lobes). */
+#define NBT_KERNEL_CORR_TERMS 7
+typedef struct {
+    double beta[NBT_KERNEL_CORR_TERMS], alpha[NBT_KERNEL_CORR_TERMS];
+} nbt_kernel_correction;
+
+void nbt_kernel_correction_terms(double tau, double albedo, double B, double *t);
+/* Corrected alpha, beta of a homogeneous medium at depth z (c == NULL: the moment kernel). */
+nbt_status nbt_kernel_corrected(const nbt_kernel_correction *c, const nbt_beam_medium *m, double z, double *alpha,
+                                double *beta);
+/* Read the file nbt-fit writes ('beta' and 'alpha' lines of 7 numbers, '#' comments). */
+nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c, char *err, size_t errlen);
+
 /* Read a layered density profile: lines "z rho" ('#' comments), z
  * increasing from exactly 0, rho >= 0; layer i is [z_i, z_{i+1}), the last
  * unbounded. On success *z and *rho are malloc'd (free both) and *n >= 1;

@@ -42,10 +42,13 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 #define NBT_TABLE_MAX_CH 4
 
 /* H: airlight H_k(u, v); J: surface J_k^n(T, theta); PSI: photon counts
- * Psi(r/z, z) with its standard error (nbt-fit mc), bins at the nodes. */
-typedef enum { NBT_TABLE_H, NBT_TABLE_J, NBT_TABLE_PSI } nbt_table_kind;
+ * Psi(r/z, z) with its standard error (nbt-fit mc), bins at the nodes;
+ * KERNEL: the narrow-beam kernel's alpha/sigma_t and beta sigma_t over
+ * optical depth tau = sigma_t z and albedo (nbt-gen kernel). */
+typedef enum { NBT_TABLE_H, NBT_TABLE_J, NBT_TABLE_PSI, NBT_TABLE_KERNEL } nbt_table_kind;
 
-/* "H", "J", "PSI"; and the names of the two axes ("u", "v"; "T", "theta"; "r/z", "z"). */
+/* "H", "J", "PSI", "KERNEL"; the names of the two axes ("u", "v"; "T",
+ * "theta"; "r/z", "z"; "tau", "albedo"). */
 const char *nbt_table_kind_name(nbt_table_kind k);
 const char *nbt_table_axis_name(nbt_table_kind k, int axis);
 
@@ -75,6 +78,13 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
 
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);
+
+/* Tabulate f(x0, x1) -> out[0..nch-1] at the table's nodes; with
+ * measure_error, also on the grid refined by 2 and record max_err (largest
+ * |bilinear - f| over all cell and edge midpoints) and max_abs. f returns 0,
+ * or non-zero to abort (NBT_EDOM). */
+typedef int (*nbt_table_fn)(double x0, double x1, double *out, void *ctx);
+nbt_status nbt_table_tabulate(nbt_table *t, nbt_table_fn f, void *ctx, int measure_error);
 
 typedef enum { NBT_EXR_ZIP, NBT_EXR_NONE } nbt_exr_compression;
 
