@@ -103,8 +103,7 @@ static void shape_rms_parts(const psi_data *d, size_t j, int ncomp, const double
 
 static void plane_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
 {
-    double p[2] = {alpha, beta};
-    shape_rms_parts(d, j, 1, p, num, den);
+    kernel_rms_parts(d, j, alpha, beta, num, den);
 }
 
 /* ---- the correction, fitted to all runs ---- */

@@ -11,6 +11,8 @@
 #include "../gen/cli.h"
 #include "ceres_shim.h"
 #include "commands.h"
+#include "kernel_model.h"
+#include "psi_data.h"
 
 #define MAXK 16
 #define NPANEL 8
@@ -19,14 +21,18 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt]\n\n"
+    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt] [--against MC.exr]\n\n"
          "Fits w_1..w_K >= 0 (sum 1) and B_1..B_K > 0 of p = sum w_i p_G(B_i), p_G the Gaussian\n"
          "phase function of Shinya et al. eq. 13 on the sphere (as nbt's photon counter samples it),\n"
          "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), 1e-6 <= B <= 1e3,\n"
          "minimising the L2\n"
          "error over the sphere relative to the target's norm, ||p_K - p|| / ||p||. Prints that error\n"
          "for every K' = 1..K (each fit starts from the previous one). SOG.txt has lines 'w B' and is\n"
-         "accepted wherever a phase SPEC is, as sog:SOG.txt.");
+         "accepted wherever a phase SPEC is, as sog:SOG.txt.\n"
+         "--against MC.exr (photon counts from nbt-fit mc, whose metadata names the medium): the\n"
+         "narrow-beam moment kernel depends on the lobes only through B_mix = sum w_i B_i, so all\n"
+         "widths are scaled by one factor to make it match the counts best (RMS of 2 pi r Psi);\n"
+         "the RMS before and after is printed and the scaled lobes are written.");
 }
 
 typedef struct {
@@ -79,12 +85,95 @@ static double fit_error(phase_ctx *c, const double *p)
     return sqrt(s);
 }
 
+/* --against MC: the moment kernel depends on the lobes only through
+ * B_mix = sum w_i B_i (eq. 26 is linear in B), so the narrow-beam prediction
+ * is matched to photon counts by scaling every width by one factor c. */
+typedef struct {
+    const psi_data *d;
+    int K;
+    const double *w, *B;
+    double scale;
+} against_ctx;
+
+static double against_rms(const against_ctx *c, double factor, double *num_out)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(c->d->sigma_t, c->d->albedo, 1.0);
+    m.nlobes = (size_t)c->K;
+    for (int i = 0; i < c->K; i++) {
+        m.w[i] = c->w[i];
+        m.B[i] = factor * c->B[i];
+    }
+    double num = 0, den = 0;
+    for (size_t j = 0; j < c->d->nplanes; j++) {
+        double M0, M2, a, b;
+        nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, c->d->z[j], &M0, &M2, NULL);
+        nbt_beam_kernel_params(M0, M2, &a, &b);
+        kernel_rms_parts(c->d, j, a, b, &num, &den);
+    }
+    if (num_out)
+        *num_out = num;
+    return sqrt(num / den);
+}
+
+static int against_res(const double *p, double *r, double *jac, void *vp)
+{
+    (void)jac;
+    const against_ctx *c = vp;
+    double num;
+    against_rms(c, exp(p[0]), &num);
+    r[0] = sqrt(num) * c->scale;
+    return 0;
+}
+
+static int refit_against(const char *path, int K, double *w, double *B)
+{
+    psi_data d;
+    char err[512];
+    if (psi_data_read(path, &d, err, sizeof err))
+        die_usage("--against: %s", err);
+    if (isnan(d.albedo) || isnan(d.sigma_t))
+        die_usage("--against: %s does not name its medium (use an EXR written by nbt-fit mc)", path);
+    against_ctx c = {&d, K, w, B, 1};
+    double before = against_rms(&c, 1, NULL), num;
+    against_rms(&c, 1, &num);
+    c.scale = 1 / sqrt(num);
+    double p[1] = {0}, lo[1] = {log(1e-3)}, hi[1] = {log(1e3)};
+    nbt_fit_options fo;
+    nbt_fit_options_default(&fo);
+    nbt_fit_summary s;
+    /* a 1-D problem: bracket the factor on a log grid, then refine */
+    double bestf = 0, bestr = before;
+    for (double lf = -3; lf <= 3.0001; lf += 0.25) {
+        double rr = against_rms(&c, exp(lf), NULL);
+        if (rr < bestr) {
+            bestr = rr;
+            bestf = lf;
+        }
+    }
+    p[0] = bestf;
+    if (nbt_fit_solve(1, p, lo, hi, 1, against_res, &c, &fo, &s) != 0) {
+        fprintf(stderr, "%s: --against: the refit failed: %s (%s)\n", cli_prog, s.termination, s.message);
+        psi_data_free(&d);
+        return 1;
+    }
+    double f = exp(p[0]), after = against_rms(&c, f, NULL);
+    if (after > bestr) { /* keep the grid's best if the local refinement wandered */
+        f = exp(bestf);
+        after = bestr;
+    }
+    printf("against %s: moment-kernel RMS %.4f with the fitted lobes, %.4f with widths x %.4g\n", path, before, after, f);
+    for (int i = 0; i < K; i++)
+        B[i] *= f;
+    psi_data_free(&d);
+    return 0;
+}
+
 int cmd_phase(int argc, char **argv)
 {
     static const struct option opts[] = {{"target", required_argument, 0, 't'}, {"terms", required_argument, 0, 'k'},
                                          {"output", required_argument, 0, 'o'}, {"against", required_argument, 0, 'a'},
                                          {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
-    const char *target = NULL, *out = NULL;
+    const char *target = NULL, *out = NULL, *against = NULL;
     int K = 0, o;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
@@ -92,8 +181,7 @@ int cmd_phase(int argc, char **argv)
         case 't': target = optarg; break;
         case 'k': K = (int)opt_long("--terms", optarg, 1, MAXK); break;
         case 'o': out = optarg; break;
-        case 'a':
-            die_usage("--against: refitting the phase function to photon counts is not implemented yet");
+        case 'a': against = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit phase --help'");
         }
@@ -181,6 +269,10 @@ int cmd_phase(int argc, char **argv)
         printf("K %d error %.6g\n", k, berr);
     }
     params_to_sog(K, best, w, B);
+    if (against && refit_against(against, K, w, B) != 0) {
+        nbt_phase_free(tp);
+        return 1;
+    }
     int rc = 0;
     if (out) {
         size_t len = strlen(out) + 32;

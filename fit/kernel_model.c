@@ -39,3 +39,14 @@ double gauss_annulus(double M, double s, double lo, double hi, double *dm, doubl
         *ds = M / area * (el * lo * lo - eh * hi * hi) / (s * s * s);
     return M * base;
 }
+
+void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
+{
+    for (size_t k = 0; k < d->nbins; k++) {
+        size_t i = j * d->nbins + k;
+        double w = M_PI * (d->lo[i] + d->hi[i]); /* 2 pi r_c */
+        double m = alpha > 0 && beta > 0 ? kernel_annulus(alpha, beta, d->lo[i], d->hi[i], NULL, NULL) : 0;
+        *num += w * w * (m - d->psi[i]) * (m - d->psi[i]);
+        *den += w * w * d->psi[i] * d->psi[i];
+    }
+}

@@ -12,4 +12,10 @@ double kernel_annulus(double alpha, double beta, double lo, double hi, double *d
  * M exp(-r^2/2s^2)/(2 pi s^2), over the annulus; derivatives into *dm, *ds. */
 double gauss_annulus(double M, double s, double lo, double hi, double *dm, double *ds);
 
+#include "psi_data.h"
+
+/* Add sum (2 pi r_c (m - mc))^2 and sum (2 pi r_c mc)^2 over plane j of d,
+ * m the annulus mean of alpha/r G(r/beta) (0 when alpha or beta is 0). */
+void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den);
+
 #endif

@@ -75,6 +75,11 @@ else
   "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/corr.txt" -o "$tmp/kc.csv" 2>/dev/null && [ -s "$tmp/corr.txt" ] && ok || bad "--correction"
   "$NBT_FIT" kernel "$tmp/k2.exr" --apply "$tmp/corr.txt" >"$tmp/app" 2>&1 &&
     awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/app" && ok || bad "the correction helps on a held-out run: $(cat "$tmp/app")"
+  # phase --against: the widths' common factor that makes the moment kernel match the counts
+  "$NBT_FIT" phase --target gauss:B=0.0685 --terms 1 --against "$tmp/k2.exr" -o "$tmp/ag.sog" >"$tmp/ag" 2>&1 &&
+    awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
+    bad "--against improves the moment kernel: $(cat "$tmp/ag")"
+  expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
   # degenerate data
   printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,0,0\n1,0.5,1,0,0\n1,1,1.5,0,0\n1,1.5,2,0,0\n1,2,2.5,0,0\n1,2.5,3,0,0\n' >"$tmp/zero.csv"
   expect_usage "all-zero histogram" "all-zero" "$NBT_FIT" kernel "$tmp/zero.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"
