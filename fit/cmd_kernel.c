@@ -157,17 +157,10 @@ static int corr_res(const double *p, double *r, double *jac, void *vp)
 
 static int write_correction(const char *path, const corr_ctx *c, const double *cb, const double *ca)
 {
-    size_t len = strlen(path) + 32;
-    char *tmp = malloc(len);
-    FILE *f = NULL;
-    if (tmp) {
-        snprintf(tmp, len, "%s.tmp%ld", path, (long)getpid());
-        f = fopen(tmp, "w");
-    }
-    if (!f) {
-        free(tmp);
+    char *tmp;
+    FILE *f = out_open(path, &tmp);
+    if (!f)
         return 1;
-    }
     double alo = INFINITY, ahi = -INFINITY, blo = INFINITY, bhi = -INFINITY, tlo = INFINITY, thi = -INFINITY;
     for (size_t q = 0; q < c->nruns; q++) {
         const psi_data *d = &c->runs[q];
@@ -190,11 +183,7 @@ static int write_correction(const char *path, const corr_ctx *c, const double *c
     for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         fprintf(f, " %.17g", ca[i]);
     fprintf(f, "\n");
-    int rc = fclose(f) != 0 || rename(tmp, path) != 0;
-    if (rc)
-        unlink(tmp);
-    free(tmp);
-    return rc;
+    return out_close(f, tmp, path, 1);
 }
 
 static double run_rms(const psi_data *d, const double *cb, const double *ca, int use_corr)
@@ -307,16 +296,8 @@ int cmd_kernel(int argc, char **argv)
     }
     FILE *f = stdout;
     char *tmp = NULL;
-    if (out) {
-        size_t len = strlen(out) + 32;
-        tmp = malloc(len);
-        if (tmp) {
-            snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
-            f = fopen(tmp, "w");
-        }
-        if (!f || !tmp)
-            die("cannot write '%s'", out);
-    }
+    if (out && !(f = out_open(out, &tmp)))
+        die("cannot write '%s'", out);
     if (ncomp == 1)
         fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after\n");
     else if (ncomp == 2)
@@ -334,7 +315,7 @@ int cmd_kernel(int argc, char **argv)
                     floor_se = fmin(floor_se, d->se[j * d->nbins + k]);
             if (isinf(floor_se)) {
                 if (out)
-                    unlink(tmp);
+                    out_close(f, tmp, out, 0);
                 die_usage("%s: plane z = %g has no photons counted (all-zero histogram): cannot fit", d->name, d->z[j]);
             }
             double p[4], lo[4] = {0, 1e-9 * d->z[j], 0, 1e-9 * d->z[j]}, hi[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
@@ -407,15 +388,9 @@ int cmd_kernel(int argc, char **argv)
             fprintf(stderr, "RMS %s moment %.4f fitted %.4f\n", d->name, sqrt(nb_all / den_all),
                     sqrt(na_all / den_all));
     }
-    if (out) {
-        if (fclose(f) != 0 || rc != 0 || rename(tmp, out) != 0) {
-            unlink(tmp);
-            if (rc == 0) {
-                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
-                rc = 1;
-            }
-        }
-        free(tmp);
+    if (out && out_close(f, tmp, out, rc == 0) && rc == 0) {
+        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        rc = 1;
     }
     if (rc == 0 && corr_out) {
         corr_ctx c = {runs, nruns, {1, 1, 1, 0, 0, 0, 0}, calloc(nruns, sizeof(double))};

@@ -42,15 +42,9 @@ static void bar(double f, void *data)
 
 static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_result *r)
 {
-    size_t len = strlen(out) + 32;
-    char *tmp = malloc(len);
-    FILE *f = NULL;
-    if (tmp) {
-        snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
-        f = fopen(tmp, "w");
-    }
+    char *tmp;
+    FILE *f = out_open(out, &tmp);
     if (!f) {
-        free(tmp);
         fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
         return 1;
     }
@@ -61,14 +55,11 @@ static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_resul
             fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g\n", c->z_planes[j], dr * (double)k, dr * (double)(k + 1),
                     r->psi[j * c->r_bins + k], r->psi_se[j * c->r_bins + k]);
     }
-    int rc = 0;
-    if (fclose(f) != 0 || rename(tmp, out) != 0) {
-        unlink(tmp);
+    if (out_close(f, tmp, out, 1)) {
         fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
-        rc = 1;
+        return 1;
     }
-    free(tmp);
-    return rc;
+    return 0;
 }
 
 /* A PSI table: axis 0 = r/z at the bin centres, axis 1 = z at the planes

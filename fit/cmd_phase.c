@@ -275,25 +275,18 @@ int cmd_phase(int argc, char **argv)
     }
     int rc = 0;
     if (out) {
-        size_t len = strlen(out) + 32;
-        char *tmp = malloc(len);
-        FILE *f = NULL;
-        if (tmp) {
-            snprintf(tmp, len, "%s.tmp%ld", out, (long)getpid());
-            f = fopen(tmp, "w");
-        }
+        char *tmp;
+        FILE *f = out_open(out, &tmp);
         if (!f)
             die("cannot write '%s'", out);
         fprintf(f, "# sum of %d Gaussian lobes fitted to %s by nbt-fit phase; L2 error %.6g relative\n# w B\n", K,
                 target, werr);
         for (int i = 0; i < K; i++)
             fprintf(f, "%.17g %.17g\n", w[i], B[i]);
-        if (fclose(f) != 0 || rename(tmp, out) != 0) {
-            unlink(tmp);
+        if (out_close(f, tmp, out, 1)) {
             fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
             rc = 1;
         }
-        free(tmp);
     } else
         for (int i = 0; i < K; i++)
             printf("w %.17g B %.17g\n", w[i], B[i]);

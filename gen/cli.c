@@ -90,6 +90,30 @@ void opt_range(const char *opt, const char *arg, double lo, double hi, double *a
         die_usage("%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
 }
 
+FILE *out_open(const char *path, char **tmp)
+{
+    size_t len = strlen(path) + 32;
+    *tmp = malloc(len);
+    if (!*tmp)
+        return NULL;
+    snprintf(*tmp, len, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(*tmp, "w");
+    if (!f) {
+        free(*tmp);
+        *tmp = NULL;
+    }
+    return f;
+}
+
+int out_close(FILE *f, char *tmp, const char *path, int ok)
+{
+    int rc = fclose(f) != 0 || !ok || rename(tmp, path) != 0;
+    if (rc)
+        unlink(tmp);
+    free(tmp);
+    return rc;
+}
+
 int stderr_is_tty(void)
 {
     return isatty(fileno(stderr));

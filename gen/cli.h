@@ -20,6 +20,13 @@ long opt_long(const char *opt, const char *arg, long lo, long hi);
 /* Parse "LO:HI" or a single value (LO = HI) within [lo, hi]. */
 void opt_range(const char *opt, const char *arg, double lo, double hi, double *a, double *b);
 
+/* Output written all or nothing: out_open creates PATH.tmpPID for writing
+ * (NULL on failure); out_close closes it and, if ok and the close worked,
+ * renames it to PATH, else removes it. out_close returns 0 on success. */
+#include <stdio.h>
+FILE *out_open(const char *path, char **tmp);
+int out_close(FILE *f, char *tmp, const char *path, int ok);
+
 /* Is stderr a terminal (progress output only then)? */
 int stderr_is_tty(void);
 
