@@ -6,7 +6,7 @@ cd "$(dirname "$0")"
 mode=${1:-run}
 case $mode in run|check) ;; *) echo "usage: ./quickstart.sh [check]" >&2; exit 2 ;; esac
 
-PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev"
+PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -24,7 +24,7 @@ fi
 jobs=$(nproc 2>/dev/null || echo 2)
 [ -x configure ] || autoreconf -fi
 flags=""
-[ "$mode" = check ] && flags="--enable-werror --with-ceres"
+[ "$mode" = check ] && flags="--enable-werror --with-ceres --with-gl"
 ./configure -q $flags ${NBT_CONFIGURE_FLAGS:-}
 make -j"$jobs"
 

@@ -1,0 +1,50 @@
+/* nbt/gl.h: libnbt-gl, the small C helper for nbt's GLSL modules: assemble a
+ * fragment shader with the #defines a scene needs, and load tables into GL
+ * textures. Needs a current OpenGL >= 3.3 context for the texture calls.
+ *
+ * Uniforms the modules declare (set them with glUniform*):
+ *   nbt_hw[NBT_W_PACKS] (vec4)        Legendre weights w_k = (2k+1) b_k, see nbt_gl_weights
+ *   nbt_H0..nbt_H3 (sampler2D)        H packs;  nbt_H_ax0, nbt_H_ax1 (vec4), nbt_H_map0, nbt_H_map1 (int)
+ *   nbt_J1_0..3, nbt_Jn_0..3          J^1 and J^n packs; nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
+ * Functions: nbt_airlight(kappa_s, kappa_t, I0, dsv, gamma, dvp),
+ *   nbt_surface(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n),
+ *   nbt_beam_kernel_params(sigma_t, albedo, B, z) -> (alpha, beta), nbt_beam_psi(ab, r). */
+#ifndef NBT_GL_H
+#define NBT_GL_H
+
+#include <stddef.h>
+#include <nbt/table.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    int h_packs;      /* 0: no airlight; 1..4 H textures (orders 4p..4p+3) */
+    int j1_packs;     /* 0: no surface radiance; 1..4 J^1 textures */
+    int jn_packs;     /* 0..4 J^n (Phong) textures; 0: no specular term */
+    int fixed_phase;  /* 1: one fixed-phase table per kind (packs must be 0 or 1) */
+    int beam;         /* 1: include the narrow-beam kernel */
+    double gamma_eps; /* airlight: gamma clamped to [eps, pi - eps]; 0: 1e-3 */
+} nbt_gl_config;
+
+/* "#version 330 core", the #defines, the modules the configuration needs, then
+ * user_src (the shader's own code, may be NULL). malloc'd; NULL on a bad
+ * configuration (pack counts out of range) or no memory. */
+char *nbt_gl_shader_source(const nbt_gl_config *c, const char *user_src);
+
+/* Weights for packs x 4 channels: w[k] = (2k+1) b[k] for k < nterms, 0 beyond. */
+void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w);
+
+/* The table's axis uniforms: vec4(lo, hi, c, n) and mapping codes. */
+void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0, int *map1);
+
+/* Upload as a GL_RGBA32F 2-D texture (channels beyond nch are 0), LINEAR
+ * filtering, CLAMP_TO_EDGE; binds it on the active texture unit. Returns the
+ * texture name, 0 on failure (glGetError set). */
+unsigned nbt_gl_upload_table(const nbt_table *t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,58 @@
+// shaders/nbt_airlight.glsl: airlight of an isotropic point source along a
+// view ray from H tables (Hong, eq. 4.18 with albedo and 1/4pi explicit):
+//   L_a = kappa_s I0 e^{-kappa_t t}/(4 pi h) sum_k w_k [H_k(kappa_t h, theta_d) - H_k(kappa_t h, theta_0)]
+// Defines: NBT_H_PACKS (1..4 RGBA textures holding orders 4p..4p+3) with
+// weights nbt_hw[p] (nbt_weights.glsl), or, with NBT_FIXED_PHASE, one
+// fixed-phase table (channel R, weight (1, 0, 0, 0)).
+// Singular places: gamma is clamped to [NBT_GAMMA_EPS, pi - NBT_GAMMA_EPS]
+// (a ray through the source has infinite airlight; the clamp gives that of a
+// ray passing at angle NBT_GAMMA_EPS); u beyond the table reads its edge.
+#ifndef NBT_GAMMA_EPS
+#define NBT_GAMMA_EPS 1e-3
+#endif
+uniform sampler2D nbt_H0;
+#if NBT_H_PACKS > 1
+uniform sampler2D nbt_H1;
+#endif
+#if NBT_H_PACKS > 2
+uniform sampler2D nbt_H2;
+#endif
+#if NBT_H_PACKS > 3
+uniform sampler2D nbt_H3;
+#endif
+uniform vec4 nbt_H_ax0, nbt_H_ax1; // u axis, v axis: vec4(lo, hi, c, n)
+uniform int nbt_H_map0, nbt_H_map1;
+
+// sum_k w_k [H_k(u, v1) - H_k(u, v0)]
+float nbt_h_diff(float u, float v0, float v1)
+{
+    float s = dot(nbt_hw[0], nbt_lookup(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
+                             nbt_lookup(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+#if NBT_H_PACKS > 1
+    s += dot(nbt_hw[1], nbt_lookup(nbt_H1, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
+                        nbt_lookup(nbt_H1, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+#endif
+#if NBT_H_PACKS > 2
+    s += dot(nbt_hw[2], nbt_lookup(nbt_H2, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
+                        nbt_lookup(nbt_H2, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+#endif
+#if NBT_H_PACKS > 3
+    s += dot(nbt_hw[3], nbt_lookup(nbt_H3, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
+                        nbt_lookup(nbt_H3, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+#endif
+    return s;
+}
+
+// kappa_s, kappa_t [1/length], I0, dsv = viewer-source distance, gamma = angle
+// between the view ray and the source direction, dvp = distance to the
+// surface along the ray (use a huge value, e.g. 1e30, for none)
+float nbt_airlight(float kappa_s, float kappa_t, float I0, float dsv, float gamma, float dvp)
+{
+    float g = clamp(gamma, NBT_GAMMA_EPS, NBT_PI - NBT_GAMMA_EPS);
+    float h = dsv * sin(g), t = dsv * cos(g);
+    float th0 = g - 0.5 * NBT_PI;
+    float thd = atan(dvp - t, h);
+    float d = nbt_h_diff(kappa_t * h, th0, thd);
+    // e^{-kappa_t t} can overflow where t < 0 while d is tiny: combine in logs
+    return d == 0.0 ? 0.0 : sign(d) * exp(-kappa_t * t + log(abs(d) * kappa_s * I0 / (4.0 * NBT_PI * h)));
+}

@@ -1,0 +1,96 @@
+/* shaders/nbt_gl.c: assembling nbt's GLSL and uploading tables. */
+#include <config.h>
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "nbt/gl.h"
+
+/* generated from the GLSL modules at build time (nbt_glsl.c) */
+extern const char nbt_glsl_nbt_table[], nbt_glsl_nbt_weights[], nbt_glsl_nbt_airlight[], nbt_glsl_nbt_surface[],
+    nbt_glsl_nbt_beam[];
+
+char *nbt_gl_shader_source(const nbt_gl_config *c, const char *user_src)
+{
+    if (c->h_packs < 0 || c->h_packs > 4 || c->j1_packs < 0 || c->j1_packs > 4 || c->jn_packs < 0 ||
+        c->jn_packs > 4 || (c->jn_packs > 0 && c->j1_packs == 0) ||
+        (c->fixed_phase && (c->h_packs > 1 || c->j1_packs > 1 || c->jn_packs > 1)))
+        return NULL;
+    int w = c->h_packs > c->j1_packs ? c->h_packs : c->j1_packs;
+    if (c->jn_packs > w)
+        w = c->jn_packs;
+    char head[512];
+    int n = snprintf(head, sizeof head, "#version 330 core\n%s#define NBT_W_PACKS %d\n#define NBT_GAMMA_EPS %.9g\n",
+                     c->fixed_phase ? "#define NBT_FIXED_PHASE 1\n" : "", w > 0 ? w : 1,
+                     c->gamma_eps > 0 ? c->gamma_eps : 1e-3);
+    if (c->h_packs)
+        n += snprintf(head + n, sizeof head - (size_t)n, "#define NBT_H_PACKS %d\n", c->h_packs);
+    if (c->j1_packs)
+        n += snprintf(head + n, sizeof head - (size_t)n, "#define NBT_J1_PACKS %d\n#define NBT_JN_PACKS %d\n",
+                      c->j1_packs, c->jn_packs);
+    const char *parts[6] = {head, nbt_glsl_nbt_table, nbt_glsl_nbt_weights,
+                            c->h_packs ? nbt_glsl_nbt_airlight : "", c->j1_packs ? nbt_glsl_nbt_surface : "",
+                            c->beam ? nbt_glsl_nbt_beam : ""};
+    size_t len = (user_src ? strlen(user_src) : 0) + 1;
+    for (int i = 0; i < 6; i++)
+        len += strlen(parts[i]) + 1;
+    char *s = malloc(len);
+    if (!s)
+        return NULL;
+    s[0] = '\0';
+    for (int i = 0; i < 6; i++) {
+        strcat(s, parts[i]);
+        strcat(s, "\n");
+    }
+    if (user_src)
+        strcat(s, user_src);
+    return s;
+}
+
+void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w)
+{
+    for (size_t k = 0; k < (size_t)packs * 4; k++)
+        w[k] = k < nterms ? (float)((2.0 * (double)k + 1.0) * b[k]) : 0.0f;
+}
+
+void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0, int *map1)
+{
+    float *a[2] = {ax0, ax1};
+    int *m[2] = {map0, map1};
+    for (int i = 0; i < 2; i++) {
+        a[i][0] = (float)t->axis[i].lo;
+        a[i][1] = (float)t->axis[i].hi;
+        a[i][2] = (float)t->axis[i].c;
+        a[i][3] = (float)t->axis[i].n;
+        *m[i] = t->axis[i].map == NBT_AXIS_SQRT ? 1 : t->axis[i].map == NBT_AXIS_LOG1P ? 2
+              : t->axis[i].map == NBT_AXIS_COS ? 3 : 0;
+    }
+}
+
+unsigned nbt_gl_upload_table(const nbt_table *t)
+{
+    size_t nx = t->axis[0].n, ny = t->axis[1].n;
+    float *rgba = calloc(nx * ny * 4, sizeof(float));
+    if (!rgba)
+        return 0;
+    for (size_t i = 0; i < nx * ny; i++)
+        for (size_t c = 0; c < t->nch; c++)
+            rgba[i * 4 + c] = t->data[i * t->nch + c];
+    GLuint tex = 0;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)nx, (GLsizei)ny, 0, GL_RGBA, GL_FLOAT, rgba);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    free(rgba);
+    if (glGetError() != GL_NO_ERROR) {
+        glDeleteTextures(1, &tex);
+        return 0;
+    }
+    return tex;
+}

@@ -1,0 +1,29 @@
+// shaders/nbt_table.glsl: node-aligned table lookup, exactly as libnbt writes
+// tables. An axis is vec4(lo, hi, c, n) plus a mapping code: 0 linear,
+// 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos.
+// Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
+const float NBT_PI = 3.14159265358979;
+
+float nbt_axis_unit(float x, vec4 a, int map)
+{
+    float r = clamp((x - a.x) / (a.y - a.x), 0.0, 1.0);
+    if (map == 1)
+        return sqrt(r);
+    if (map == 2)
+        return log(1.0 + a.z * r) / log(1.0 + a.z);
+    if (map == 3)
+        return acos(clamp(1.0 - 2.0 * r, -1.0, 1.0)) / NBT_PI;
+    return r;
+}
+
+// the texel-centre convention: node i of n sits at (i + 0.5)/n
+float nbt_texcoord(float s, float n)
+{
+    return (s * (n - 1.0) + 0.5) / n;
+}
+
+vec4 nbt_lookup(sampler2D t, vec4 a0, int m0, vec4 a1, int m1, float x0, float x1)
+{
+    return texture(t, vec2(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
+                           nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w)));
+}

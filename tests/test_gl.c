@@ -1,0 +1,258 @@
+/* tests/test_gl.c: nbt's GLSL on a real GL (Mesa llvmpipe through EGL
+ * surfaceless): every assembled variant validates with glslangValidator and
+ * compiles; rendered airlight, surface radiance and beam kernel match libnbt's
+ * CPU evaluation of the same float tables pixel by pixel, and stay within the
+ * tables' recorded error of the exact series; singular places give finite
+ * values. Fails with a clear message when no GL context can be created. */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <nbt/nbt.h>
+#include <nbt/gl.h>
+#include "../examples/egl_headless.h"
+#include "testutil.h"
+
+/* the GL driver leaks at eglTerminate: no leak report for this program */
+const char *__asan_default_options(void);
+const char *__asan_default_options(void)
+{
+    return "detect_leaks=0";
+}
+
+#define W 64
+#define H 48
+static const double G0 = 0.05, G1 = 3.09, D0 = 0.5, D1 = 40, KT = 0.2, KS = 0.15, I0 = 2.385, DVP = 25;
+static const double KD = 0.7, KSP = 0.3, NPH = 20, ALB = 0.9, BB = 0.0685;
+
+static const char *MAIN =
+    "uniform vec2 res;\n"
+    "out vec4 color;\n"
+    "void main() {\n"
+    "  vec2 f = (gl_FragCoord.xy - 0.5) / (res - 1.0);\n"
+    "  float gam = mix(0.05, 3.09, f.x), d = mix(0.5, 40.0, f.y);\n"
+    "  color.r = nbt_airlight(0.15, 0.2, 2.385, d, gam, 25.0);\n"
+    "  color.g = nbt_surface(0.15, 0.2, 2.385, d, f.x * 3.14159265358979, (1.0 - f.x) * 1.5, 0.7, 0.3, 20.0);\n"
+    "  float z = d / 4.0;\n"
+    "  color.b = nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.0685, z), (0.02 + 0.8 * f.x) * z);\n"
+    "  color.a = 1.0;\n"
+    "}\n";
+
+static nbt_table *build(nbt_table_kind kind, int n, int pack, size_t N)
+{
+    nbt_axis a0 = {0, 10, NBT_AXIS_LOG1P, 1000, N};
+    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, N} : (nbt_axis){0, M_PI, NBT_AXIS_COS, 0, N};
+    nbt_table *t = nbt_table_alloc(kind, &a0, &a1, 4);
+    for (int c = 0; c < 4; c++)
+        t->k[c] = 4 * pack + c;
+    t->n = n;
+    nbt_build_opts o = {1e-10, 1, 0};
+    nbt_status st = kind == NBT_TABLE_H ? nbt_h_table_build(t, NULL, &o) : nbt_j_table_build(t, NULL, &o);
+    return st == NBT_OK ? t : NULL;
+}
+
+static void set_axes(GLuint prog, const char *pre, const nbt_table *t)
+{
+    float a0[4], a1[4];
+    int m0, m1;
+    char name[64];
+    nbt_gl_table_axes(t, a0, a1, &m0, &m1);
+    snprintf(name, sizeof name, "%s_ax0", pre);
+    glUniform4fv(glGetUniformLocation(prog, name), 1, a0);
+    snprintf(name, sizeof name, "%s_ax1", pre);
+    glUniform4fv(glGetUniformLocation(prog, name), 1, a1);
+    snprintf(name, sizeof name, "%s_map0", pre);
+    glUniform1i(glGetUniformLocation(prog, name), m0);
+    snprintf(name, sizeof name, "%s_map1", pre);
+    glUniform1i(glGetUniformLocation(prog, name), m1);
+}
+
+/* validate one variant with glslangValidator (and the GL compiler) */
+static void validate(const nbt_gl_config *c, const char *main_src)
+{
+    char *src = nbt_gl_shader_source(c, main_src);
+    char path[] = "/tmp/nbt-test-glsl-XXXXXX";
+    int fd = mkstemp(path);
+    FILE *f = fdopen(fd, "w");
+    fputs(src, f);
+    fclose(f);
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "glslangValidator -S frag %s >/dev/null 2>&1", path);
+    int rc = system(cmd);
+    t_true(rc == 0, "glslangValidator accepts the variant h=%d j1=%d jn=%d fixed=%d beam=%d%s", c->h_packs, c->j1_packs,
+           c->jn_packs, c->fixed_phase, c->beam, rc == 0 ? "" : " (is glslang-tools installed?)");
+    char err[4096];
+    unsigned p = gl_fullscreen_program(src, err, sizeof err);
+    t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d: %s", c->h_packs, c->j1_packs,
+           c->jn_packs, c->fixed_phase, p ? "ok" : err);
+    if (p)
+        glDeleteProgram(p);
+    unlink(path);
+    free(src);
+}
+
+int main(void)
+{
+    char err[4096];
+    if (egl_headless_open(err, sizeof err)) {
+        printf("FAIL: cannot create a GL context: %s\n", err);
+        t_true(0, "GL context");
+        return t_done();
+    }
+    t_true(1, "GL context: %s", (const char *)glGetString(GL_RENDERER));
+    /* variants */
+    const char *just_airlight = "out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30)); }\n";
+    const char *just_surface = "out vec4 color;\nvoid main() { color = vec4(nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0)); }\n";
+    const char *just_beam = "out vec4 color;\nvoid main() { color = vec4(nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3)); }\n";
+    for (int h = 1; h <= 4; h++)
+        validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0}, just_airlight);
+    for (int j = 1; j <= 4; j++)
+        validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0}, just_surface);
+    validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0}, just_airlight);
+    validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0}, just_beam);
+    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0}, MAIN);
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
+
+    /* tables: orders 0..7 of H, J^1, J^20 */
+    nbt_table *Ht[2], *J1t[2], *Jnt[2];
+    for (int p = 0; p < 2; p++) {
+        Ht[p] = build(NBT_TABLE_H, 0, p, 65);
+        J1t[p] = build(NBT_TABLE_J, 1, p, 49);
+        Jnt[p] = build(NBT_TABLE_J, 20, p, 49);
+    }
+    t_true(Ht[0] && Ht[1] && J1t[0] && J1t[1] && Jnt[0] && Jnt[1], "tables built");
+    nbt_gl_config cfg = {2, 2, 2, 0, 1, 0};
+    char *src = nbt_gl_shader_source(&cfg, MAIN);
+    GLuint prog = gl_fullscreen_program(src, err, sizeof err);
+    free(src);
+    t_true(prog != 0, "test shader: %s", prog ? "ok" : err);
+    GLuint fbo = gl_float_target(W, H);
+    t_true(fbo != 0, "RGBA32F render target");
+    /* create every texture on unit 0 first, then bind them to their units */
+    const nbt_table *all[6] = {Ht[0], Ht[1], J1t[0], J1t[1], Jnt[0], Jnt[1]};
+    static const char *names[6] = {"nbt_H0", "nbt_H1", "nbt_J1_0", "nbt_J1_1", "nbt_Jn_0", "nbt_Jn_1"};
+    GLuint tex[6];
+    glActiveTexture(GL_TEXTURE0);
+    for (int i = 0; i < 6; i++)
+        tex[i] = nbt_gl_upload_table(all[i]);
+    glUseProgram(prog);
+    for (int i = 0; i < 6; i++) {
+        glActiveTexture(GL_TEXTURE0 + (GLenum)i);
+        glBindTexture(GL_TEXTURE_2D, tex[i]);
+        glUniform1i(glGetUniformLocation(prog, names[i]), i);
+    }
+    nbt_phase *hg = nbt_phase_hg(0.5);
+    double b[8];
+    nbt_phase_moments(hg, 7, b);
+    float w[8];
+    nbt_gl_weights(b, 8, 2, w);
+    glUniform4fv(glGetUniformLocation(prog, "nbt_hw"), 2, w);
+    set_axes(prog, "nbt_H", Ht[0]);
+    set_axes(prog, "nbt_J", J1t[0]);
+    glUniform2f(glGetUniformLocation(prog, "res"), W, H);
+    gl_draw_fullscreen();
+    float *px = malloc(W * H * 4 * sizeof(float));
+    glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+    t_true(glGetError() == GL_NO_ERROR, "render and read back");
+
+    /* sum_k |w_k| max|table_k|: the scale of each weighted lookup */
+    double wscale_h = 0, wscale_j1 = 0, wscale_jn = 0;
+    for (int k = 0; k < 8; k++) {
+        double wk = fabs((2 * k + 1) * b[k]);
+        wscale_h += wk * Ht[k / 4]->max_abs[k % 4];
+        wscale_j1 += wk * J1t[k / 4]->max_abs[k % 4];
+        wscale_jn += wk * Jnt[k / 4]->max_abs[k % 4];
+    }
+    double noise_h = 4 * FLT_EPSILON * (double)(Ht[0]->axis[0].n - 1), noise_j = 4 * FLT_EPSILON * (double)(J1t[0]->axis[0].n - 1);
+    /* CPU: the same geometries, the same float tables, double arithmetic */
+    double worst[3] = {0}, worst_exact = 0;
+    int finite = 1, within = 1;
+    for (int j = 0; j < H; j++)
+        for (int i = 0; i < W; i++) {
+            double fx = (double)i / (W - 1), fy = (double)j / (H - 1);
+            double gam = G0 + (G1 - G0) * fx, d = D0 + (D1 - D0) * fy;
+            const float *p = px + (j * W + i) * 4;
+            finite &= isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+            nbt_airlight_geom ag = {KS, KT, I0, d, gam, DVP};
+            double La, Lp, ref, e;
+            nbt_airlight_table((const nbt_table *const *)Ht, 2, b, 8, &ag, &La);
+            /* Float shading: the unit coordinate carries a few ulps of relative
+             * error (log, acos), i.e. ~4 eps (N - 1) texels, and one texel can
+             * span the table's whole scale: per lookup the absolute noise is
+             * ~4 FLT_EPSILON (N - 1) x scale, times the prefactor. Where the
+             * airlight is the small difference of two lookups (gamma near pi)
+             * this, not a relative error, is the honest bound. */
+            double pre_a = KS * I0 * exp(-KT * d * cos(gam)) / (4 * M_PI * d * sin(gam));
+            double tol_a = 1e-4 * fabs(La) + 2 * noise_h * pre_a * wscale_h;
+            worst[0] = fmax(worst[0], fabs(p[0] - La) / tol_a);
+            /* the exact 8-term series, within the tables' recorded error (as in test_airlight) */
+            nbt_airlight_series(b, 8, &ag, 1e-10, &ref, &e);
+            double bound = 0, h = d * sin(gam);
+            for (int k = 0; k < 8; k++)
+                bound += 2 * fabs((2 * k + 1) * b[k]) * Ht[k / 4]->max_err[k % 4];
+            bound *= KS * I0 * exp(-KT * d * cos(gam)) / (4 * M_PI * h);
+            within &= fabs(p[0] - ref) <= 1.25 * bound + 1e-4 * fabs(ref);
+            worst_exact = fmax(worst_exact, fabs(p[0] - ref) / bound);
+            nbt_surface_geom sg = {KS, KT, I0, d, fx * M_PI, (1 - fx) * 1.5, KD, KSP, (int)NPH};
+            nbt_surface_table((const nbt_table *const *)J1t, 2, (const nbt_table *const *)Jnt, 2, b, 8, &sg, &Lp);
+            double tol_p = 1e-4 * fabs(Lp) + noise_j * KS * I0 / (4 * M_PI * d) * (KD * wscale_j1 + KSP * wscale_jn);
+            worst[1] = fmax(worst[1], fabs(p[1] - Lp) / tol_p);
+            double z = d / 4, r = (0.02 + 0.8 * fx) * z, M0, M2, al, be;
+            nbt_beam_medium m = nbt_beam_homogeneous(1.0, ALB, BB);
+            nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+            nbt_beam_kernel_params(M0, M2, &al, &be);
+            double psi = nbt_beam_kernel(al, be, r);
+            worst[2] = fmax(worst[2], fabs(p[2] - psi) / fabs(psi));
+        }
+    t_true(finite, "every pixel finite");
+    t_true(worst[0] <= 1, "airlight: shader = CPU table lookup within 1e-4 relative + float lookup noise (worst %.2f of it)",
+           worst[0]);
+    t_true(worst[1] <= 1, "surface: shader = CPU table lookup within 1e-4 relative + float lookup noise (worst %.2f of it)",
+           worst[1]);
+    /* G by A&S 7.1.26 (<= 7.5e-8 abs) and float moments */
+    t_abs(worst[2], 0, 1e-4, "beam kernel: shader = libnbt (worst rel %.2e)", worst[2]);
+    t_true(within, "airlight within 1.25x the tables' recorded error of the exact series (worst %.2f of the bound)",
+           worst_exact);
+
+    /* singular places: gamma = 0 through the source, gamma = pi, u far beyond the table, no surface */
+    const char *SING =
+        "out vec4 color;\nvoid main() {\n"
+        "  color.r = nbt_airlight(0.15, 0.2, 2.385, 5.0, 0.0, 25.0);\n"
+        "  color.g = nbt_airlight(0.15, 0.2, 2.385, 5.0, 3.14159265358979, 25.0);\n"
+        "  color.b = nbt_airlight(0.15, 20.0, 2.385, 5.0, 1.0, 1e30);\n"
+        "  color.a = nbt_surface(0.15, 20.0, 2.385, 50.0, 0.0, 0.0, 0.7, 0.3, 20.0);\n}\n";
+    src = nbt_gl_shader_source(&cfg, SING);
+    GLuint ps = gl_fullscreen_program(src, err, sizeof err);
+    free(src);
+    glUseProgram(ps);
+    for (int i = 0; i < 6; i++)
+        glUniform1i(glGetUniformLocation(ps, names[i]), i);
+    glUniform4fv(glGetUniformLocation(ps, "nbt_hw"), 2, w);
+    set_axes(ps, "nbt_H", Ht[0]);
+    set_axes(ps, "nbt_J", J1t[0]);
+    gl_draw_fullscreen();
+    float s[4];
+    glReadPixels(0, 0, 1, 1, GL_RGBA, GL_FLOAT, s);
+    t_true(isfinite(s[0]) && s[0] > 0, "ray through the source: finite (%g, the value at gamma = 1e-3)", s[0]);
+    nbt_airlight_geom g0 = {KS, KT, I0, 5.0, 1e-3, 25.0};
+    double L0;
+    nbt_airlight_table((const nbt_table *const *)Ht, 2, b, 8, &g0, &L0);
+    t_rel(s[0], L0, 1e-3, "gamma = 0 gives the gamma = 1e-3 value");
+    t_true(isfinite(s[1]) && s[1] >= 0, "source behind the viewer (gamma = pi): finite (%g)", s[1]);
+    t_true(isfinite(s[2]) && isfinite(s[3]), "u and T beyond the tables: finite, edge values (%g, %g)", s[2], s[3]);
+    free(px);
+    for (int p = 0; p < 2; p++) {
+        nbt_table_free(Ht[p]);
+        nbt_table_free(J1t[p]);
+        nbt_table_free(Jnt[p]);
+    }
+    nbt_phase_free(hg);
+    egl_headless_close();
+    return t_done();
+}
