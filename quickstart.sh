@@ -1,5 +1,6 @@
 #!/bin/sh
 # quickstart.sh        install what is missing (Debian 12), build, run nbt-gen's default scene
+#                      and render the demo (nbt-demo.png)
 # quickstart.sh check  the same set-up (warnings are errors), then the whole test suite
 set -eu
 cd "$(dirname "$0")"
@@ -31,6 +32,9 @@ make -j"$jobs"
 if [ "$mode" = run ]; then
   ./nbt-gen
   echo "quickstart: tables and previews are in ./nbt-tables/"
+  if [ -x ./nbt-demo ]; then
+    ./nbt-demo nbt-demo.png && echo "quickstart: the demo render (shaders + tables) is ./nbt-demo.png"
+  fi
   exit 0
 fi
 

@@ -1,0 +1,194 @@
+/* examples/demo_fog.c: a point light in fog over a ground plane with a
+ * sphere, rendered offscreen with nbt's shaders and tables only: airlight
+ * glow and surface radiance (Lambert + Phong n = 20) for g = 0, 0.5, 0.9 and
+ * kappa = 0.05, 0.2 (as the thesis' Fig. 5.1-5.3), written as one PNG strip.
+ * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel) */
+#include <config.h>
+#include <math.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <nbt/nbt.h>
+#include <nbt/gl.h>
+#include "egl_headless.h"
+
+static const char *SCENE =
+    "uniform vec2 res;\n"
+    "uniform vec3 light;\n"
+    "uniform float kappa, albedo, I0, exposure;\n"
+    "out vec4 color;\n"
+    "void main() {\n"
+    "  vec2 q = (gl_FragCoord.xy / res) * 2.0 - 1.0;\n"
+    "  vec3 o = vec3(0.0, 1.2, 0.0);\n"
+    "  vec3 d = normalize(vec3(q.x * res.x / res.y * 0.6, q.y * 0.6 - 0.12, -1.0));\n"
+    "  float t = 1e30; vec3 n = vec3(0.0, 1.0, 0.0);\n"
+    "  if (d.y < 0.0) t = -o.y / d.y;                       // ground plane y = 0\n"
+    "  vec3 c = vec3(0.0, 1.0, -6.0); vec3 oc = o - c;       // sphere, radius 1\n"
+    "  float b = dot(oc, d), disc = b * b - dot(oc, oc) + 1.0;\n"
+    "  if (disc > 0.0) { float ts = -b - sqrt(disc); if (ts > 0.0 && ts < t) { t = ts; n = normalize(o + ts * d - c); } }\n"
+    "  vec3 ls = light - o;\n"
+    "  float ks = albedo * kappa;\n"
+    "  float L = nbt_airlight(ks, kappa, I0, length(ls), acos(clamp(dot(d, normalize(ls)), -1.0, 1.0)), t);\n"
+    "  if (t < 1e29) {\n"
+    "    vec3 p = o + t * d, lp = light - p, ldir = normalize(lp);\n"
+    "    float ths = acos(clamp(dot(n, ldir), -1.0, 1.0));\n"
+    "    float thr = acos(clamp(dot(reflect(d, n), ldir), -1.0, 1.0));\n"
+    "    float kd = t < 1e29 && n.y > 0.999 ? 0.6 : 0.5, ksp = n.y > 0.999 ? 0.0 : 0.4;\n"
+    "    L += exp(-kappa * t) * nbt_surface(ks, kappa, I0, length(lp), ths, thr, kd, ksp, 20.0);\n"
+    "  }\n"
+    "  vec3 rgb = vec3(1.0, 0.93, 0.8) * (1.0 - exp(-exposure * L));\n"
+    "  color = vec4(pow(rgb, vec3(1.0 / 2.2)), 1.0);\n"
+    "}\n";
+
+static nbt_table *table(nbt_table_kind kind, int n, const nbt_phase *ph, size_t N)
+{
+    nbt_axis a0 = {0, 12, NBT_AXIS_LOG1P, 1000, N};
+    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, N} : (nbt_axis){0, M_PI, NBT_AXIS_COS, 0, N};
+    nbt_table *t = nbt_table_alloc(kind, &a0, &a1, 1);
+    t->n = n;
+    nbt_build_opts o = {1e-9, 0, 0};
+    nbt_status st = kind == NBT_TABLE_H ? nbt_h_table_build(t, ph, &o) : nbt_j_table_build(t, ph, &o);
+    if (st != NBT_OK) {
+        nbt_table_free(t);
+        return NULL;
+    }
+    return t;
+}
+
+static void axes(GLuint prog, const char *pre, const nbt_table *t)
+{
+    float a0[4], a1[4];
+    int m0, m1;
+    char name[64];
+    nbt_gl_table_axes(t, a0, a1, &m0, &m1);
+    snprintf(name, sizeof name, "%s_ax0", pre);
+    glUniform4fv(glGetUniformLocation(prog, name), 1, a0);
+    snprintf(name, sizeof name, "%s_ax1", pre);
+    glUniform4fv(glGetUniformLocation(prog, name), 1, a1);
+    snprintf(name, sizeof name, "%s_map0", pre);
+    glUniform1i(glGetUniformLocation(prog, name), m0);
+    snprintf(name, sizeof name, "%s_map1", pre);
+    glUniform1i(glGetUniformLocation(prog, name), m1);
+}
+
+static int write_png(const char *path, const unsigned char *rgb, int w, int h)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return 1;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!png || !info || setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, info ? &info : NULL);
+        fclose(f);
+        return 1;
+    }
+    png_init_io(png, f);
+    png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    for (int y = 0; y < h; y++)
+        png_write_row(png, (png_const_bytep)(rgb + (size_t)(h - 1 - y) * (size_t)w * 3)); /* GL rows are bottom-up */
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    return fclose(f) != 0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *out = "nbt-demo.png";
+    int pw = 320;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--width") && i + 1 < argc)
+            pw = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--help")) {
+            puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 (columns) x kappa = 0.05, 0.2 (rows).");
+            return 0;
+        } else
+            out = argv[i];
+    }
+    if (pw < 16 || pw > 4096) {
+        fprintf(stderr, "nbt-demo: --width %d is not accepted: 16..4096\n", pw);
+        return 2;
+    }
+    int ph = pw * 3 / 4, W = 3 * pw, H = 2 * ph;
+    char err[4096];
+    if (egl_headless_open(err, sizeof err)) {
+        fprintf(stderr, "nbt-demo: %s\n", err);
+        return 1;
+    }
+    nbt_gl_config cfg = {1, 1, 1, 1, 0, 0};
+    char *src = nbt_gl_shader_source(&cfg, SCENE);
+    GLuint prog = gl_fullscreen_program(src, err, sizeof err);
+    free(src);
+    GLuint fbo = prog ? gl_float_target(pw, ph) : 0;
+    if (!prog || !fbo) {
+        fprintf(stderr, "nbt-demo: %s\n", prog ? "no RGBA32F render target" : err);
+        return 1;
+    }
+    unsigned char *img = malloc((size_t)W * H * 3);
+    float *px = malloc((size_t)pw * ph * 4 * sizeof(float));
+    double gs[3] = {0.0, 0.5, 0.9}, ks[2] = {0.05, 0.2}, t_render = 0;
+    double t0 = (double)clock() / CLOCKS_PER_SEC;
+    for (int gi = 0; gi < 3; gi++) {
+        nbt_phase *hp = gs[gi] == 0 ? nbt_phase_iso() : nbt_phase_hg(gs[gi]);
+        nbt_table *Ht = table(NBT_TABLE_H, 0, hp, 129), *J1 = table(NBT_TABLE_J, 1, hp, 65), *Jn = table(NBT_TABLE_J, 20, hp, 65);
+        if (!Ht || !J1 || !Jn) {
+            fprintf(stderr, "nbt-demo: building the tables failed\n");
+            return 1;
+        }
+        glActiveTexture(GL_TEXTURE0);
+        GLuint tex[3] = {nbt_gl_upload_table(Ht), nbt_gl_upload_table(J1), nbt_gl_upload_table(Jn)};
+        static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
+        glUseProgram(prog);
+        for (int i = 0; i < 3; i++) {
+            glActiveTexture(GL_TEXTURE0 + (GLenum)i);
+            glBindTexture(GL_TEXTURE_2D, tex[i]);
+            glUniform1i(glGetUniformLocation(prog, names[i]), i);
+        }
+        float w[4] = {1, 0, 0, 0};
+        glUniform4fv(glGetUniformLocation(prog, "nbt_hw"), 1, w);
+        axes(prog, "nbt_H", Ht);
+        axes(prog, "nbt_J", J1);
+        glUniform2f(glGetUniformLocation(prog, "res"), (float)pw, (float)ph);
+        glUniform3f(glGetUniformLocation(prog, "light"), 1.6f, 2.6f, -4.5f);
+        glUniform1f(glGetUniformLocation(prog, "albedo"), 0.9f);
+        glUniform1f(glGetUniformLocation(prog, "I0"), 10.0f);
+        glUniform1f(glGetUniformLocation(prog, "exposure"), 1.5f);
+        for (int ki = 0; ki < 2; ki++) {
+            glUniform1f(glGetUniformLocation(prog, "kappa"), (float)ks[ki]);
+            double r0 = (double)clock() / CLOCKS_PER_SEC;
+            gl_draw_fullscreen();
+            glReadPixels(0, 0, pw, ph, GL_RGBA, GL_FLOAT, px);
+            t_render += (double)clock() / CLOCKS_PER_SEC - r0;
+            /* panel (gi, ki): row 0 of the strip is kappa 0.05 (top) */
+            for (int y = 0; y < ph; y++)
+                for (int x = 0; x < pw; x++)
+                    for (int c = 0; c < 3; c++) {
+                        float v = px[((size_t)y * pw + x) * 4 + c];
+                        int X = gi * pw + x, Y = (1 - ki) * ph + y;
+                        img[((size_t)Y * W + X) * 3 + c] = (unsigned char)lrintf(255.0f * fminf(fmaxf(v, 0.0f), 1.0f));
+                    }
+        }
+        glDeleteTextures(3, tex);
+        nbt_table_free(Ht);
+        nbt_table_free(J1);
+        nbt_table_free(Jn);
+        nbt_phase_free(hp);
+    }
+    int rc = write_png(out, img, W, H);
+    fprintf(stderr, "nbt-demo: %s (%dx%d): 6 panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
+            "(%s, CPU figures are for relative comparisons only)\n", out, W, H,
+            (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER));
+    free(img);
+    free(px);
+    egl_headless_close();
+    if (rc)
+        fprintf(stderr, "nbt-demo: cannot write '%s'\n", out);
+    return rc;
+}
