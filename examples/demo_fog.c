@@ -60,22 +60,6 @@ static nbt_table *table(nbt_table_kind kind, int n, const nbt_phase *ph, size_t 
     return t;
 }
 
-static void axes(GLuint prog, const char *pre, const nbt_table *t)
-{
-    float a0[4], a1[4];
-    int m0, m1;
-    char name[64];
-    nbt_gl_table_axes(t, a0, a1, &m0, &m1);
-    snprintf(name, sizeof name, "%s_ax0", pre);
-    glUniform4fv(glGetUniformLocation(prog, name), 1, a0);
-    snprintf(name, sizeof name, "%s_ax1", pre);
-    glUniform4fv(glGetUniformLocation(prog, name), 1, a1);
-    snprintf(name, sizeof name, "%s_map0", pre);
-    glUniform1i(glGetUniformLocation(prog, name), m0);
-    snprintf(name, sizeof name, "%s_map1", pre);
-    glUniform1i(glGetUniformLocation(prog, name), m1);
-}
-
 static int write_png(const char *path, const unsigned char *rgb, int w, int h)
 {
     FILE *f = fopen(path, "wb");
@@ -153,8 +137,8 @@ int main(int argc, char **argv)
         }
         float w[4] = {1, 0, 0, 0};
         glUniform4fv(glGetUniformLocation(prog, "nbt_hw"), 1, w);
-        axes(prog, "nbt_H", Ht);
-        axes(prog, "nbt_J", J1);
+        nbt_gl_set_table_axes(prog, "nbt_H", Ht);
+        nbt_gl_set_table_axes(prog, "nbt_J", J1);
         glUniform2f(glGetUniformLocation(prog, "res"), (float)pw, (float)ph);
         glUniform3f(glGetUniformLocation(prog, "light"), 1.6f, 2.6f, -4.5f);
         glUniform1f(glGetUniformLocation(prog, "albedo"), 0.9f);

@@ -69,6 +69,20 @@ void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0
     }
 }
 
+void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table *t)
+{
+    float a[2][4];
+    int m[2];
+    char name[128];
+    nbt_gl_table_axes(t, a[0], a[1], &m[0], &m[1]);
+    for (int i = 0; i < 2; i++) {
+        snprintf(name, sizeof name, "%s_ax%d", prefix, i);
+        glUniform4fv(glGetUniformLocation(program, name), 1, a[i]);
+        snprintf(name, sizeof name, "%s_map%d", prefix, i);
+        glUniform1i(glGetUniformLocation(program, name), m[i]);
+    }
+}
+
 unsigned nbt_gl_upload_table(const nbt_table *t)
 {
     size_t nx = t->axis[0].n, ny = t->axis[1].n;

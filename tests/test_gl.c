@@ -56,22 +56,6 @@ static nbt_table *build(nbt_table_kind kind, int n, int pack, size_t N)
     return st == NBT_OK ? t : NULL;
 }
 
-static void set_axes(GLuint prog, const char *pre, const nbt_table *t)
-{
-    float a0[4], a1[4];
-    int m0, m1;
-    char name[64];
-    nbt_gl_table_axes(t, a0, a1, &m0, &m1);
-    snprintf(name, sizeof name, "%s_ax0", pre);
-    glUniform4fv(glGetUniformLocation(prog, name), 1, a0);
-    snprintf(name, sizeof name, "%s_ax1", pre);
-    glUniform4fv(glGetUniformLocation(prog, name), 1, a1);
-    snprintf(name, sizeof name, "%s_map0", pre);
-    glUniform1i(glGetUniformLocation(prog, name), m0);
-    snprintf(name, sizeof name, "%s_map1", pre);
-    glUniform1i(glGetUniformLocation(prog, name), m1);
-}
-
 /* validate one variant with glslangValidator (and the GL compiler) */
 static void validate(const nbt_gl_config *c, const char *main_src)
 {
@@ -153,8 +137,8 @@ int main(void)
     float w[8];
     nbt_gl_weights(b, 8, 2, w);
     glUniform4fv(glGetUniformLocation(prog, "nbt_hw"), 2, w);
-    set_axes(prog, "nbt_H", Ht[0]);
-    set_axes(prog, "nbt_J", J1t[0]);
+    nbt_gl_set_table_axes(prog, "nbt_H", Ht[0]);
+    nbt_gl_set_table_axes(prog, "nbt_J", J1t[0]);
     glUniform2f(glGetUniformLocation(prog, "res"), W, H);
     gl_draw_fullscreen();
     float *px = malloc(W * H * 4 * sizeof(float));
@@ -234,8 +218,8 @@ int main(void)
     for (int i = 0; i < 6; i++)
         glUniform1i(glGetUniformLocation(ps, names[i]), i);
     glUniform4fv(glGetUniformLocation(ps, "nbt_hw"), 2, w);
-    set_axes(ps, "nbt_H", Ht[0]);
-    set_axes(ps, "nbt_J", J1t[0]);
+    nbt_gl_set_table_axes(ps, "nbt_H", Ht[0]);
+    nbt_gl_set_table_axes(ps, "nbt_J", J1t[0]);
     gl_draw_fullscreen();
     float s[4];
     glReadPixels(0, 0, 1, 1, GL_RGBA, GL_FLOAT, s);

@@ -39,6 +39,10 @@ void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w);
 /* The table's axis uniforms: vec4(lo, hi, c, n) and mapping codes. */
 void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0, int *map1);
 
+/* Set PREFIX_ax0, PREFIX_ax1, PREFIX_map0, PREFIX_map1 of the program in use
+ * (e.g. prefix "nbt_H" or "nbt_J") from the table's axes. */
+void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table *t);
+
 /* Upload as a GL_RGBA32F 2-D texture (channels beyond nch are 0), LINEAR
  * filtering, CLAMP_TO_EDGE; binds it on the active texture unit. Returns the
  * texture name, 0 on failure (glGetError set). */
