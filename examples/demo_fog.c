@@ -90,7 +90,10 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--width") && i + 1 < argc)
             pw = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--help")) {
+        else if (!strcmp(argv[i], "--version")) {
+            printf("nbt-demo (nbt) %s\n", nbt_version());
+            return 0;
+        } else if (!strcmp(argv[i], "--help")) {
             puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 (columns) x kappa = 0.05, 0.2 (rows).");
             return 0;
         } else
