@@ -178,6 +178,21 @@ static double gauss_eval(double B, double Z, double mu)
     return Z * ratio * exp(-th * th / (4.0 * B));
 }
 
+/* The segment [x[lo], x[lo+1]] of an increasing x[0..n-1] that holds v
+ * (the first or last segment outside the range). */
+static size_t segment(const double *x, size_t n, double v)
+{
+    size_t lo = 0, hi = n - 1;
+    while (hi - lo > 1) {
+        size_t m = (lo + hi) / 2;
+        if (x[m] <= v)
+            lo = m;
+        else
+            hi = m;
+    }
+    return lo;
+}
+
 double nbt_phase_eval(const nbt_phase *p, double mu)
 {
     if (mu > 1.0)
@@ -201,14 +216,7 @@ double nbt_phase_eval(const nbt_phase *p, double mu)
         return s;
     }
     case NBT_PHASE_TABLE: {
-        size_t lo = 0, hi = p->n - 1;
-        while (hi - lo > 1) {
-            size_t m = (lo + hi) / 2;
-            if (p->mu[m] <= mu)
-                lo = m;
-            else
-                hi = m;
-        }
+        size_t lo = segment(p->mu, p->n, mu), hi = lo + 1;
         double f = (mu - p->mu[lo]) / (p->mu[hi] - p->mu[lo]);
         return p->p[lo] + f * (p->p[hi] - p->p[lo]);
     }
@@ -383,14 +391,7 @@ double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void 
     }
     case NBT_PHASE_TABLE: {
         double u = uniform(rs);
-        size_t lo = 0, hi = p->n - 1;
-        while (hi - lo > 1) {
-            size_t m = (lo + hi) / 2;
-            if (p->cdf[m] <= u)
-                lo = m;
-            else
-                hi = m;
-        }
+        size_t lo = segment(p->cdf, p->n, u), hi = lo + 1;
         /* within the segment: 2 pi (p0 d + s d^2/2) = u - cdf0, s the slope */
         double p0 = p->p[lo], sl = (p->p[hi] - p->p[lo]) / (p->mu[hi] - p->mu[lo]);
         double c = (u - p->cdf[lo]) / (2.0 * NBT_PI), disc = p0 * p0 + 2.0 * sl * c;
