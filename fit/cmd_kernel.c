@@ -44,22 +44,6 @@ typedef struct {
     double rms_scale;
 } plane_ctx;
 
-/* the shape's annulus mean and its gradient (np = 2 ncomp entries) */
-static double shape_annulus(int shape, const double *p, double lo, double hi, double *grad)
-{
-    double m = kernel_annulus(p[0], p[1], lo, hi, grad ? &grad[0] : NULL, grad ? &grad[1] : NULL);
-    if (shape == 2)
-        m += kernel_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
-    else if (shape == 3)
-        m += gauss_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
-    return m;
-}
-
-static int shape_params(int shape)
-{
-    return shape == 1 ? 2 : 4;
-}
-
 static int plane_res(const double *p, double *r, double *jac, void *vp)
 {
     const plane_ctx *c = vp;
@@ -86,24 +70,6 @@ static void moment_kernel(const psi_data *d, double z, double *alpha, double *be
     double M0, M2;
     nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
     nbt_beam_kernel_params(M0, M2, alpha, beta);
-}
-
-/* sum (2 pi r_c (model - mc))^2 and sum (2 pi r_c mc)^2 over plane j, for
- * a shape of ncomp erfc components p = (alpha1, beta1, ...) */
-static void shape_rms_parts(const psi_data *d, size_t j, int ncomp, const double *p, double *num, double *den)
-{
-    for (size_t k = 0; k < d->nbins; k++) {
-        size_t i = j * d->nbins + k;
-        double rc = 0.5 * (d->lo[i] + d->hi[i]), w = 2 * M_PI * rc;
-        double m = p[0] > 0 && p[1] > 0 ? shape_annulus(ncomp, p, d->lo[i], d->hi[i], NULL) : 0;
-        *num += w * w * (m - d->psi[i]) * (m - d->psi[i]);
-        *den += w * w * d->psi[i] * d->psi[i];
-    }
-}
-
-static void plane_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
-{
-    kernel_rms_parts(d, j, alpha, beta, num, den);
 }
 
 /* ---- the correction, fitted to all runs ---- */
@@ -194,7 +160,7 @@ static double run_rms(const psi_data *d, const double *cb, const double *ca, int
             corrected(d, d->z[j], cb, ca, &a, &b);
         else
             moment_kernel(d, d->z[j], &a, &b);
-        plane_rms_parts(d, j, a, b, &num, &den);
+        kernel_rms_parts(d, j, a, b, &num, &den);
     }
     return sqrt(num / den);
 }
@@ -328,7 +294,7 @@ int cmd_kernel(int argc, char **argv)
             plane_ctx pc = {d, j, floor_se, ncomp, rmsw, 0};
             {
                 double n00 = 0, d00 = 0;
-                plane_rms_parts(d, j, 0, 0, &n00, &d00);
+                kernel_rms_parts(d, j, 0, 0, &n00, &d00);
                 pc.rms_scale = 1 / sqrt(d00);
             }
             nbt_fit_summary s;
@@ -372,7 +338,7 @@ int cmd_kernel(int argc, char **argv)
             for (int e = 0; e < np; e++)
                 se_[e] = s.covariance_ok ? sqrt(s.covariance[e * np + e] * sc) : NAN;
             double n0 = 0, d0 = 0, n1 = 0, d1 = 0;
-            plane_rms_parts(d, j, a0, b0, &n0, &d0);
+            kernel_rms_parts(d, j, a0, b0, &n0, &d0);
             shape_rms_parts(d, j, ncomp, p, &n1, &d1);
             if (ncomp == 1)
                 fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g\n", d->z[j], p[0], p[1], se_[0], se_[1],
@@ -398,7 +364,7 @@ int cmd_kernel(int argc, char **argv)
         for (size_t q = 0; q < nruns; q++) {
             double num = 0, den = 0;
             for (size_t j = 0; j < runs[q].nplanes; j++)
-                plane_rms_parts(&runs[q], j, 0, 0, &num, &den);
+                kernel_rms_parts(&runs[q], j, 0, 0, &num, &den);
             c.scale[q] = 1 / sqrt(den);
             nres += runs[q].nplanes * runs[q].nbins;
             /* albedo and width terms only where the runs differ in them */

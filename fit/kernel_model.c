@@ -40,13 +40,34 @@ double gauss_annulus(double M, double s, double lo, double hi, double *dm, doubl
     return M * base;
 }
 
-void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
+double shape_annulus(int shape, const double *p, double lo, double hi, double *grad)
+{
+    double m = kernel_annulus(p[0], p[1], lo, hi, grad ? &grad[0] : NULL, grad ? &grad[1] : NULL);
+    if (shape == 2)
+        m += kernel_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
+    else if (shape == 3)
+        m += gauss_annulus(p[2], p[3], lo, hi, grad ? &grad[2] : NULL, grad ? &grad[3] : NULL);
+    return m;
+}
+
+int shape_params(int shape)
+{
+    return shape == 1 ? 2 : 4;
+}
+
+void shape_rms_parts(const psi_data *d, size_t j, int shape, const double *p, double *num, double *den)
 {
     for (size_t k = 0; k < d->nbins; k++) {
         size_t i = j * d->nbins + k;
         double w = M_PI * (d->lo[i] + d->hi[i]); /* 2 pi r_c */
-        double m = alpha > 0 && beta > 0 ? kernel_annulus(alpha, beta, d->lo[i], d->hi[i], NULL, NULL) : 0;
+        double m = p[0] > 0 && p[1] > 0 ? shape_annulus(shape, p, d->lo[i], d->hi[i], NULL) : 0;
         *num += w * w * (m - d->psi[i]) * (m - d->psi[i]);
         *den += w * w * d->psi[i] * d->psi[i];
     }
+}
+
+void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den)
+{
+    double p[2] = {alpha, beta};
+    shape_rms_parts(d, j, 1, p, num, den);
 }

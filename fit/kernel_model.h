@@ -14,8 +14,15 @@ double gauss_annulus(double M, double s, double lo, double hi, double *dm, doubl
 
 #include "psi_data.h"
 
+/* The fitted shapes: 1 erfc (alpha, beta); 2 erfc2 (alpha1, beta1, alpha2,
+ * beta2); 3 erfc+gauss (alpha, beta, M, s). Annulus mean and gradient. */
+int shape_params(int shape);
+double shape_annulus(int shape, const double *p, double lo, double hi, double *grad);
+
 /* Add sum (2 pi r_c (m - mc))^2 and sum (2 pi r_c mc)^2 over plane j of d,
- * m the annulus mean of alpha/r G(r/beta) (0 when alpha or beta is 0). */
+ * m the shape's annulus mean (0 when p[0] or p[1] is 0). */
+void shape_rms_parts(const psi_data *d, size_t j, int shape, const double *p, double *num, double *den);
+/* The same for one erfc kernel alpha/r G(r/beta). */
 void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den);
 
 #endif
