@@ -10,6 +10,7 @@
 #include <nbt/surface.h>
 #include <nbt/beam.h>
 #include <nbt/mc.h>
+#include <nbt/screen.h>
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,0 +1,145 @@
+/* nbt/screen.h: screen-space multiple scattering references. A rendered
+ * image c(x) (linear RGB) with the distance D(x) along each pixel's view ray
+ * becomes the image seen through a homogeneous medium,
+ *     J(x) = T(x) c(x) + S(x),   T = exp(-sigma_t D),
+ * where S, the scattered part, is one of two operators (doc/screenspace.md):
+ *
+ *   NBT_SCREEN_NEAR   (operator A, Shinya et al. eq. 37-39): every ordered
+ *       pair of pixels (x receives from y, y = x included) exchanges light
+ *       through the kernel of the nearer of the two, evaluated at the nearer
+ *       depth, at lateral distance D_near * dtheta * |x - y|, integrated over
+ *       pixel y's footprint;
+ *   NBT_SCREEN_SOURCE (operator B, Elek et al.): every source pixel spreads
+ *       its own kernel, whatever the receiver's depth.
+ *
+ * Conventions: pixels are squares of constant angle dtheta = 2 tan(fov_y/2)/H;
+ * a kernel at depth D seen from the camera spans D*dtheta per pixel. Sky
+ * pixels (D infinite, or >= NBT_SCREEN_SKY) lie behind infinite medium:
+ * T = 0 and they send nothing (their kernel's mass is spread over an infinite
+ * area), but they receive from nearer pixels. D = 0 gives T = 1, S = 0.
+ *
+ * Kernels are radially symmetric and written as a few "atoms": the
+ * narrow-beam shape alpha/r G(r/beta) (G(x) = erfc(x/sqrt 2)/2) and unit
+ * Gaussians. Since (1/r) G(r/beta) = sqrt(2 pi) int_0^beta N(r; s) ds, with N
+ * a unit-mass 2-D Gaussian of deviation s, both integrate over a square
+ * pixel in closed form per deviation (products of erf differences), and the
+ * erfc atom by Gauss-Legendre quadrature in s on octave panels. */
+#ifndef NBT_SCREEN_H
+#define NBT_SCREEN_H
+
+#include <stddef.h>
+#include <nbt/beam.h>
+#include <nbt/error.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Depths at or beyond this (Blender writes 1e10 for the background) are sky. */
+#define NBT_SCREEN_SKY 1e10
+
+#define NBT_SCREEN_MAX_ATOMS 48
+
+typedef enum {
+    NBT_ATOM_ERFC,  /* mass * (1/(sqrt(2 pi) scale r)) G(r/scale): the kernel alpha/r G(r/beta), scale = beta */
+    NBT_ATOM_GAUSS  /* mass * exp(-r^2 / 2 scale^2) / (2 pi scale^2) */
+} nbt_atom_shape;
+
+/* A kernel at one depth, lengths in world units. mass is the fraction of a
+ * source's radiance that arrives scattered (int Psi dA); T the direct part. */
+typedef struct {
+    double T;
+    size_t n;
+    nbt_atom_shape shape[NBT_SCREEN_MAX_ATOMS];
+    double mass[NBT_SCREEN_MAX_ATOMS], scale[NBT_SCREEN_MAX_ATOMS];
+} nbt_screen_kern;
+
+typedef enum {
+    NBT_SKERNEL_MOMENT,     /* alpha/r G(r/beta) from eq. 25/26 moments (nbt_beam_moments, ISHIMARU) */
+    NBT_SKERNEL_SMALLANGLE, /* the same shape from the small-angle random walk's moments */
+    NBT_SKERNEL_CORRECTED,  /* the moment kernel with an nbt-fit correction (nbt_kernel_corrected) */
+    NBT_SKERNEL_SINGLE,     /* single scattering Psi_1 (one erfc atom per lobe) */
+    NBT_SKERNEL_LINEINT,    /* the eq. 16 line integral: Gaussians at Gauss-Legendre nodes in depth */
+    NBT_SKERNEL_ELEK        /* Elek et al.: one Gaussian of deviation W(D), mass M0 (g = the lobes' mean cosine) */
+} nbt_skernel_kind;
+
+/* A built-in kernel family over depth, or a caller's. */
+typedef struct nbt_screen_kernel nbt_screen_kernel;
+typedef nbt_status (*nbt_screen_kernel_fn)(double D, nbt_screen_kern *out, void *ctx);
+
+/* medium: homogeneous (nlayers = 0, no rho_fn); corr: only for CORRECTED
+ * (copied). NULL on a bad medium (reason through the error handler) or no
+ * memory. */
+nbt_screen_kernel *nbt_screen_kernel_alloc(nbt_skernel_kind kind, const nbt_beam_medium *medium,
+                                           const nbt_kernel_correction *corr);
+/* fn(D, out, ctx) for 0 < D < infinity fills T and the atoms. */
+nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx);
+void nbt_screen_kernel_free(nbt_screen_kernel *k);
+/* The kernel at distance D (>= 0, INFINITY or >= NBT_SCREEN_SKY for sky). */
+nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_screen_kern *out);
+/* "moment", "smallangle", "corrected", "single", "lineint", "elek"; parse: NBT_EINVAL for others. */
+const char *nbt_skernel_name(nbt_skernel_kind kind);
+nbt_status nbt_skernel_parse(const char *name, nbt_skernel_kind *kind);
+
+/* The weight a kernel of total mass 1 and one atom (shape, scale in pixels)
+ * gives to the pixel at integer offset (dx, dy): its integral over that
+ * pixel's unit square. The building block of every operator; exported for
+ * tests and for fitting GPU approximations. */
+double nbt_screen_atom_pixel(nbt_atom_shape shape, double scale_px, long dx, long dy);
+
+/* Radius in pixels (integer, >= 0) beyond which a unit-mass atom of this
+ * shape and scale leaves less than tail outside (0 < tail < 1). */
+long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail);
+
+typedef enum { NBT_SCREEN_NEAR, NBT_SCREEN_SOURCE } nbt_screen_rule;
+
+typedef struct {
+    size_t w, h;
+    const float *rgb;     /* c: rgb[(y*w + x)*3 + ch] */
+    const float *D;       /* distance along the ray, >= 0 (sky: see above) */
+    double dtheta;        /* pixel angle in radians, > 0 */
+} nbt_screen_input;
+
+/* Checks sizes, dtheta and every depth (finite >= 0, or sky); NBT_EDOM with
+ * the first bad pixel named through the error handler. */
+nbt_status nbt_screen_check(const nbt_screen_input *in);
+
+/* Brute force, any depth map: S (w*h*3 doubles) and, if T != NULL, the
+ * transmittance per pixel. Each kernel is truncated where less than tail
+ * (e.g. 1e-7) of its mass lies outside. O(N R^2): small images. Threads:
+ * 0 = all cores; the result depends on the thread count only in round-off. */
+nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel *k, nbt_screen_rule rule,
+                            double tail, unsigned nthreads, double *S, double *T);
+
+/* The same operator by FFT convolution, exact for layered depth: the depth
+ * map may take at most max_layers distinct values (sky counts as one). Same
+ * truncation as nbt_screen_brute, so the two agree to round-off.
+ * NBT_EDOM if the depth map has more layers. */
+nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kernel *k, nbt_screen_rule rule,
+                              double tail, size_t max_layers, unsigned nthreads, double *S, double *T);
+
+/* Scores of a scattered part S against a reference (both w*h*3). */
+typedef struct {
+    double rel_l1;   /* sum |S - R| / sum |R| */
+    double rel_rms;  /* sqrt(sum (S - R)^2 / sum R^2) */
+    double edge;     /* rel_rms over the band around depth discontinuities (0 if none) */
+    double bias;     /* sum S / sum R - 1 */
+    double max;      /* max |S - R| / max |R| */
+    size_t edge_pixels;
+} nbt_screen_metrics;
+
+/* The band: pixels within 2 kernel radii (the larger beta or sigma, in
+ * pixels, of the two sides) of an edge between 4-neighbours whose depths
+ * differ by more than 5% of the nearer one (either side sky counts). */
+nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kernel *k, const double *S,
+                              const double *ref, nbt_screen_metrics *m);
+
+/* Distance along the ray from planar depth Z (along the view axis) for a
+ * pinhole camera with pixel pitch dtheta on the unit-distance image plane,
+ * centred: D = Z sqrt(1 + u^2 + v^2). Sky stays sky. */
+double nbt_screen_ray_distance(double Z, size_t w, size_t h, double dtheta, size_t x, size_t y);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,581 @@
+/* libnbt/screen.c: screen-space scattering kernels, pixel integration, the
+ * brute-force references and metrics (nbt/screen.h; doc/screenspace.md). */
+#include <config.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/phase.h>
+#include <nbt/screen.h>
+#include "internal.h"
+#include "screen_internal.h"
+
+struct nbt_screen_kernel {
+    nbt_skernel_kind kind;
+    nbt_screen_kernel_fn fn; /* custom, or NULL */
+    void *ctx;
+    nbt_beam_medium m;
+    nbt_kernel_correction corr;
+    double g; /* ELEK: mean cosine of the lobes */
+};
+
+static const char *const KNAMES[] = {"moment", "smallangle", "corrected", "single", "lineint", "elek"};
+
+const char *nbt_skernel_name(nbt_skernel_kind kind)
+{
+    return (unsigned)kind < sizeof KNAMES / sizeof KNAMES[0] ? KNAMES[kind] : "?";
+}
+
+nbt_status nbt_skernel_parse(const char *name, nbt_skernel_kind *kind)
+{
+    for (unsigned i = 0; i < sizeof KNAMES / sizeof KNAMES[0]; i++)
+        if (!strcmp(name, KNAMES[i])) {
+            *kind = (nbt_skernel_kind)i;
+            return NBT_OK;
+        }
+    return NBT_EINVAL;
+}
+
+nbt_screen_kernel *nbt_screen_kernel_alloc(nbt_skernel_kind kind, const nbt_beam_medium *medium,
+                                           const nbt_kernel_correction *corr)
+{
+    if (nbt_beam_check(medium) != NBT_OK)
+        return NULL;
+    if (medium->nlayers > 0 || medium->rho_fn) {
+        nbt__fail(NBT_EINVAL, "screen: kernels over depth need a homogeneous medium");
+        return NULL;
+    }
+    if ((unsigned)kind > NBT_SKERNEL_ELEK || (kind == NBT_SKERNEL_CORRECTED && !corr)) {
+        nbt__fail(NBT_EINVAL, "screen: unknown kernel, or CORRECTED without a correction");
+        return NULL;
+    }
+    nbt_screen_kernel *k = calloc(1, sizeof *k);
+    if (!k) {
+        nbt__fail(NBT_ENOMEM, "screen: out of memory");
+        return NULL;
+    }
+    k->kind = kind;
+    k->m = *medium;
+    if (corr)
+        k->corr = *corr;
+    if (kind == NBT_SKERNEL_ELEK) {
+        /* W's g is the true mean cosine of the sphere-mapped lobes, not 1 - 2B */
+        double b[2] = {0, 0};
+        nbt_phase *p = nbt_phase_sog(medium->nlobes, medium->w, medium->B);
+        if (!p || nbt_phase_moments(p, 1, b) != NBT_OK) {
+            nbt_phase_free(p);
+            free(k);
+            nbt__fail(NBT_ENOMEM, "screen: the lobes' mean cosine could not be computed");
+            return NULL;
+        }
+        nbt_phase_free(p);
+        k->g = b[1];
+    }
+    return k;
+}
+
+nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx)
+{
+    if (!fn) {
+        nbt__fail(NBT_EINVAL, "screen: custom kernel without a function");
+        return NULL;
+    }
+    nbt_screen_kernel *k = calloc(1, sizeof *k);
+    if (!k) {
+        nbt__fail(NBT_ENOMEM, "screen: out of memory");
+        return NULL;
+    }
+    k->fn = fn;
+    k->ctx = ctx;
+    return k;
+}
+
+void nbt_screen_kernel_free(nbt_screen_kernel *k)
+{
+    free(k);
+}
+
+static void add_atom(nbt_screen_kern *o, nbt_atom_shape s, double mass, double scale)
+{
+    if (o->n < NBT_SCREEN_MAX_ATOMS && mass > 0 && scale > 0 && isfinite(mass) && isfinite(scale)) {
+        o->shape[o->n] = s;
+        o->mass[o->n] = mass;
+        o->scale[o->n] = scale;
+        o->n++;
+    }
+}
+
+/* The eq. 16 line integral over the beam's depth y at Gauss-Legendre nodes:
+ * Psi = ss e^{-sa z} int_0^z e^{-ss y} sum_i w_i N(r; sqrt2 W_i(y)) dy. */
+static void lineint_atoms(const nbt_beam_medium *m, double z, nbt_screen_kern *o)
+{
+    size_t ny = NBT_SCREEN_MAX_ATOMS / m->nlobes;
+    double x[NBT_SCREEN_MAX_ATOMS], w[NBT_SCREEN_MAX_ATOMS];
+    nbt__gl_nodes(ny, x, w);
+    double ss = m->albedo * m->sigma_t, sa = m->sigma_t - ss, bm = 0;
+    for (size_t l = 0; l < m->nlobes; l++)
+        bm += m->w[l] * m->B[l];
+    for (size_t j = 0; j < ny; j++) {
+        double y = 0.5 * z * (1.0 + x[j]), wy = 0.5 * z * w[j], Ah = ss * bm * (z - y);
+        for (size_t i = 0; i < m->nlobes; i++) {
+            double B = m->B[i], S = B + Ah, C2 = B * y * y * (1.0 - B / S), d = z - B * y / S;
+            add_atom(o, NBT_ATOM_GAUSS, ss * exp(-sa * z) * wy * exp(-ss * y) * m->w[i], sqrt(2.0 * (C2 + d * d * S)));
+        }
+    }
+}
+
+nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_screen_kern *o)
+{
+    o->n = 0;
+    o->T = 1;
+    if (!(D >= 0))
+        NBT_FAIL(NBT_EDOM, "screen: depth must be >= 0");
+    if (D >= NBT_SCREEN_SKY) { /* behind infinite medium: nothing direct, mass over infinite area */
+        o->T = 0;
+        return NBT_OK;
+    }
+    if (D == 0)
+        return NBT_OK;
+    if (k->fn)
+        return k->fn(D, o, k->ctx);
+    const nbt_beam_medium *m = &k->m;
+    double ss = m->albedo * m->sigma_t, M0, M2, alpha, beta;
+    nbt_status st = NBT_OK;
+    o->T = exp(-m->sigma_t * D);
+    switch (k->kind) {
+    case NBT_SKERNEL_MOMENT:
+    case NBT_SKERNEL_SMALLANGLE:
+        st = nbt_beam_moments(m, k->kind == NBT_SKERNEL_MOMENT ? NBT_BEAM_ISHIMARU : NBT_BEAM_SMALLANGLE, D, &M0,
+                              &M2, NULL);
+        nbt_beam_kernel_params(M0, M2, &alpha, &beta);
+        add_atom(o, NBT_ATOM_ERFC, M0, beta);
+        break;
+    case NBT_SKERNEL_CORRECTED:
+        st = nbt_kernel_corrected(&k->corr, m, D, &alpha, &beta);
+        add_atom(o, NBT_ATOM_ERFC, sqrt(2.0 * NBT_PI) * alpha * beta, beta);
+        break;
+    case NBT_SKERNEL_SINGLE: /* per lobe alpha = w ss e^{-tau}/(2 sqrt(pi B)), beta = D sqrt(2B): mass w ss D e^{-tau} */
+        for (size_t i = 0; i < m->nlobes; i++)
+            add_atom(o, NBT_ATOM_ERFC, m->w[i] * ss * D * o->T, D * sqrt(2.0 * m->B[i]));
+        break;
+    case NBT_SKERNEL_LINEINT:
+        lineint_atoms(m, D, o);
+        break;
+    case NBT_SKERNEL_ELEK: {
+        st = nbt_beam_moments(m, NBT_BEAM_ISHIMARU, D, &M0, &M2, NULL);
+        double sa = m->sigma_t - ss;
+        double inv = 2.0 * sa / (3.0 * D) + (ss > 0 ? 4.0 / (D * D * D * ss * (1.0 - k->g)) : INFINITY);
+        add_atom(o, NBT_ATOM_GAUSS, M0, sqrt(0.5 / inv));
+        break;
+    }
+    }
+    return st;
+}
+
+/* ---- pixel integration ---- */
+
+void nbt__gl_nodes(size_t n, double *x, double *w)
+{
+    /* Newton on P_n from Chebyshev guesses */
+    for (size_t i = 0; i < (n + 1) / 2; i++) {
+        double z = cos(NBT_PI * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1, p1 = z;
+            for (size_t j = 2; j <= n; j++) {
+                double p2 = ((2.0 * j - 1) * z * p1 - (j - 1.0) * p0) / j;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1);
+            double dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16)
+                break;
+        }
+        double p0 = 1, p1 = z;
+        for (size_t j = 2; j <= n; j++) {
+            double p2 = ((2.0 * j - 1) * z * p1 - (j - 1.0) * p0) / j;
+            p0 = p1;
+            p1 = p2;
+        }
+        dp = n * (z * p1 - p0) / (z * z - 1);
+        x[i] = -z;
+        x[n - 1 - i] = z;
+        w[i] = w[n - 1 - i] = 2.0 / ((1 - z * z) * dp * dp);
+    }
+}
+
+/* integral of a unit 1-D Gaussian of deviation s over [d - 1/2, d + 1/2] */
+double nbt__gauss_cell(double s, long d)
+{
+    double a = fabs((double)d);
+    if (!(s > 0))
+        return d == 0 ? 1.0 : 0.0;
+    double k = 1.0 / (sqrt(2.0) * s);
+    if (a == 0)
+        return erf(0.5 * k);
+    /* both ends positive: difference of erfc, no cancellation */
+    return 0.5 * (erfc((a - 0.5) * k) - erfc((a + 0.5) * k));
+}
+
+size_t nbt__kern_nodes(const nbt_screen_kern *kn, double px, double *sig, double *wt, size_t max)
+{
+    double gx[SCREEN_GL], gw[SCREEN_GL];
+    nbt__gl_nodes(SCREEN_GL, gx, gw);
+    size_t n = 0;
+    for (size_t a = 0; a < kn->n; a++) {
+        double s = kn->scale[a] / px, mass = kn->mass[a];
+        if (kn->shape[a] == NBT_ATOM_GAUSS || s <= 0) {
+            if (n < max) {
+                sig[n] = s;
+                wt[n++] = mass;
+            }
+            continue;
+        }
+        /* uniform mixture of Gaussians over (0, s]: octave panels from 1/8 px */
+        double lo = 0, hi = fmin(s, 0.125);
+        while (lo < s) {
+            for (int j = 0; j < SCREEN_GL && n < max; j++) {
+                sig[n] = lo + 0.5 * (hi - lo) * (1.0 + gx[j]);
+                wt[n++] = mass * 0.5 * (hi - lo) * gw[j] / s;
+            }
+            lo = hi;
+            hi = fmin(s, 2 * hi);
+        }
+    }
+    return n;
+}
+
+double nbt_screen_atom_pixel(nbt_atom_shape shape, double scale_px, long dx, long dy)
+{
+    nbt_screen_kern kn = {.T = 1, .n = 1, .shape = {shape}, .mass = {1}, .scale = {scale_px}};
+    double sig[SCREEN_MAX_NODES], wt[SCREEN_MAX_NODES], s = 0;
+    size_t n = nbt__kern_nodes(&kn, 1.0, sig, wt, SCREEN_MAX_NODES);
+    for (size_t i = 0; i < n; i++)
+        s += wt[i] * nbt__gauss_cell(sig[i], dx) * nbt__gauss_cell(sig[i], dy);
+    return s;
+}
+
+/* mass of a unit atom outside radius a*scale */
+static double atom_tail(nbt_atom_shape shape, double a)
+{
+    if (shape == NBT_ATOM_GAUSS)
+        return exp(-0.5 * a * a);
+    /* sqrt(2 pi) int_a^inf G = sqrt(2 pi) (phi(a) - a G(a)) */
+    return exp(-0.5 * a * a) - sqrt(2.0 * NBT_PI) * a * 0.5 * erfc(a / sqrt(2.0));
+}
+
+long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail)
+{
+    if (!(scale_px > 0) || !(tail > 0 && tail < 1))
+        return 0;
+    double lo = 0, hi = 1;
+    while (atom_tail(shape, hi) > tail && hi < 100)
+        hi *= 2;
+    for (int i = 0; i < 60; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (atom_tail(shape, mid) > tail)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    double r = ceil(hi * scale_px - 0.5);
+    return r > 0 ? (r < 1e7 ? (long)r : 10000000L) : 0;
+}
+
+/* ---- per-pixel kernels ---- */
+
+nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, nbt__pkern *pk)
+{
+    nbt_screen_kern kn;
+    nbt_status st = nbt_screen_kernel_eval(k, D, &kn);
+    pk->T = kn.T;
+    pk->n = 0;
+    pk->R = 0;
+    pk->mass = 0;
+    pk->radius = 0;
+    if (st != NBT_OK || kn.n == 0)
+        return st;
+    double px = D * dtheta;
+    for (size_t a = 0; a < kn.n; a++) {
+        long r = nbt_screen_atom_radius(kn.shape[a], kn.scale[a] / px, tail);
+        if (r > pk->R)
+            pk->R = r;
+        pk->mass += kn.mass[a];
+        if (kn.scale[a] / px > pk->radius)
+            pk->radius = kn.scale[a] / px;
+    }
+    pk->n = nbt__kern_nodes(&kn, px, pk->sig, pk->wt, SCREEN_MAX_NODES);
+    return NBT_OK;
+}
+
+/* Quadrant weights wq[j*(R+1) + i] for offsets (i, j) >= 0. */
+nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap)
+{
+    size_t R1 = (size_t)pk->R + 1, need = R1 * R1;
+    if (need > *cap) {
+        double *a = realloc(*wq, need * sizeof **wq), *b;
+        if (!a)
+            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+        *wq = a;
+        b = realloc(*cell, need * sizeof **cell);
+        if (!b)
+            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+        *cell = b;
+        *cap = need;
+    }
+    double *w = *wq, *c = *cell; /* c: 1-D cell integrals, node-major */
+    memset(w, 0, need * sizeof *w);
+    for (size_t n = 0; n < pk->n; n++) {
+        double *e = c; /* reuse the first R1 of cell per node */
+        size_t last = 0;
+        for (size_t i = 0; i < R1; i++) {
+            e[i] = nbt__gauss_cell(pk->sig[n], (long)i);
+            if (e[i] > 0)
+                last = i;
+        }
+        for (size_t j = 0; j <= last; j++) {
+            double f = pk->wt[n] * e[j];
+            double *row = w + j * R1;
+            for (size_t i = 0; i <= last; i++)
+                row[i] += f * e[i];
+        }
+    }
+    return NBT_OK;
+}
+
+/* ---- input checks and depth ---- */
+
+nbt_status nbt_screen_check(const nbt_screen_input *in)
+{
+    if (in->w == 0 || in->h == 0 || !in->rgb || !in->D)
+        NBT_FAIL(NBT_EINVAL, "screen: empty image");
+    if (!(in->dtheta > 0) || !isfinite(in->dtheta))
+        NBT_FAIL(NBT_EDOM, "screen: dtheta must be finite and > 0");
+    for (size_t i = 0; i < in->w * in->h; i++) {
+        if (!(in->D[i] >= 0))
+            NBT_FAIL(NBT_EDOM, "screen: a depth is negative or NaN");
+        for (int c = 0; c < 3; c++)
+            if (!isfinite(in->rgb[3 * i + c]))
+                NBT_FAIL(NBT_EDOM, "screen: a colour is not finite");
+    }
+    return NBT_OK;
+}
+
+double nbt__depth_key(float D)
+{
+    return D >= NBT_SCREEN_SKY ? INFINITY : (double)D;
+}
+
+double nbt_screen_ray_distance(double Z, size_t w, size_t h, double dtheta, size_t x, size_t y)
+{
+    if (Z >= NBT_SCREEN_SKY)
+        return Z;
+    double u = ((double)x + 0.5 - 0.5 * (double)w) * dtheta, v = ((double)y + 0.5 - 0.5 * (double)h) * dtheta;
+    return Z * sqrt(1.0 + u * u + v * v);
+}
+
+/* ---- brute force ---- */
+
+typedef struct {
+    const nbt_screen_input *in;
+    const nbt_screen_kernel *k;
+    nbt_screen_rule rule;
+    double tail;
+    unsigned nchunks;
+    double *S, *T, **buf;
+} brute_ctx;
+
+/* receiver rows: gather from strictly farther pixels with the receiver's kernel */
+static nbt_status gather_row(size_t y, unsigned thread, void *vp)
+{
+    (void)thread;
+    brute_ctx *b = vp;
+    const nbt_screen_input *in = b->in;
+    nbt__pkern pk;
+    double *wq = NULL, *cell = NULL;
+    size_t cap = 0;
+    nbt_status st = NBT_OK;
+    for (size_t x = 0; x < in->w && st == NBT_OK; x++) {
+        size_t i = y * in->w + x;
+        double Dx = nbt__depth_key(in->D[i]);
+        st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, &pk);
+        if (b->T)
+            b->T[i] = pk.T;
+        if (st != NBT_OK || pk.n == 0 || b->rule != NBT_SCREEN_NEAR)
+            continue;
+        st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
+        long R = pk.R, R1 = R + 1;
+        long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
+        long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
+        double s[3] = {0, 0, 0};
+        for (long yy = y0; yy <= y1 && st == NBT_OK; yy++) {
+            const double *row = wq + labs(yy - (long)y) * R1;
+            for (long xx = x0; xx <= x1; xx++) {
+                size_t j = (size_t)yy * in->w + (size_t)xx;
+                if (!(nbt__depth_key(in->D[j]) > Dx))
+                    continue;
+                double wgt = row[labs(xx - (long)x)];
+                s[0] += wgt * in->rgb[3 * j];
+                s[1] += wgt * in->rgb[3 * j + 1];
+                s[2] += wgt * in->rgb[3 * j + 2];
+            }
+        }
+        for (int c = 0; c < 3; c++)
+            b->S[3 * i + c] += s[c];
+    }
+    free(wq);
+    free(cell);
+    return st;
+}
+
+/* source rows (a fixed chunk per task): spread with the source's kernel onto
+ * receivers as far or farther (NEAR) or all receivers (SOURCE) */
+static nbt_status scatter_chunk(size_t chunk, unsigned thread, void *vp)
+{
+    (void)thread;
+    brute_ctx *b = vp;
+    const nbt_screen_input *in = b->in;
+    size_t ya = chunk * in->h / b->nchunks, yb = (chunk + 1) * in->h / b->nchunks;
+    double *out = b->buf[chunk];
+    nbt__pkern pk;
+    double *wq = NULL, *cell = NULL;
+    size_t cap = 0;
+    nbt_status st = NBT_OK;
+    for (size_t y = ya; y < yb && st == NBT_OK; y++)
+        for (size_t x = 0; x < in->w && st == NBT_OK; x++) {
+            size_t i = y * in->w + x;
+            const float *c = in->rgb + 3 * i;
+            if (c[0] == 0 && c[1] == 0 && c[2] == 0)
+                continue;
+            st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, &pk);
+            if (st != NBT_OK || pk.n == 0)
+                continue;
+            st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
+            double Dy = nbt__depth_key(in->D[i]);
+            long R = pk.R, R1 = R + 1;
+            long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
+            long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
+            for (long yy = y0; yy <= y1 && st == NBT_OK; yy++) {
+                const double *row = wq + labs(yy - (long)y) * R1;
+                for (long xx = x0; xx <= x1; xx++) {
+                    size_t j = (size_t)yy * in->w + (size_t)xx;
+                    if (b->rule == NBT_SCREEN_NEAR && !(nbt__depth_key(in->D[j]) >= Dy))
+                        continue;
+                    double wgt = row[labs(xx - (long)x)];
+                    out[3 * j] += wgt * c[0];
+                    out[3 * j + 1] += wgt * c[1];
+                    out[3 * j + 2] += wgt * c[2];
+                }
+            }
+        }
+    free(wq);
+    free(cell);
+    return st;
+}
+
+nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel *k, nbt_screen_rule rule,
+                            double tail, unsigned nthreads, double *S, double *T)
+{
+    nbt_status st = nbt_screen_check(in);
+    if (st != NBT_OK)
+        return st;
+    if (!(tail > 0 && tail < 1))
+        NBT_FAIL(NBT_EDOM, "screen: tail must lie in (0, 1)");
+    size_t np = in->w * in->h;
+    memset(S, 0, np * 3 * sizeof *S);
+    brute_ctx b = {in, k, rule, tail, nbt__nthreads(nthreads, in->h), S, T, NULL};
+    st = nbt__parallel_for(in->h, nthreads, gather_row, &b);
+    if (st != NBT_OK)
+        return st;
+    b.buf = calloc(b.nchunks, sizeof *b.buf);
+    if (!b.buf)
+        NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+    for (unsigned c = 0; c < b.nchunks && st == NBT_OK; c++)
+        if (!(b.buf[c] = calloc(np * 3, sizeof(double))))
+            st = nbt__fail(NBT_ENOMEM, "screen: out of memory");
+    if (st == NBT_OK)
+        st = nbt__parallel_for(b.nchunks, nthreads, scatter_chunk, &b);
+    for (unsigned c = 0; c < b.nchunks; c++) {
+        if (st == NBT_OK)
+            for (size_t i = 0; i < np * 3; i++)
+                S[i] += b.buf[c][i];
+        free(b.buf[c]);
+    }
+    free(b.buf);
+    return st;
+}
+
+/* ---- metrics ---- */
+
+nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kernel *k, const double *S,
+                              const double *ref, nbt_screen_metrics *m)
+{
+    memset(m, 0, sizeof *m);
+    size_t w = in->w, h = in->h, np = w * h;
+    double *rad = malloc(np * sizeof *rad);
+    unsigned char *band = calloc(np, 1);
+    if (!rad || !band) {
+        free(rad);
+        free(band);
+        NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+    }
+    nbt_status st = NBT_OK;
+    for (size_t i = 0; i < np && st == NBT_OK; i++) {
+        nbt__pkern pk;
+        st = nbt__pixel_kernel(k, in->D[i], in->dtheta, 1e-3, &pk);
+        rad[i] = pk.radius;
+    }
+    /* mark the band: a disc of 2 radii around each discontinuity edge */
+    for (size_t y = 0; y < h && st == NBT_OK; y++)
+        for (size_t x = 0; x < w; x++)
+            for (int dir = 0; dir < 2; dir++) {
+                size_t x2 = x + (dir == 0), y2 = y + (dir == 1);
+                if (x2 >= w || y2 >= h)
+                    continue;
+                size_t a = y * w + x, b2 = y2 * w + x2;
+                double da = nbt__depth_key(in->D[a]), db = nbt__depth_key(in->D[b2]);
+                double near = fmin(da, db), far = fmax(da, db);
+                if (!(far - near > 0.05 * near) && !(isinf(far) && !isinf(near)))
+                    continue;
+                double r = 2.0 * fmax(rad[a], rad[b2]);
+                if (r < 1)
+                    r = 1;
+                double cx = 0.5 * (double)(x + x2), cy = 0.5 * (double)(y + y2);
+                long ylo = (long)floor(cy - r), yhi = (long)ceil(cy + r);
+                for (long yy = ylo < 0 ? 0 : ylo; yy <= yhi && yy < (long)h; yy++) {
+                    double dy = (double)yy - cy, hw = r * r - dy * dy;
+                    if (hw < 0)
+                        continue;
+                    hw = sqrt(hw);
+                    long xlo = (long)ceil(cx - hw), xhi = (long)floor(cx + hw);
+                    for (long xx = xlo < 0 ? 0 : xlo; xx <= xhi && xx < (long)w; xx++)
+                        band[(size_t)yy * w + (size_t)xx] = 1;
+                }
+            }
+    double l1 = 0, l1r = 0, e2 = 0, r2 = 0, be2 = 0, br2 = 0, s = 0, sr = 0, mx = 0, mxr = 0;
+    for (size_t i = 0; i < np * 3; i++) {
+        double d = S[i] - ref[i];
+        l1 += fabs(d);
+        l1r += fabs(ref[i]);
+        e2 += d * d;
+        r2 += ref[i] * ref[i];
+        s += S[i];
+        sr += ref[i];
+        mx = fmax(mx, fabs(d));
+        mxr = fmax(mxr, fabs(ref[i]));
+        if (band[i / 3]) {
+            be2 += d * d;
+            br2 += ref[i] * ref[i];
+        }
+    }
+    for (size_t i = 0; i < np; i++)
+        m->edge_pixels += band[i];
+    m->rel_l1 = l1r > 0 ? l1 / l1r : l1;
+    m->rel_rms = r2 > 0 ? sqrt(e2 / r2) : sqrt(e2);
+    m->edge = br2 > 0 ? sqrt(be2 / br2) : 0;
+    m->bias = sr != 0 ? s / sr - 1 : 0;
+    m->max = mxr > 0 ? mx / mxr : mx;
+    free(rad);
+    free(band);
+    return st;
+}

@@ -1,0 +1,366 @@
+/* tests/test_screen.c: screen-space references (nbt/screen.h) against
+ * independent quadrature, closed forms, invariants, and each other. */
+#include <config.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+static double G(double x)
+{
+    return 0.5 * erfc(x / sqrt(2.0));
+}
+
+/* ---- independent reference for the pixel-integrated erfc kernel ----
+ * k(r) = G(r/b)/(sqrt(2 pi) b r) has unit mass. Own pixel in polar
+ * coordinates, the radial integral in closed form:
+ * int_0^a G(r/b) dr = b (1/sqrt(2 pi) - phi(a/b) + (a/b) G(a/b)). */
+static int own_f(double ph, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    double b = *(double *)vp, q = 0.5 / (b * cos(ph));
+    double phi = exp(-0.5 * q * q) / sqrt(2.0 * M_PI);
+    f[0] = 8.0 / sqrt(2.0 * M_PI) * (1.0 / sqrt(2.0 * M_PI) - phi + q * G(q));
+    return 0;
+}
+
+typedef struct {
+    double b, x, y0, y1;
+    nbt_quad_ws *ws;
+} cell_ctx;
+
+static int cell_inner(double y, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    cell_ctx *c = vp;
+    double r = hypot(c->x, y);
+    f[0] = G(r / c->b) / (sqrt(2.0 * M_PI) * c->b * r);
+    return 0;
+}
+
+static int cell_outer(double x, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    cell_ctx *c = vp;
+    c->x = x;
+    double v, e;
+    nbt_quad_gk(c->ws, cell_inner, c, 1, c->y0, c->y1, 0, 1e-13, &v, &e);
+    f[0] = v;
+    return 0;
+}
+
+static double ref_pixel(double b, long dx, long dy)
+{
+    double v, e;
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 500), *ws2 = nbt_quad_ws_alloc(1, 500);
+    if (dx == 0 && dy == 0) {
+        nbt_quad_gk(ws, own_f, &b, 1, 0, M_PI / 4, 0, 1e-13, &v, &e);
+    } else {
+        cell_ctx c = {b, 0, dy - 0.5, dy + 0.5, ws2};
+        nbt_quad_gk(ws, cell_outer, &c, 1, dx - 0.5, dx + 0.5, 0, 1e-12, &v, &e);
+    }
+    nbt_quad_ws_free(ws);
+    nbt_quad_ws_free(ws2);
+    return v;
+}
+
+static void test_pixel_integrals(void)
+{
+    /* SCREENSPACE.md: own pixel 0.303 of M0 at beta = 2.07 px */
+    t_abs(nbt_screen_atom_pixel(NBT_ATOM_ERFC, 2.07, 0, 0), 0.303, 5e-4, "own pixel at beta 2.07 px ~ 0.303");
+    const double betas[] = {0.137, 0.61, 2.07, 7.385, 41.3};
+    const long off[][2] = {{0, 0}, {1, 0}, {1, 1}, {2, 1}, {3, 0}, {5, 4}};
+    for (size_t i = 0; i < sizeof betas / sizeof betas[0]; i++)
+        for (size_t j = 0; j < sizeof off / sizeof off[0]; j++) {
+            double want = ref_pixel(betas[i], off[j][0], off[j][1]);
+            double got = nbt_screen_atom_pixel(NBT_ATOM_ERFC, betas[i], off[j][0], off[j][1]);
+            if (want > 1e-12)
+                t_rel(got, want, 1e-7, "erfc atom, beta %g px, offset (%ld,%ld) vs 2-D quadrature", betas[i],
+                      off[j][0], off[j][1]);
+            else
+                t_abs(got, want, 1e-12, "erfc atom, beta %g px, far offset (%ld,%ld)", betas[i], off[j][0], off[j][1]);
+        }
+    /* symmetric in the offset */
+    t_rel(nbt_screen_atom_pixel(NBT_ATOM_ERFC, 3.3, -2, 1), nbt_screen_atom_pixel(NBT_ATOM_ERFC, 3.3, 1, 2), 1e-14,
+          "erfc atom symmetric");
+    /* wide kernels: own pixel -> 2 ln(1 + sqrt2)/(sqrt(2 pi) beta) */
+    double b = 400.0;
+    t_rel(nbt_screen_atom_pixel(NBT_ATOM_ERFC, b, 0, 0) * b, 2.0 * log(1 + sqrt(2.0)) / sqrt(2.0 * M_PI), 2e-3,
+          "own pixel of a wide kernel ~ 0.703/beta");
+    /* Gaussian atom: product of erf differences */
+    double s = 1.37, gx = 0.5 * (erf(1.5 / (sqrt(2.0) * s)) - erf(0.5 / (sqrt(2.0) * s)));
+    double gy = 0.5 * (erf(2.5 / (sqrt(2.0) * s)) - erf(1.5 / (sqrt(2.0) * s)));
+    t_rel(nbt_screen_atom_pixel(NBT_ATOM_GAUSS, s, 1, -2), gx * gy, 1e-14, "Gaussian atom at (1,-2)");
+    /* truncation: the mass inside the square of radius R is >= 1 - tail,
+     * and the closed-form tail is tight (a radius one smaller leaves more) */
+    const double tails[] = {1e-3, 1e-6};
+    for (int sh = 0; sh < 2; sh++)
+        for (size_t i = 1; i < 4; i++)
+            for (int t = 0; t < 2; t++) {
+                nbt_atom_shape shape = sh ? NBT_ATOM_GAUSS : NBT_ATOM_ERFC;
+                long R = nbt_screen_atom_radius(shape, betas[i], tails[t]);
+                double in = 0;
+                for (long y = -R; y <= R; y++)
+                    for (long x = -R; x <= R; x++)
+                        in += nbt_screen_atom_pixel(shape, betas[i], x, y);
+                t_true(in >= 1 - tails[t] - 1e-9 && in <= 1 + 1e-9,
+                       "%s atom %g px: mass %.12f inside R = %ld (tail %g)", sh ? "gauss" : "erfc", betas[i], in, R,
+                       tails[t]);
+            }
+}
+
+static void test_kernels(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(0.7385, 0.9, 0.0685);
+    double D = 3.31, M0, M2, alpha, beta;
+    nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, D, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, &alpha, &beta);
+    nbt_screen_kern kn;
+    nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
+    nbt_screen_kernel_eval(k, D, &kn);
+    t_true(kn.n == 1 && kn.shape[0] == NBT_ATOM_ERFC, "moment kernel: one erfc atom");
+    t_rel(kn.mass[0], M0, 1e-14, "moment kernel mass = M0");
+    t_rel(kn.scale[0], beta, 1e-14, "moment kernel scale = beta");
+    t_rel(kn.T, exp(-m.sigma_t * D), 1e-14, "T = exp(-sigma_t D)");
+    /* the atom's value at r equals nbt_beam_kernel */
+    double r = 0.37 * beta;
+    t_rel(kn.mass[0] * G(r / kn.scale[0]) / (sqrt(2 * M_PI) * kn.scale[0] * r), nbt_beam_kernel(alpha, beta, r), 1e-13,
+          "erfc atom value = alpha/r G(r/beta)");
+    nbt_screen_kernel_free(k);
+
+    k = nbt_screen_kernel_alloc(NBT_SKERNEL_SINGLE, &m, NULL);
+    nbt_screen_kernel_eval(k, D, &kn);
+    double ss = m.albedo * m.sigma_t, psi;
+    t_rel(kn.mass[0], ss * D * exp(-m.sigma_t * D), 1e-14, "single scattering mass = sigma_s D e^{-tau}");
+    nbt_beam_psi(&m, NBT_PSI_SINGLE, D, r, &psi, NULL);
+    t_rel(kn.mass[0] * G(r / kn.scale[0]) / (sqrt(2 * M_PI) * kn.scale[0] * r), psi, 1e-13,
+          "single-scattering atom = nbt_beam_psi SINGLE");
+    nbt_screen_kernel_free(k);
+
+    k = nbt_screen_kernel_alloc(NBT_SKERNEL_LINEINT, &m, NULL);
+    nbt_screen_kernel_eval(k, D, &kn);
+    double mass = 0, m2 = 0, val = 0;
+    for (size_t i = 0; i < kn.n; i++) {
+        mass += kn.mass[i];
+        m2 += kn.mass[i] * 2 * kn.scale[i] * kn.scale[i];
+        val += kn.mass[i] * exp(-r * r / (2 * kn.scale[i] * kn.scale[i])) / (2 * M_PI * kn.scale[i] * kn.scale[i]);
+    }
+    t_rel(mass, M0, 1e-12, "line-integral kernel mass = M0");
+    t_rel(m2, M2, 1e-10, "line-integral kernel second moment = M2 (eq. 26)");
+    nbt_beam_psi(&m, NBT_PSI_LINEINT, D, r, &psi, NULL);
+    t_rel(val, psi, 1e-6, "line-integral atoms at r = nbt_beam_psi LINEINT");
+    nbt_screen_kernel_free(k);
+
+    k = nbt_screen_kernel_alloc(NBT_SKERNEL_ELEK, &m, NULL);
+    nbt_screen_kernel_eval(k, D, &kn);
+    nbt_beam_psi(&m, NBT_PSI_ELEK, D, r, &psi, NULL);
+    t_rel(kn.mass[0] * exp(-r * r / (2 * kn.scale[0] * kn.scale[0])) / (2 * M_PI * kn.scale[0] * kn.scale[0]), psi,
+          1e-12, "Elek atom = nbt_beam_psi ELEK");
+    /* edges of the domain */
+    nbt_screen_kernel_eval(k, 0, &kn);
+    t_true(kn.n == 0 && kn.T == 1, "D = 0: T = 1, no scattering");
+    nbt_screen_kernel_eval(k, INFINITY, &kn);
+    t_true(kn.n == 0 && kn.T == 0, "sky (inf): T = 0, sends nothing");
+    nbt_screen_kernel_eval(k, 1e10, &kn);
+    t_true(kn.n == 0 && kn.T == 0, "sky (1e10): T = 0, sends nothing");
+    t_true(nbt_screen_kernel_eval(k, -1, &kn) == NBT_EDOM, "negative depth rejected");
+    t_true(nbt_screen_kernel_eval(k, NAN, &kn) == NBT_EDOM, "NaN depth rejected");
+    nbt_screen_kernel_free(k);
+    nbt_beam_medium m0 = nbt_beam_homogeneous(0.7, 0.0, 0.0685);
+    k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m0, NULL);
+    nbt_screen_kernel_eval(k, 2.0, &kn);
+    t_true(kn.n == 0, "albedo 0: no scattered mass");
+    nbt_screen_kernel_free(k);
+    nbt_skernel_kind kk;
+    t_true(nbt_skernel_parse("lineint", &kk) == NBT_OK && kk == NBT_SKERNEL_LINEINT &&
+               nbt_skernel_parse("bogus", &kk) == NBT_EINVAL,
+           "kernel names parse");
+}
+
+/* ---- operators ---- */
+
+typedef struct {
+    size_t w, h;
+    float *rgb, *D;
+} scene;
+
+static scene scene_new(size_t w, size_t h)
+{
+    scene s = {w, h, calloc(w * h * 3, sizeof(float)), calloc(w * h, sizeof(float))};
+    return s;
+}
+
+static void scene_free(scene *s)
+{
+    free(s->rgb);
+    free(s->D);
+}
+
+static nbt_screen_input as_input(const scene *s, double dtheta)
+{
+    nbt_screen_input in = {s->w, s->h, s->rgb, s->D, dtheta};
+    return in;
+}
+
+static double maxabs(const double *a, size_t n)
+{
+    double m = 0;
+    for (size_t i = 0; i < n; i++)
+        m = fmax(m, fabs(a[i]));
+    return m;
+}
+
+static void test_operators(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(0.2385, 0.93, 0.0085); /* dtheta = 10.6 deg */
+    nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
+    const double dth = 0.08, tail = 1e-9;
+    const size_t W = 64, H = 56, N = W * H;
+    double *S = malloc(N * 3 * sizeof *S), *S2 = malloc(N * 3 * sizeof *S2), *T = malloc(N * sizeof *T);
+    nbt_screen_kern kn;
+
+    /* constant image at constant depth: interior receives M0 c, J = (T + M0) c */
+    scene s = scene_new(W, H);
+    double Dw = 7.3;
+    for (size_t i = 0; i < N; i++) {
+        s.D[i] = (float)Dw;
+        s.rgb[3 * i] = 1.25f, s.rgb[3 * i + 1] = 0.5f, s.rgb[3 * i + 2] = 2.0f;
+    }
+    nbt_screen_kernel_eval(k, (float)Dw, &kn);
+    nbt_screen_input in = as_input(&s, dth);
+    long R = nbt_screen_atom_radius(NBT_ATOM_ERFC, kn.scale[0] / ((float)Dw * dth), tail);
+    t_true(nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, T) == NBT_OK, "brute force runs");
+    size_t c = (H / 2) * W + W / 2;
+    t_true(R < (long)H / 2, "wall kernel fits on screen (R = %ld px)", R);
+    t_rel(S[3 * c] / 1.25, kn.mass[0], 1e-8, "constant wall: interior S = M0 c (red)");
+    t_rel(S[3 * c + 2] / 2.0, kn.mass[0], 1e-8, "constant wall: interior S = M0 c (blue)");
+    t_rel(T[c], kn.T, 1e-7, "constant wall: T");
+    t_true(S[0] < 0.5 * kn.mass[0] * 1.25 && S[0] > 0.2 * kn.mass[0] * 1.25,
+           "corner pixel keeps only what lands on screen (%.3f of M0)", S[0] / (kn.mass[0] * 1.25));
+
+    /* impulse response integrates to M0; same for both rules at constant depth */
+    memset(s.rgb, 0, N * 3 * sizeof(float));
+    s.rgb[3 * c + 1] = 3.0f;
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 1, S, NULL);
+    double sum = 0;
+    for (size_t i = 0; i < N; i++)
+        sum += S[3 * i + 1];
+    t_rel(sum / 3.0, kn.mass[0], 1e-8, "impulse response integrates to M0");
+    t_rel(S[3 * c + 1] / 3.0, kn.mass[0] * nbt_screen_atom_pixel(NBT_ATOM_ERFC, kn.scale[0] / ((float)Dw * dth), 0, 0),
+          1e-12, "impulse: own pixel weight");
+    t_abs(S[3 * c], 0, 0, "impulse: other channels untouched");
+
+    /* two layers: a near square over a far wall; check the pair rule */
+    double Dn = 2.9, Df = 11.7;
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++)
+            s.D[y * W + x] = (float)(x >= 10 && x < 30 && y >= 8 && y < 28 ? Dn : Df);
+    nbt_screen_kern kf;
+    nbt_screen_kernel_eval(k, (float)Dn, &kn);
+    nbt_screen_kernel_eval(k, (float)Df, &kf);
+    double bn = kn.scale[0] / ((float)Dn * dth), bf = kf.scale[0] / ((float)Df * dth);
+    memset(s.rgb, 0, N * 3 * sizeof(float));
+    size_t src = 18 * W + 34, rcv = 18 * W + 28; /* far source, near receiver 6 px left */
+    s.rgb[3 * src] = 1.0f;
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, NULL);
+    t_rel(S[3 * rcv], kn.mass[0] * nbt_screen_atom_pixel(NBT_ATOM_ERFC, bn, 6, 0), 1e-12,
+          "A: far source -> near receiver uses the near (receiver's) kernel");
+    t_rel(S[3 * (18 * W + 40)], kf.mass[0] * nbt_screen_atom_pixel(NBT_ATOM_ERFC, bf, 6, 0), 1e-12,
+          "A: far source -> far receiver uses the far kernel");
+    nbt_screen_brute(&in, k, NBT_SCREEN_SOURCE, tail, 2, S, NULL);
+    t_rel(S[3 * rcv], kf.mass[0] * nbt_screen_atom_pixel(NBT_ATOM_ERFC, bf, 6, 0), 1e-12,
+          "B: far source -> near receiver uses the source's kernel");
+    memset(s.rgb, 0, N * 3 * sizeof(float));
+    s.rgb[3 * rcv + 2] = 1.0f; /* near source, far receiver 6 px right */
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, NULL);
+    t_rel(S[3 * src + 2], kn.mass[0] * nbt_screen_atom_pixel(NBT_ATOM_ERFC, bn, 6, 0), 1e-12,
+          "A: near source -> far receiver uses the near (source's) kernel");
+
+    /* linearity, and brute force = layered FFT on a layered scene with sky */
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            size_t i = y * W + x;
+            s.D[i] = (float)(y < 6 ? 1e10 : x < 16 ? 3.7 : x < 33 ? 9.1 : 5.2);
+            /* multiples of 1/1024, so that 2 c + 3 c' below is exact in float */
+            s.rgb[3 * i] = (float)(floor(t_uniform() * 2048) / 1024);
+            s.rgb[3 * i + 1] = (float)(floor(t_uniform() * 1024) / 1024 * (x == 20 && y == 20 ? 400 : 1)); /* an HDR lamp */
+            s.rgb[3 * i + 2] = (float)(floor(t_uniform() * 1024) / 1024);
+        }
+    for (int rule = 0; rule < 2; rule++) {
+        nbt_screen_brute(&in, k, (nbt_screen_rule)rule, tail, 2, S, NULL);
+        nbt_status st = nbt_screen_layered(&in, k, (nbt_screen_rule)rule, tail, 8, 2, S2, T);
+        double d = 0;
+        for (size_t i = 0; i < N * 3; i++)
+            d = fmax(d, fabs(S[i] - S2[i]));
+        t_true(st == NBT_OK && d <= 1e-10 * maxabs(S, N * 3), "%s: brute force = layered FFT (max diff %.2g of max S)",
+               rule ? "B" : "A", d / maxabs(S, N * 3));
+    }
+    t_true(nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, tail, 3, 2, S2, T) == NBT_EDOM,
+           "layered: more depths than layers is refused");
+    t_abs(T[0], 0, 0, "sky pixel: T = 0");
+    /* linearity */
+    double *S3 = malloc(N * 3 * sizeof *S3);
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, NULL);
+    float *orig = malloc(N * 3 * sizeof *orig);
+    memcpy(orig, s.rgb, N * 3 * sizeof *orig);
+    for (size_t i = 0; i < N * 3; i++)
+        s.rgb[i] = (float)(i % 7 == 0);
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S2, NULL);
+    for (size_t i = 0; i < N * 3; i++)
+        s.rgb[i] = 2.0f * orig[i] + 3.0f * (float)(i % 7 == 0);
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S3, NULL);
+    double d = 0;
+    for (size_t i = 0; i < N * 3; i++)
+        d = fmax(d, fabs(S3[i] - 2 * S[i] - 3 * S2[i]));
+    t_true(d <= 1e-12 * maxabs(S3, N * 3), "operator A is linear in the image (%.2g)", d / maxabs(S3, N * 3));
+
+    /* metrics on a known perturbation */
+    nbt_screen_metrics mt;
+    for (size_t i = 0; i < N * 3; i++)
+        S2[i] = 1.01 * S[i];
+    nbt_screen_compare(&in, k, S2, S, &mt);
+    t_rel(mt.rel_l1, 0.01, 1e-9, "metrics: rel L1 of a 1%% scale");
+    t_rel(mt.rel_rms, 0.01, 1e-9, "metrics: rel RMS of a 1%% scale");
+    t_rel(mt.bias, 0.01, 1e-9, "metrics: bias of a 1%% scale");
+    t_rel(mt.max, 0.01, 1e-9, "metrics: max of a 1%% scale");
+    t_rel(mt.edge, 0.01, 1e-9, "metrics: edge band of a 1%% scale");
+    t_true(mt.edge_pixels > 0 && mt.edge_pixels < N, "metrics: a band around the depth edges (%zu px)", mt.edge_pixels);
+    memcpy(S2, S, N * 3 * sizeof *S);
+    S2[3 * (20 * W + 31)] += 0.5 * maxabs(S, N * 3); /* next to the 9.1 | 5.2 edge */
+    nbt_screen_compare(&in, k, S2, S, &mt);
+    t_rel(mt.max, 0.5, 1e-12, "metrics: max error");
+    t_true(mt.edge > mt.rel_rms, "metrics: an error at an edge weighs more in the band");
+
+    /* bad input */
+    s.D[5] = -1.0f;
+    t_true(nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, NULL) == NBT_EDOM, "negative depth refused");
+    s.D[5] = NAN;
+    t_true(nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, tail, 8, 2, S, NULL) == NBT_EDOM, "NaN depth refused");
+    s.D[5] = 3.0f;
+    in.dtheta = 0;
+    t_true(nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, NULL) == NBT_EDOM, "dtheta 0 refused");
+    /* depth 0 and albedo 0 */
+    in.dtheta = dth;
+    for (size_t i = 0; i < N; i++)
+        s.D[i] = 0.0f;
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, T);
+    t_true(maxabs(S, N * 3) == 0 && T[7] == 1, "D = 0 everywhere: S = 0, T = 1");
+    t_rel(nbt_screen_ray_distance(2.0, 100, 80, 0.01, 0, 0), 2.0 * sqrt(1 + 0.495 * 0.495 + 0.395 * 0.395), 1e-14,
+          "planar depth to ray distance at a corner pixel");
+    free(orig);
+    free(S3);
+    scene_free(&s);
+    free(S);
+    free(S2);
+    free(T);
+    nbt_screen_kernel_free(k);
+}
+
+int main(void)
+{
+    test_pixel_integrals();
+    test_kernels();
+    test_operators();
+    return t_done();
+}
