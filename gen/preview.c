@@ -49,6 +49,28 @@ static int write_png(FILE *f, const unsigned char *img, size_t W, size_t H)
     return 0;
 }
 
+int preview_write_rgb8(const char *path, const unsigned char *img, size_t W, size_t H)
+{
+    size_t len = strlen(path) + 32;
+    char *tmp = malloc(len);
+    int rc = -1;
+    if (tmp) {
+        snprintf(tmp, len, "%s.tmp%ld", path, (long)getpid());
+        FILE *f = fopen(tmp, "wb");
+        if (f) {
+            rc = write_png(f, img, W, H);
+            if (fclose(f) != 0)
+                rc = -1;
+            if (rc == 0 && rename(tmp, path) != 0)
+                rc = -1;
+            if (rc != 0)
+                unlink(tmp);
+        }
+    }
+    free(tmp);
+    return rc;
+}
+
 int preview_write_png(const nbt_table *t, const char *path)
 {
     size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch, gap = 4;
@@ -69,23 +91,7 @@ int preview_write_png(const nbt_table *t, const char *path)
                 ramp((t->data[(j * nx + i) * nc + c] - lo) / span,
                      img + ((H - 1 - j) * W + c * (nx + gap) + i) * 3);
     }
-    size_t len = strlen(path) + 32;
-    char *tmp = malloc(len);
-    int rc = -1;
-    if (tmp) {
-        snprintf(tmp, len, "%s.tmp%ld", path, (long)getpid());
-        FILE *f = fopen(tmp, "wb");
-        if (f) {
-            rc = write_png(f, img, W, H);
-            if (fclose(f) != 0)
-                rc = -1;
-            if (rc == 0 && rename(tmp, path) != 0)
-                rc = -1;
-            if (rc != 0)
-                unlink(tmp);
-        }
-    }
-    free(tmp);
+    int rc = preview_write_rgb8(path, img, W, H);
     free(img);
     return rc;
 }

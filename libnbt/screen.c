@@ -327,19 +327,25 @@ nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, 
     memset(w, 0, need * sizeof *w);
     for (size_t n = 0; n < pk->n; n++) {
         double *e = c; /* reuse the first R1 of cell per node */
+        /* a node's support ends where its cells fall below 1e-16 of its centre */
         size_t last = 0;
-        for (size_t i = 0; i < R1; i++) {
+        e[0] = nbt__gauss_cell(pk->sig[n], 0);
+        for (size_t i = 1; i < R1; i++) {
             e[i] = nbt__gauss_cell(pk->sig[n], (long)i);
-            if (e[i] > 0)
-                last = i;
+            if (!(e[i] > 1e-16 * e[0]))
+                break;
+            last = i;
         }
-        for (size_t j = 0; j <= last; j++) {
+        for (size_t j = 0; j <= last; j++) { /* upper triangle i >= j; symmetric */
             double f = pk->wt[n] * e[j];
             double *row = w + j * R1;
-            for (size_t i = 0; i <= last; i++)
+            for (size_t i = j; i <= last; i++)
                 row[i] += f * e[i];
         }
     }
+    for (size_t j = 1; j < R1; j++)
+        for (size_t i = 0; i < j; i++)
+            w[j * R1 + i] = w[i * R1 + j];
     return NBT_OK;
 }
 
@@ -385,52 +391,11 @@ typedef struct {
     double *S, *T, **buf;
 } brute_ctx;
 
-/* receiver rows: gather from strictly farther pixels with the receiver's kernel */
-static nbt_status gather_row(size_t y, unsigned thread, void *vp)
-{
-    (void)thread;
-    brute_ctx *b = vp;
-    const nbt_screen_input *in = b->in;
-    nbt__pkern pk;
-    double *wq = NULL, *cell = NULL;
-    size_t cap = 0;
-    nbt_status st = NBT_OK;
-    for (size_t x = 0; x < in->w && st == NBT_OK; x++) {
-        size_t i = y * in->w + x;
-        double Dx = nbt__depth_key(in->D[i]);
-        st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, &pk);
-        if (b->T)
-            b->T[i] = pk.T;
-        if (st != NBT_OK || pk.n == 0 || b->rule != NBT_SCREEN_NEAR)
-            continue;
-        st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
-        long R = pk.R, R1 = R + 1;
-        long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
-        long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
-        double s[3] = {0, 0, 0};
-        for (long yy = y0; yy <= y1 && st == NBT_OK; yy++) {
-            const double *row = wq + labs(yy - (long)y) * R1;
-            for (long xx = x0; xx <= x1; xx++) {
-                size_t j = (size_t)yy * in->w + (size_t)xx;
-                if (!(nbt__depth_key(in->D[j]) > Dx))
-                    continue;
-                double wgt = row[labs(xx - (long)x)];
-                s[0] += wgt * in->rgb[3 * j];
-                s[1] += wgt * in->rgb[3 * j + 1];
-                s[2] += wgt * in->rgb[3 * j + 2];
-            }
-        }
-        for (int c = 0; c < 3; c++)
-            b->S[3 * i + c] += s[c];
-    }
-    free(wq);
-    free(cell);
-    return st;
-}
-
-/* source rows (a fixed chunk per task): spread with the source's kernel onto
- * receivers as far or farther (NEAR) or all receivers (SOURCE) */
-static nbt_status scatter_chunk(size_t chunk, unsigned thread, void *vp)
+/* One pass over a fixed chunk of rows. Each pixel's kernel weights serve
+ * twice: (NEAR) it gathers from strictly farther pixels with its own kernel,
+ * and it spreads onto receivers as far or farther (NEAR) or onto every
+ * receiver (SOURCE). Ties are counted once, by the spreading side. */
+static nbt_status chunk_pass(size_t chunk, unsigned thread, void *vp)
 {
     (void)thread;
     brute_ctx *b = vp;
@@ -445,13 +410,14 @@ static nbt_status scatter_chunk(size_t chunk, unsigned thread, void *vp)
         for (size_t x = 0; x < in->w && st == NBT_OK; x++) {
             size_t i = y * in->w + x;
             const float *c = in->rgb + 3 * i;
-            if (c[0] == 0 && c[1] == 0 && c[2] == 0)
-                continue;
+            int spread = c[0] != 0 || c[1] != 0 || c[2] != 0, gather = b->rule == NBT_SCREEN_NEAR;
             st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, &pk);
-            if (st != NBT_OK || pk.n == 0)
+            if (b->T)
+                b->T[i] = pk.T;
+            if (st != NBT_OK || pk.n == 0 || !(spread || gather))
                 continue;
             st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
-            double Dy = nbt__depth_key(in->D[i]);
+            double Di = nbt__depth_key(in->D[i]), s[3] = {0, 0, 0};
             long R = pk.R, R1 = R + 1;
             long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
             long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
@@ -459,14 +425,22 @@ static nbt_status scatter_chunk(size_t chunk, unsigned thread, void *vp)
                 const double *row = wq + labs(yy - (long)y) * R1;
                 for (long xx = x0; xx <= x1; xx++) {
                     size_t j = (size_t)yy * in->w + (size_t)xx;
-                    if (b->rule == NBT_SCREEN_NEAR && !(nbt__depth_key(in->D[j]) >= Dy))
-                        continue;
-                    double wgt = row[labs(xx - (long)x)];
-                    out[3 * j] += wgt * c[0];
-                    out[3 * j + 1] += wgt * c[1];
-                    out[3 * j + 2] += wgt * c[2];
+                    double Dj = nbt__depth_key(in->D[j]), wgt = row[labs(xx - (long)x)];
+                    if (gather && Dj > Di) {
+                        const float *cj = in->rgb + 3 * j;
+                        s[0] += wgt * cj[0];
+                        s[1] += wgt * cj[1];
+                        s[2] += wgt * cj[2];
+                    }
+                    if (spread && (!gather || Dj >= Di)) {
+                        out[3 * j] += wgt * c[0];
+                        out[3 * j + 1] += wgt * c[1];
+                        out[3 * j + 2] += wgt * c[2];
+                    }
                 }
             }
+            for (int ch = 0; ch < 3; ch++)
+                out[3 * i + ch] += s[ch];
         }
     free(wq);
     free(cell);
@@ -484,9 +458,6 @@ nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel 
     size_t np = in->w * in->h;
     memset(S, 0, np * 3 * sizeof *S);
     brute_ctx b = {in, k, rule, tail, nbt__nthreads(nthreads, in->h), S, T, NULL};
-    st = nbt__parallel_for(in->h, nthreads, gather_row, &b);
-    if (st != NBT_OK)
-        return st;
     b.buf = calloc(b.nchunks, sizeof *b.buf);
     if (!b.buf)
         NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
@@ -494,7 +465,7 @@ nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel 
         if (!(b.buf[c] = calloc(np * 3, sizeof(double))))
             st = nbt__fail(NBT_ENOMEM, "screen: out of memory");
     if (st == NBT_OK)
-        st = nbt__parallel_for(b.nchunks, nthreads, scatter_chunk, &b);
+        st = nbt__parallel_for(b.nchunks, nthreads, chunk_pass, &b);
     for (unsigned c = 0; c < b.nchunks; c++) {
         if (st == NBT_OK)
             for (size_t i = 0; i < np * 3; i++)

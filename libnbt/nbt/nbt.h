@@ -11,6 +11,7 @@
 #include <nbt/beam.h>
 #include <nbt/mc.h>
 #include <nbt/screen.h>
+#include <nbt/image.h>
 
 #ifdef __cplusplus
 extern "C" {

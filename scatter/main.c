@@ -1,0 +1,370 @@
+/* scatter/main.c: nbt-scatter, screen-space multiple scattering of a render
+ * (RGB + depth) through a homogeneous medium (doc/screenspace.md). */
+#include <config.h>
+#include <errno.h>
+#include <getopt.h>
+#include <libgen.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include <nbt/image.h>
+#include "../gen/cli.h"
+#include "../gen/preview.h"
+#include "scatter.h"
+
+static void help(void)
+{
+    puts("Usage: nbt-scatter IN.exr -o OUT.exr --fov-y DEG --sigma-t X --albedo A (--B B | --dtheta DEG) [options]\n"
+         "       nbt-scatter scene NAME -o IN.exr [--size WxH]\n"
+         "       nbt-scatter --version\n\n"
+         "Applies multiple scattering in a homogeneous medium to a render. IN.exr holds R, G, B\n"
+         "(A ignored) and Z as Blender writes it: planar depth along the view axis, sky at\n"
+         "Z >= 1e10 (or inf). OUT.exr gets float R, G, B of the whole image, T c + S (direct plus\n"
+         "scattered), and Z; OUT.png a tone-mapped preview.\n\n"
+         "  -o, --output OUT.exr   output (required)\n"
+         "  --fov-y DEG            vertical field of view, (0, 180)\n"
+         "  --sigma-t X            extinction coefficient per scene unit, > 0\n"
+         "  --albedo A             single-scattering albedo, [0, 1]\n"
+         "  --B B | --dtheta DEG   Gaussian phase width: B > 0, or dtheta in (0, 90] degrees (dtheta^2 = 4B)\n"
+         "  --method M             ref-a (default): operator A, every pixel pair through the nearer pixel's\n"
+         "                         kernel (Shinya et al., corrected); ref-b: operator B, every source its own\n"
+         "                         Gaussian (Elek et al.'s PSF). Both exact on the CPU.\n"
+         "  --kernel K             moment (default for ref-a), smallangle, single, lineint, elek (default for\n"
+         "                         ref-b), corrected (needs --correction FILE from nbt-fit kernel --correction)\n"
+         "  --depth plane|ray      what Z holds: planar depth (default) or distance along the ray\n"
+         "  --layers N             use the exact layered FFT when Z takes at most N distinct values\n"
+         "                         (default 64), else brute force; --layers 0 forces brute force\n"
+         "  --tail X               truncate each kernel where less than X of its mass lies outside (1e-7)\n"
+         "  --threads N            0 = all cores (default)\n"
+         "  --compare REF.exr      print 'relL1 X relRMS X edge X bias X max X' for the scattered part\n"
+         "                         against REF.exr (an nbt-scatter output for the same input and medium)\n"
+         "  --no-png               no preview\n\n"
+         "'scene NAME' writes a generated test render: plane, step, layers, slant, blocks (default\n"
+         "size 320x240). Exit status: 0 success, 1 failure, 2 bad usage.");
+}
+
+static void parse_size(const char *arg, size_t *w, size_t *h)
+{
+    char *end;
+    errno = 0;
+    long a = strtol(arg, &end, 10), b = 0;
+    int ok = end != arg && *end == 'x';
+    if (ok) {
+        const char *p = end + 1;
+        b = strtol(p, &end, 10);
+        ok = end != p && *end == '\0' && errno == 0;
+    }
+    if (!ok || a < 1 || b < 1 || a > 16384 || b > 16384)
+        die_usage("--size: '%s' is not accepted: expected WxH with 1 <= W, H <= 16384", arg);
+    *w = (size_t)a;
+    *h = (size_t)b;
+}
+
+/* the directory of path must exist and be writable: checked before any work */
+static void check_writable(const char *opt, const char *path)
+{
+    char *dup = strdup(path);
+    if (!dup)
+        die("out of memory");
+    const char *dir = dirname(dup);
+    if (access(dir, W_OK) != 0) {
+        int e = errno;
+        free(dup);
+        die("%s: cannot write '%s': %s", opt, path, strerror(e));
+    }
+    free(dup);
+}
+
+static char *png_path(const char *out)
+{
+    size_t n = strlen(out);
+    char *p = malloc(n + 5);
+    if (!p)
+        die("out of memory");
+    memcpy(p, out, n + 1);
+    if (n > 4 && !strcasecmp(out + n - 4, ".exr"))
+        p[n - 4] = '\0';
+    strcat(p, ".png");
+    return p;
+}
+
+static int cmd_scene(int argc, char **argv)
+{
+    const char *out = NULL;
+    size_t w = 320, h = 240;
+    static const struct option lo[] = {{"output", 1, 0, 'o'}, {"size", 1, 0, 's'}, {"help", 0, 0, 'h'}, {0, 0, 0, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
+        if (c == 'o')
+            out = optarg;
+        else if (c == 's')
+            parse_size(optarg, &w, &h);
+        else if (c == 'h') {
+            help();
+            return 0;
+        } else
+            die_usage("see 'nbt-scatter --help'");
+    }
+    if (optind + 1 != argc)
+        die_usage("scene: name one scene: %s", scene_names());
+    int kind = scene_parse(argv[optind]);
+    if (kind < 0)
+        die_usage("scene: '%s' is not accepted: expected one of %s", argv[optind], scene_names());
+    if (!out)
+        die_usage("scene: -o OUT.exr is required");
+    check_writable("-o", out);
+    nbt_image *im = scene_make(kind, w, h);
+    if (!im)
+        die("out of memory");
+    char err[512];
+    if (nbt_image_write_exr(im, out, NULL, 0, err, sizeof err) != NBT_OK)
+        die("%s", err);
+    nbt_image_free(im);
+    return 0;
+}
+
+typedef struct {
+    const char *in, *out, *compare, *corr_path;
+    double fov, sigma_t, albedo, B, tail;
+    int method; /* 0: ref-a, 1: ref-b */
+    int kernel; /* -1: the method's default */
+    int ray_depth, png;
+    long layers, threads;
+} opts;
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void parse(int argc, char **argv, opts *o)
+{
+    enum { O_FOV = 256, O_ST, O_ALB, O_B, O_DTH, O_METHOD, O_KERNEL, O_DEPTH, O_LAYERS, O_TAIL, O_THREADS, O_CMP,
+           O_NOPNG, O_CORR };
+    static const struct option lo[] = {
+        {"output", 1, 0, 'o'},    {"fov-y", 1, 0, O_FOV},     {"sigma-t", 1, 0, O_ST},    {"albedo", 1, 0, O_ALB},
+        {"B", 1, 0, O_B},         {"dtheta", 1, 0, O_DTH},    {"method", 1, 0, O_METHOD}, {"kernel", 1, 0, O_KERNEL},
+        {"depth", 1, 0, O_DEPTH}, {"layers", 1, 0, O_LAYERS}, {"tail", 1, 0, O_TAIL},     {"threads", 1, 0, O_THREADS},
+        {"compare", 1, 0, O_CMP}, {"no-png", 0, 0, O_NOPNG},  {"correction", 1, 0, O_CORR}, {"help", 0, 0, 'h'},
+        {0, 0, 0, 0}};
+    memset(o, 0, sizeof *o);
+    o->fov = o->sigma_t = o->albedo = o->B = NAN;
+    o->tail = 1e-7;
+    o->kernel = -1;
+    o->png = 1;
+    o->layers = 64;
+    int c;
+    nbt_skernel_kind kk;
+    while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
+        switch (c) {
+        case 'o': o->out = optarg; break;
+        case O_FOV: o->fov = opt_double("--fov-y", optarg, 0, 1, 180, 1); break;
+        case O_ST: o->sigma_t = opt_double("--sigma-t", optarg, 0, 1, 1e6, 0); break;
+        case O_ALB: o->albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); break;
+        case O_B:
+            if (!isnan(o->B))
+                die_usage("--B and --dtheta: give one phase width");
+            o->B = opt_double("--B", optarg, 0, 1, 1, 0);
+            break;
+        case O_DTH: {
+            if (!isnan(o->B))
+                die_usage("--B and --dtheta: give one phase width");
+            double d = opt_double("--dtheta", optarg, 0, 1, 90, 0) * M_PI / 180.0;
+            o->B = d * d / 4.0;
+            break;
+        }
+        case O_METHOD:
+            if (!strcmp(optarg, "ref-a"))
+                o->method = 0;
+            else if (!strcmp(optarg, "ref-b"))
+                o->method = 1;
+            else if (!strcmp(optarg, "shinya") || !strcmp(optarg, "shinya-literal") || !strcmp(optarg, "elek") ||
+                     !strcmp(optarg, "naive") || !strcmp(optarg, "nbt"))
+                die_usage("--method: '%s' (a GL method) is not in this build yet: use ref-a or ref-b", optarg);
+            else
+                die_usage("--method: '%s' is not accepted: expected ref-a or ref-b", optarg);
+            break;
+        case O_KERNEL:
+            if (nbt_skernel_parse(optarg, &kk) != NBT_OK)
+                die_usage("--kernel: '%s' is not accepted: expected moment, smallangle, corrected, single, lineint "
+                          "or elek", optarg);
+            o->kernel = (int)kk;
+            break;
+        case O_DEPTH:
+            if (strcmp(optarg, "plane") && strcmp(optarg, "ray"))
+                die_usage("--depth: '%s' is not accepted: expected plane or ray", optarg);
+            o->ray_depth = !strcmp(optarg, "ray");
+            break;
+        case O_LAYERS: o->layers = opt_long("--layers", optarg, 0, 4096); break;
+        case O_TAIL: o->tail = opt_double("--tail", optarg, 0, 1, 0.1, 0); break;
+        case O_THREADS: o->threads = opt_long("--threads", optarg, 0, 64); break;
+        case O_CMP: o->compare = optarg; break;
+        case O_NOPNG: o->png = 0; break;
+        case O_CORR: o->corr_path = optarg; break;
+        case 'h': help(); exit(0);
+        default: die_usage("see 'nbt-scatter --help'");
+        }
+    }
+    if (optind + 1 != argc)
+        die_usage("name one input render IN.exr (see 'nbt-scatter --help')");
+    o->in = argv[optind];
+    if (!o->out)
+        die_usage("-o OUT.exr is required");
+    if (isnan(o->fov))
+        die_usage("--fov-y DEG is required: the vertical field of view in (0, 180)");
+    if (isnan(o->sigma_t))
+        die_usage("--sigma-t X is required: the extinction coefficient, > 0");
+    if (isnan(o->albedo))
+        die_usage("--albedo A is required: in [0, 1]");
+    if (isnan(o->B))
+        die_usage("--B B or --dtheta DEG is required: the phase function's width");
+    if (o->kernel < 0)
+        o->kernel = o->method ? NBT_SKERNEL_ELEK : NBT_SKERNEL_MOMENT;
+    if ((o->kernel == NBT_SKERNEL_CORRECTED) != (o->corr_path != NULL))
+        die_usage("--kernel corrected and --correction FILE go together");
+}
+
+/* the render as the operators need it: distances along the ray */
+static float *ray_distances(const opts *o, const nbt_image *im, double dtheta)
+{
+    size_t np = im->w * im->h;
+    float *D = malloc(np * sizeof *D);
+    if (!D)
+        die("out of memory");
+    for (size_t y = 0; y < im->h; y++)
+        for (size_t x = 0; x < im->w; x++) {
+            size_t i = y * im->w + x;
+            double Z = im->z[i];
+            if (isnan(Z) || Z < 0)
+                die_usage("%s: depth Z at pixel (%zu, %zu) is %g: expected >= 0 (sky: >= 1e10 or inf)", o->in, x, y,
+                          Z);
+            if (Z >= NBT_SCREEN_SKY)
+                D[i] = INFINITY;
+            else
+                D[i] = (float)(o->ray_depth ? Z : nbt_screen_ray_distance(Z, im->w, im->h, dtheta, x, y));
+        }
+    for (size_t i = 0; i < 3 * np; i++)
+        if (!isfinite(im->rgb[i]))
+            die_usage("%s: colour at pixel (%zu, %zu) is not finite", o->in, (i / 3) % im->w, (i / 3) / im->w);
+    return D;
+}
+
+static void on_error(const char *reason, nbt_status st)
+{
+    (void)st;
+    fprintf(stderr, "nbt-scatter: %s\n", reason);
+}
+
+int main(int argc, char **argv)
+{
+    cli_prog = "nbt-scatter";
+    if (argc >= 2 && !strcmp(argv[1], "--version")) {
+        printf("nbt-scatter (nbt) %s\n", nbt_version());
+        return 0;
+    }
+    if (argc >= 2 && !strcmp(argv[1], "scene"))
+        return cmd_scene(argc - 1, argv + 1);
+    opts o;
+    parse(argc, argv, &o);
+    check_writable("-o", o.out);
+    nbt_set_error_handler(on_error);
+
+    char err[512];
+    nbt_image *im = NULL, *ref = NULL;
+    nbt_status st = nbt_image_read_exr(o.in, &im, err, sizeof err);
+    if (st != NBT_OK)
+        die_usage("%s", err);
+    if (!im->z)
+        die_usage("%s: no depth channel Z: nbt-scatter needs R, G, B and Z (Blender: enable the Z pass)", o.in);
+    if (o.compare) {
+        if (nbt_image_read_exr(o.compare, &ref, err, sizeof err) != NBT_OK)
+            die_usage("--compare: %s", err);
+        if (ref->w != im->w || ref->h != im->h)
+            die_usage("--compare: %s is %zux%zu, the input %zux%zu", o.compare, ref->w, ref->h, im->w, im->h);
+    }
+    nbt_kernel_correction corr;
+    if (o.corr_path && nbt_kernel_correction_read(o.corr_path, &corr, err, sizeof err) != NBT_OK)
+        die_usage("--correction: %s", err);
+
+    double dtheta = 2.0 * tan(o.fov * M_PI / 360.0) / (double)im->h;
+    float *D = ray_distances(&o, im, dtheta);
+    nbt_beam_medium m = nbt_beam_homogeneous(o.sigma_t, o.albedo, o.B);
+    nbt_screen_kernel *k = nbt_screen_kernel_alloc((nbt_skernel_kind)o.kernel, &m, o.corr_path ? &corr : NULL);
+    if (!k)
+        die("the kernel could not be set up");
+    size_t np = im->w * im->h;
+    double *S = malloc(np * 3 * sizeof *S), *T = malloc(np * sizeof *T);
+    if (!S || !T)
+        die("out of memory");
+    nbt_screen_input in = {im->w, im->h, im->rgb, D, dtheta};
+    nbt_screen_rule rule = o.method ? NBT_SCREEN_SOURCE : NBT_SCREEN_NEAR;
+    double t0 = now();
+    const char *how = "layered FFT";
+    st = o.layers > 0 ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, S, T)
+                      : NBT_EDOM;
+    if (st == NBT_EDOM) {
+        how = "brute force";
+        nbt_set_error_handler(NULL); /* EDOM from the layer count is expected; the input was checked */
+        st = nbt_screen_brute(&in, k, rule, o.tail, (unsigned)o.threads, S, T);
+        nbt_set_error_handler(on_error);
+    }
+    if (st != NBT_OK)
+        die("scattering failed: %s", nbt_strerror(st));
+    double t1 = now();
+    fprintf(stderr, "nbt-scatter: %s (operator %s, %s kernel) by %s, %zux%zu: %.3f s\n", o.method ? "ref-b" : "ref-a",
+            o.method ? "B" : "A", nbt_skernel_name((nbt_skernel_kind)o.kernel), how, im->w, im->h, t1 - t0);
+
+    if (ref) {
+        double *Sr = malloc(np * 3 * sizeof *Sr);
+        if (!Sr)
+            die("out of memory");
+        for (size_t i = 0; i < np * 3; i++)
+            Sr[i] = (double)ref->rgb[i] - T[i / 3] * (double)im->rgb[i];
+        nbt_screen_metrics mt;
+        if (nbt_screen_compare(&in, k, S, Sr, &mt) != NBT_OK)
+            die("comparison failed");
+        printf("relL1 %.6g relRMS %.6g edge %.6g bias %.6g max %.6g\n", mt.rel_l1, mt.rel_rms, mt.edge, mt.bias,
+               mt.max);
+        free(Sr);
+    }
+    /* the whole image: direct plus scattered */
+    nbt_image *out = nbt_image_alloc(im->w, im->h, 1);
+    if (!out)
+        die("out of memory");
+    for (size_t i = 0; i < np * 3; i++)
+        out->rgb[i] = (float)(T[i / 3] * im->rgb[i] + S[i]);
+    memcpy(out->z, im->z, np * sizeof *out->z);
+    char sst[32], ssa[32], sb[32], sfov[32];
+    snprintf(sst, sizeof sst, "%.17g", o.sigma_t);
+    snprintf(ssa, sizeof ssa, "%.17g", o.albedo);
+    snprintf(sb, sizeof sb, "%.17g", o.B);
+    snprintf(sfov, sizeof sfov, "%.17g", o.fov);
+    const char *attrs[] = {"nbt.method", o.method ? "ref-b" : "ref-a", "nbt.kernel",
+                           nbt_skernel_name((nbt_skernel_kind)o.kernel), "nbt.sigma_t", sst, "nbt.albedo", ssa, "nbt.B",
+                           sb, "nbt.fov_y", sfov, "nbt.depth", o.ray_depth ? "ray" : "plane", "nbt.version",
+                           nbt_version()};
+    /* preview first, so that a failed EXR write can take it back: all or nothing */
+    char *png = o.png ? png_path(o.out) : NULL;
+    if (png && scatter_preview_png(out, png) != 0)
+        die("cannot write the preview '%s'", png);
+    if (nbt_image_write_exr(out, o.out, attrs, sizeof attrs / sizeof attrs[0] / 2, err, sizeof err) != NBT_OK) {
+        if (png)
+            unlink(png);
+        die("%s", err);
+    }
+    free(png);
+    nbt_image_free(out);
+    nbt_image_free(im);
+    nbt_image_free(ref);
+    nbt_screen_kernel_free(k);
+    free(D);
+    free(S);
+    free(T);
+    return 0;
+}
