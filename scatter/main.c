@@ -273,7 +273,6 @@ int main(int argc, char **argv)
     opts o;
     parse(argc, argv, &o);
     check_writable("-o", o.out);
-    nbt_set_error_handler(on_error);
 
     char err[512];
     nbt_image *im = NULL, *ref = NULL;
@@ -292,6 +291,7 @@ int main(int argc, char **argv)
     if (o.corr_path && nbt_kernel_correction_read(o.corr_path, &corr, err, sizeof err) != NBT_OK)
         die_usage("--correction: %s", err);
 
+    nbt_set_error_handler(on_error); /* file errors above come back in err */
     double dtheta = 2.0 * tan(o.fov * M_PI / 360.0) / (double)im->h;
     float *D = ray_distances(&o, im, dtheta);
     nbt_beam_medium m = nbt_beam_homogeneous(o.sigma_t, o.albedo, o.B);

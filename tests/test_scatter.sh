@@ -1,0 +1,67 @@
+#!/bin/sh
+# tests/test_scatter.sh: nbt-scatter end to end: generated scenes, the layered
+# FFT against brute force through files, the direct part, --compare, and bad
+# input (exit 2, one message naming the problem, nothing written).
+. "${top_srcdir:-.}/tests/testlib.sh"
+S=$(abspath "${NBT_SCATTER:-./nbt-scatter}")
+MK=$(abspath "${NBT_MKEXR:-./tests/mkexr}")
+M="--fov-y 35 --sigma-t 0.15 --albedo 0.9 --dtheta 10"
+
+"$S" --version | grep -q "nbt-scatter (nbt)" && ok || bad "--version"
+"$S" --help | grep -q "Usage" && ok || bad "--help"
+for s in plane step layers slant blocks; do
+  "$S" scene $s -o "$tmp/$s.exr" --size 64x48 && [ -s "$tmp/$s.exr" ] && ok || bad "scene $s"
+done
+
+# layered depth (Z read as ray distance): FFT = brute force, both operators;
+# the files hold float, so the two agree to float round-off of the whole image
+for m in ref-a ref-b; do
+  "$S" "$tmp/layers.exr" -o "$tmp/fft-$m.exr" $M --depth ray --method $m --no-png 2>"$tmp/log" || bad "$m fft"
+  grep -q "layered FFT" "$tmp/log" && ok || bad "$m: layered scene uses the FFT: $(cat "$tmp/log")"
+  set -- $("$S" "$tmp/layers.exr" -o "$tmp/brute-$m.exr" $M --depth ray --method $m --layers 0 --no-png \
+    --compare "$tmp/fft-$m.exr" 2>"$tmp/log")
+  grep -q "brute force" "$tmp/log" && ok || bad "$m: --layers 0 uses brute force"
+  [ "$1" = relL1 ] && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 1e-6 && b < 1e-6 && b > -1e-6) }' && ok ||
+    bad "$m: brute force vs layered FFT through files: $*"
+done
+# operator B is not operator A: they differ by far more than round-off
+set -- $("$S" "$tmp/layers.exr" -o "$tmp/x.exr" $M --depth ray --method ref-b --no-png --compare "$tmp/fft-ref-a.exr" 2>/dev/null)
+awk -v a="$2" 'BEGIN { exit !(a > 0.02) }' && ok || bad "ref-b differs from ref-a: $*"
+# planar depth (Blender's Z): a continuous ray distance, brute force; a preview is written
+"$S" "$tmp/step.exr" -o "$tmp/step-out.exr" $M 2>"$tmp/log" && [ -s "$tmp/step-out.png" ] && ok || bad "step, planar depth"
+grep -q "brute force" "$tmp/log" && ok || bad "planar depth: brute force"
+# a clear medium (albedo 0, tiny sigma_t) leaves the image as it was, scaled by T
+"$S" "$tmp/plane.exr" -o "$tmp/clear.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 --depth ray --no-png 2>/dev/null
+set -- $("$S" "$tmp/plane.exr" -o "$tmp/y.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 --depth ray --no-png \
+  --compare "$tmp/clear.exr" 2>/dev/null)
+[ "$1" = relL1 ] && ok || bad "--compare prints its line: $*"
+# kernels by name, and a correction file for the corrected kernel
+for k in moment smallangle single lineint elek; do
+  "$S" "$tmp/layers.exr" -o "$tmp/k-$k.exr" $M --depth ray --kernel $k --no-png 2>/dev/null && ok || bad "--kernel $k"
+done
+printf 'beta 0.1 0 0 0 0 0 0\nalpha -0.05 0 0 0 0 0 0\n' >"$tmp/corr.txt"
+"$S" "$tmp/layers.exr" -o "$tmp/k-corr.exr" $M --depth ray --kernel corrected --correction "$tmp/corr.txt" --no-png \
+  2>/dev/null && ok || bad "--kernel corrected"
+
+# bad input: exit 2, one line, nothing written
+"$MK" "$tmp/noz.exr" noz && "$MK" "$tmp/nan.exr" nan && "$MK" "$tmp/neg.exr" negative && "$MK" "$tmp/sky.exr" inf || bad mkexr
+o="$tmp/out.exr"
+expect_usage "no Z channel" "no depth channel Z" "$S" "$tmp/noz.exr" -o "$o" $M
+expect_usage "NaN depth" "pixel (3, 5) is nan" "$S" "$tmp/nan.exr" -o "$o" $M
+expect_usage "negative depth" "pixel (3, 5) is -2" "$S" "$tmp/neg.exr" -o "$o" $M
+"$S" "$tmp/sky.exr" -o "$tmp/sky-out.exr" $M --no-png 2>/dev/null && ok || bad "an inf depth is sky"
+expect_usage "unknown method" "--method: 'magic'" "$S" "$tmp/plane.exr" -o "$o" $M --method magic
+expect_usage "unknown kernel" "--kernel: 'x'" "$S" "$tmp/plane.exr" -o "$o" $M --kernel x
+expect_usage "fov 0" "--fov-y: '0'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 0 --sigma-t 0.1 --albedo 0.9 --B 0.01
+expect_usage "fov 180" "--fov-y: '180'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 180 --sigma-t 0.1 --albedo 0.9 --B 0.01
+expect_usage "albedo" "--albedo: '1.2'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 30 --sigma-t 0.1 --albedo 1.2 --B 0.01
+expect_usage "no phase width" "--B B or --dtheta" "$S" "$tmp/plane.exr" -o "$o" --fov-y 30 --sigma-t 0.1 --albedo 0.9
+expect_usage "both widths" "give one phase width" "$S" "$tmp/plane.exr" -o "$o" $M --B 0.01
+expect_usage "missing input" "nonexistent.exr" "$S" "$tmp/nonexistent.exr" -o "$o" $M
+expect_usage "not an EXR" "tmp" "$S" "$tmp/corr.txt" -o "$o" $M
+expect_usage "compare size" "--compare" "$S" "$tmp/plane.exr" -o "$o" $M --compare "$tmp/noz.exr"
+expect_usage "scene name" "scene: 'moon'" "$S" scene moon -o "$o"
+"$S" "$tmp/plane.exr" -o "$tmp/nodir/out.exr" $M 2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && grep -q "No such file" "$tmp/err" && ok || bad "unwritable output: rc $rc, $(cat "$tmp/err")"
+[ ! -e "$o" ] && [ ! -e "$tmp/out.png" ] && [ -z "$(ls "$tmp" | grep tmp)" ] && ok || bad "nothing written on bad input"
+finish
