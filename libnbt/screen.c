@@ -284,7 +284,8 @@ long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail)
 
 /* ---- per-pixel kernels ---- */
 
-nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, nbt__pkern *pk)
+nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, long clip,
+                             nbt__pkern *pk)
 {
     nbt_screen_kern kn;
     nbt_status st = nbt_screen_kernel_eval(k, D, &kn);
@@ -304,6 +305,8 @@ nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta
         if (kn.scale[a] / px > pk->radius)
             pk->radius = kn.scale[a] / px;
     }
+    if (pk->R > clip)
+        pk->R = clip;
     pk->n = nbt__kern_nodes(&kn, px, pk->sig, pk->wt, SCREEN_MAX_NODES);
     return NBT_OK;
 }
@@ -367,6 +370,11 @@ nbt_status nbt_screen_check(const nbt_screen_input *in)
     return NBT_OK;
 }
 
+long nbt__clip(const nbt_screen_input *in)
+{
+    return (long)(in->w > in->h ? in->w : in->h) - 1;
+}
+
 double nbt__depth_key(float D)
 {
     return D >= NBT_SCREEN_SKY ? INFINITY : (double)D;
@@ -411,7 +419,7 @@ static nbt_status chunk_pass(size_t chunk, unsigned thread, void *vp)
             size_t i = y * in->w + x;
             const float *c = in->rgb + 3 * i;
             int spread = c[0] != 0 || c[1] != 0 || c[2] != 0, gather = b->rule == NBT_SCREEN_NEAR;
-            st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, &pk);
+            st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, nbt__clip(in), &pk);
             if (b->T)
                 b->T[i] = pk.T;
             if (st != NBT_OK || pk.n == 0 || !(spread || gather))
@@ -493,7 +501,7 @@ nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kerne
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < np && st == NBT_OK; i++) {
         nbt__pkern pk;
-        st = nbt__pixel_kernel(k, in->D[i], in->dtheta, 1e-3, &pk);
+        st = nbt__pixel_kernel(k, in->D[i], in->dtheta, 1e-3, nbt__clip(in), &pk);
         rad[i] = pk.radius;
     }
     /* mark the band: a disc of 2 radii around each discontinuity edge */

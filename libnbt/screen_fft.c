@@ -46,6 +46,7 @@ typedef struct {
     const nbt_screen_input *in;
     nbt_screen_rule rule;
     size_t px, py, nc, layer;
+    long rx, ry; /* kernel extent kept: min(R, image size - 1) per axis */
     const unsigned short *lid;
     const nbt__pkern *pk;
     double *rbuf[4];
@@ -68,8 +69,8 @@ static nbt_status forward_task(size_t t, unsigned thread, void *vp)
         size_t cap = 0;
         nbt_status st = pk->n ? nbt__pixel_weights(pk, &wq, &cell, &cap) : NBT_OK;
         if (st == NBT_OK && pk->n)
-            for (long dy = -pk->R; dy <= pk->R; dy++)
-                for (long dx = -pk->R; dx <= pk->R; dx++) {
+            for (long dy = -(pk->R < f->ry ? pk->R : f->ry); dy <= pk->R && dy <= f->ry; dy++)
+                for (long dx = -(pk->R < f->rx ? pk->R : f->rx); dx <= pk->R && dx <= f->rx; dx++) {
                     size_t X = (size_t)((dx + (long)f->px) % (long)f->px), Y = (size_t)((dy + (long)f->py) % (long)f->py);
                     r[Y * f->px + X] = wq[labs(dy) * (pk->R + 1) + labs(dx)];
                 }
@@ -184,7 +185,7 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
     }
     long R = 0;
     for (size_t l = 0; l < nl && st == NBT_OK; l++) {
-        st = nbt__pixel_kernel(k, isinf(keys[l]) ? INFINITY : keys[l], in->dtheta, tail, &pk[l]);
+        st = nbt__pixel_kernel(k, isinf(keys[l]) ? INFINITY : keys[l], in->dtheta, tail, nbt__clip(in), &pk[l]);
         if (pk[l].n && pk[l].R > R)
             R = pk[l].R;
     }
@@ -198,8 +199,10 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
     f.lid = lid;
     f.pk = pk;
     f.S = S;
-    f.px = good_size(in->w + (size_t)R > 2 * (size_t)R + 1 ? in->w + (size_t)R : 2 * (size_t)R + 1);
-    f.py = good_size(in->h + (size_t)R > 2 * (size_t)R + 1 ? in->h + (size_t)R : 2 * (size_t)R + 1);
+    f.rx = R < (long)in->w - 1 ? R : (long)in->w - 1;
+    f.ry = R < (long)in->h - 1 ? R : (long)in->h - 1;
+    f.px = good_size(in->w + (size_t)f.rx);
+    f.py = good_size(in->h + (size_t)f.ry);
     f.nc = f.py * (f.px / 2 + 1);
     for (int i = 0; i < 4; i++)
         if (!(f.rbuf[i] = fftw_malloc(f.px * f.py * sizeof(double))))

@@ -24,10 +24,14 @@ void nbt__gl_nodes(size_t n, double *x, double *w);
 double nbt__gauss_cell(double s, long d);
 /* An evaluated kernel as Gaussian nodes in units of px (world length per pixel). */
 size_t nbt__kern_nodes(const nbt_screen_kern *kn, double px, double *sig, double *wt, size_t max);
-/* The kernel of a pixel at depth D. */
-nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, nbt__pkern *pk);
+/* The kernel of a pixel at depth D; R is clipped to clip (offsets beyond the
+ * image's size never pair two of its pixels). */
+nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, long clip,
+                             nbt__pkern *pk);
 /* Quadrant weights (*wq)[j*(R+1) + i] of offsets (i, j) >= 0; buffers grow as needed. */
 nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap);
+/* The largest offset two pixels of the image can have. */
+long nbt__clip(const nbt_screen_input *in);
 /* Depth for ordering: sky as +infinity. */
 double nbt__depth_key(float D);
 
