@@ -44,7 +44,7 @@ int main(int argc, char **argv)
             return 1;
         scene(w, h, rgb, D);
         double fov = 40.0, dth = 2 * tan(fov * M_PI / 360) / (double)h;
-        nbt_screen_input in = {w, h, rgb, D, dth};
+        nbt_screen_input in = {w, h, rgb, D, dth, NULL};
         double t0 = now();
         nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, tail, 8, 0, S1, NULL);
         double t1 = now();

@@ -311,6 +311,28 @@ nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta
     return NBT_OK;
 }
 
+nbt_status nbt__input_kernel(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, double tail,
+                             nbt__pkern *pk)
+{
+    if (!in->pix)
+        return nbt__pixel_kernel(k, in->D[i], in->dtheta, tail, nbt__clip(in), pk);
+    const nbt_screen_pixkern *p = &in->pix[i];
+    nbt_screen_kern kn = {.T = p->T, .n = 0};
+    add_atom(&kn, NBT_ATOM_ERFC, p->M0, p->beta_px);
+    pk->T = p->T;
+    pk->n = 0;
+    pk->R = 0;
+    pk->mass = kn.n ? p->M0 : 0;
+    pk->radius = kn.n ? p->beta_px : 0;
+    if (kn.n == 0)
+        return NBT_OK;
+    pk->R = nbt_screen_atom_radius(NBT_ATOM_ERFC, p->beta_px, tail);
+    if (pk->R > nbt__clip(in))
+        pk->R = nbt__clip(in);
+    pk->n = nbt__kern_nodes(&kn, 1.0, pk->sig, pk->wt, SCREEN_MAX_NODES);
+    return NBT_OK;
+}
+
 /* Quadrant weights wq[j*(R+1) + i] for offsets (i, j) >= 0. */
 nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap)
 {
@@ -363,6 +385,9 @@ nbt_status nbt_screen_check(const nbt_screen_input *in)
     for (size_t i = 0; i < in->w * in->h; i++) {
         if (!(in->D[i] >= 0))
             NBT_FAIL(NBT_EDOM, "screen: a depth is negative or NaN");
+        if (in->pix && !(in->pix[i].T >= 0 && in->pix[i].T <= 1 && in->pix[i].M0 >= 0 && isfinite(in->pix[i].M0) &&
+                         in->pix[i].beta_px >= 0 && isfinite(in->pix[i].beta_px)))
+            NBT_FAIL(NBT_EDOM, "screen: a per-pixel kernel is out of range (T in [0,1], M0 and beta >= 0, finite)");
         for (int c = 0; c < 3; c++)
             if (!isfinite(in->rgb[3 * i + c]))
                 NBT_FAIL(NBT_EDOM, "screen: a colour is not finite");
@@ -419,7 +444,7 @@ static nbt_status chunk_pass(size_t chunk, unsigned thread, void *vp)
             size_t i = y * in->w + x;
             const float *c = in->rgb + 3 * i;
             int spread = c[0] != 0 || c[1] != 0 || c[2] != 0, gather = b->rule == NBT_SCREEN_NEAR;
-            st = nbt__pixel_kernel(b->k, in->D[i], in->dtheta, b->tail, nbt__clip(in), &pk);
+            st = nbt__input_kernel(b->k, in, i, b->tail, &pk);
             if (b->T)
                 b->T[i] = pk.T;
             if (st != NBT_OK || pk.n == 0 || !(spread || gather))
@@ -501,7 +526,7 @@ nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kerne
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < np && st == NBT_OK; i++) {
         nbt__pkern pk;
-        st = nbt__pixel_kernel(k, in->D[i], in->dtheta, 1e-3, nbt__clip(in), &pk);
+        st = nbt__input_kernel(k, in, i, 1e-3, &pk);
         rad[i] = pk.radius;
     }
     /* mark the band: a disc of 2 radii around each discontinuity edge */

@@ -144,6 +144,8 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
         return st;
     if (!(tail > 0 && tail < 1))
         NBT_FAIL(NBT_EDOM, "screen: tail must lie in (0, 1)");
+    if (in->pix || !k)
+        NBT_FAIL(NBT_EINVAL, "screen: the layered FFT needs one kernel per depth (no per-pixel kernels)");
     if (max_layers < 1 || max_layers > 4096)
         NBT_FAIL(NBT_EDOM, "screen: max_layers must lie in [1, 4096]");
     size_t np = in->w * in->h, nl = 0;

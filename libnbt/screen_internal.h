@@ -28,6 +28,9 @@ size_t nbt__kern_nodes(const nbt_screen_kern *kn, double px, double *sig, double
  * image's size never pair two of its pixels). */
 nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, long clip,
                              nbt__pkern *pk);
+/* The kernel of pixel i of the input: its own (in->pix) or the family's at its depth. */
+nbt_status nbt__input_kernel(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, double tail,
+                             nbt__pkern *pk);
 /* Quadrant weights (*wq)[j*(R+1) + i] of offsets (i, j) >= 0; buffers grow as needed. */
 nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap);
 /* The largest offset two pixels of the image can have. */

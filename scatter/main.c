@@ -302,7 +302,7 @@ int main(int argc, char **argv)
     double *S = malloc(np * 3 * sizeof *S), *T = malloc(np * sizeof *T);
     if (!S || !T)
         die("out of memory");
-    nbt_screen_input in = {im->w, im->h, im->rgb, D, dtheta};
+    nbt_screen_input in = {im->w, im->h, im->rgb, D, dtheta, NULL};
     nbt_screen_rule rule = o.method ? NBT_SCREEN_SOURCE : NBT_SCREEN_NEAR;
     double t0 = now();
     const char *how = "layered FFT";

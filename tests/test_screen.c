@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
 
@@ -199,7 +200,7 @@ static void scene_free(scene *s)
 
 static nbt_screen_input as_input(const scene *s, double dtheta)
 {
-    nbt_screen_input in = {s->w, s->h, s->rgb, s->D, dtheta};
+    nbt_screen_input in = {s->w, s->h, s->rgb, s->D, dtheta, NULL};
     return in;
 }
 
@@ -361,10 +362,128 @@ static void test_operators(void)
     nbt_screen_kernel_free(k);
 }
 
+
+/* ---- heterogeneous media ---- */
+
+static double dens_const(const double p[3], void *ctx)
+{
+    (void)p;
+    return *(double *)ctx;
+}
+
+/* world density along the camera's z axis: 1 + 0.6 sin(0.9 t) at distance t */
+static double dens_wave(const double p[3], void *ctx)
+{
+    (void)ctx;
+    return 1.0 + 0.6 * sin(0.9 * -p[2]);
+}
+
+/* the same seen from a beam starting at the surface (distance D): z' = D - t */
+static double beam_wave(double z, void *ctx)
+{
+    double D = *(double *)ctx;
+    return 1.0 + 0.6 * sin(0.9 * (D - z));
+}
+
+static void test_medium(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(0.31, 0.87, 0.0123);
+    const size_t W = 5, H = 5;
+    float rgb[5 * 5 * 3] = {0}, D[5 * 5];
+    for (size_t i = 0; i < W * H; i++)
+        D[i] = (float)(4.0 + 0.5 * (double)i);
+    D[3] = 1e10f; /* sky */
+    nbt_screen_input in = {W, H, rgb, D, 0.02, NULL};
+    nbt_camera cam = {{0, 0, 0}, {0, 0, -1}, {0, 1, 0}};
+    nbt_screen_pixkern pix[25];
+    double err, rho = 1.0;
+    nbt_status st = nbt_screen_medium_kernels(&in, &m, dens_const, &rho, &cam, 0.002, 20.0, 2, pix, &err);
+    t_true(st == NBT_OK, "medium kernels: constant density");
+    double worst = 0;
+    for (size_t i = 0; i < W * H; i++) {
+        double Dm = i == 3 ? 20.0 : D[i], M0, M2, alpha, beta;
+        nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, Dm, &M0, &M2, NULL);
+        nbt_beam_kernel_params(M0, M2, &alpha, &beta);
+        worst = fmax(worst, fabs(pix[i].beta_px - beta / (Dm * 0.02)) / (beta / (Dm * 0.02)));
+        t_rel(pix[i].M0, M0, 1e-11, "medium, constant density: M0 = eq. 25 (pixel %zu)", i);
+        t_rel(pix[i].T, exp(-m.sigma_t * Dm), 1e-11, "medium, constant density: T (pixel %zu)", i);
+    }
+    t_true(worst < 1e-6, "medium, constant density: beta = eq. 26 (worst rel %.2g)", worst);
+    t_true(worst <= err && err < 1e-5, "medium: the step estimate (%.2g) bounds the true error (%.2g)", err, worst);
+    /* a smooth density along the central ray against nbt_beam_moments' adaptive quadrature */
+    st = nbt_screen_medium_kernels(&in, &m, dens_wave, NULL, &cam, 0.004, 20.0, 1, pix, &err);
+    size_t c = 2 * W + 2;
+    double Dc = D[c], M0, M2, alpha, beta;
+    nbt_beam_medium mb = m;
+    mb.rho_fn = beam_wave;
+    mb.rho_data = &Dc;
+    nbt_beam_moments(&mb, NBT_BEAM_ISHIMARU, Dc, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, &alpha, &beta);
+    t_rel(pix[c].M0, M0, 1e-5, "medium, smooth density: M0 vs adaptive eq. 28");
+    t_rel(pix[c].beta_px, beta / (Dc * 0.02), 3 * err + 1e-9, "medium, smooth density: beta vs adaptive eq. 29 (3 x estimate %.2g)", err);
+    t_rel(pix[c].T, exp(-m.sigma_t * nbt_beam_zeta(&mb, Dc)), 1e-5, "medium, smooth density: T");
+    /* the operators take per-pixel kernels: equal ones reproduce the family */
+    nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
+    for (size_t i = 0; i < W * H; i++) {
+        nbt_screen_kern kn;
+        nbt_screen_kernel_eval(k, D[i], &kn);
+        pix[i].T = kn.T;
+        pix[i].M0 = kn.n ? kn.mass[0] : 0;
+        pix[i].beta_px = kn.n ? kn.scale[0] / (D[i] * 0.02) : 0;
+        rgb[3 * i] = (float)(i % 4), rgb[3 * i + 1] = 1, rgb[3 * i + 2] = (float)(i % 3);
+    }
+    double S1[75], S2[75];
+    nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, 1e-9, 1, S1, NULL);
+    in.pix = pix;
+    nbt_screen_brute(&in, NULL, NBT_SCREEN_NEAR, 1e-9, 1, S2, NULL);
+    double d = 0;
+    for (int i = 0; i < 75; i++)
+        d = fmax(d, fabs(S1[i] - S2[i]) / fabs(S1[i] + 1e-300));
+    t_true(d < 1e-12, "per-pixel kernels = the family's (max rel %.2g)", d);
+    t_true(nbt_screen_layered(&in, NULL, NBT_SCREEN_NEAR, 1e-9, 8, 1, S2, NULL) == NBT_EINVAL,
+           "layered FFT refuses per-pixel kernels");
+    nbt_screen_kernel_free(k);
+
+    /* grids: trilinear at centres and between them, zero outside, raw round trip */
+    double o[3] = {-1.0, 0.5, 2.0};
+    nbt_grid *g = nbt_grid_alloc(4, 3, 2, o, 0.5);
+    for (size_t i = 0; i < 24; i++)
+        g->data[i] = (float)(0.25 * (double)i);
+    double p[3] = {-1.0 + 0.5, 0.5 + 0.5, 2.0 + 0.5};
+    t_rel(nbt_grid_density(p, g), g->data[(1 * 3 + 1) * 4 + 1], 1e-15, "grid: value at a voxel centre");
+    double q[3] = {-1.0 + 0.75, 0.5 + 0.25, 2.0 + 0.25}; /* halfway in x, y, z from voxel (1,0,0) */
+    double want = 0;
+    for (int cz = 0; cz < 2; cz++)
+        for (int cy = 0; cy < 2; cy++)
+            for (int cx = 0; cx < 2; cx++)
+                want += 0.125 * g->data[(cz * 3 + cy) * 4 + 1 + cx];
+    t_rel(nbt_grid_density(q, g), want, 1e-14, "grid: trilinear midpoint");
+    double out[3] = {-1.3, 0.5, 2.0};
+    t_abs(nbt_grid_density(out, g), 0, 0, "grid: zero outside the box");
+    double o2[3] = {0.3, 1.0, -5.0}, dz[3] = {0, 0, 1};
+    t_rel(nbt_grid_exit(g, o2, dz), 5.0 + 2.0 + 0.75, 1e-14, "grid: exit distance along z");
+    char err2[256], path[64];
+    snprintf(path, sizeof path, "/tmp/nbt-test-grid-%ld.raw", (long)getpid());
+    nbt_grid *g2 = NULL;
+    t_true(nbt_grid_write_raw(g, path, err2, sizeof err2) == NBT_OK &&
+               nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_OK && g2->nx == 4 && g2->nz == 2 &&
+               g2->voxel == 0.5 && g2->origin[0] == -1.0 && !memcmp(g2->data, g->data, 24 * sizeof(float)),
+           "grid: raw round trip");
+    nbt_grid_free(g2);
+    g->data[7] = -1.0f;
+    nbt_grid_write_raw(g, path, err2, sizeof err2);
+    t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EFORMAT && strstr(err2, "(3, 1, 0)") && !g2,
+           "grid: a negative voxel is refused and named: %s", err2);
+    unlink(path);
+    t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EIO, "grid: missing file");
+    nbt_grid_free(g);
+}
+
 int main(void)
 {
     test_pixel_integrals();
     test_kernels();
     test_operators();
+    test_medium();
     return t_done();
 }

@@ -12,6 +12,7 @@
 #include <nbt/mc.h>
 #include <nbt/screen.h>
 #include <nbt/image.h>
+#include <nbt/grid.h>
 
 #ifdef __cplusplus
 extern "C" {

@@ -93,11 +93,19 @@ long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail);
 
 typedef enum { NBT_SCREEN_NEAR, NBT_SCREEN_SOURCE } nbt_screen_rule;
 
+/* A moment kernel of one pixel (heterogeneous media): transmittance,
+ * scattered mass and beta in pixels. */
+typedef struct {
+    double T, M0, beta_px;
+} nbt_screen_pixkern;
+
 typedef struct {
     size_t w, h;
     const float *rgb;     /* c: rgb[(y*w + x)*3 + ch] */
-    const float *D;       /* distance along the ray, >= 0 (sky: see above) */
+    const float *D;       /* distance along the ray, >= 0 (sky: see above); orders the pixels */
     double dtheta;        /* pixel angle in radians, > 0 */
+    const nbt_screen_pixkern *pix; /* NULL: kernels from the family over D; else one per pixel
+                                      (nbt_screen_medium_kernels), and the family may be NULL */
 } nbt_screen_input;
 
 /* Checks sizes, dtheta and every depth (finite >= 0, or sky); NBT_EDOM with
@@ -133,6 +141,33 @@ typedef struct {
  * differ by more than 5% of the nearer one (either side sky counts). */
 nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kernel *k, const double *S,
                               const double *ref, nbt_screen_metrics *m);
+
+/* ---- heterogeneous media (Shinya et al. eq. 28/29) ---- */
+
+/* Density at a world point (>= 0; multiplies sigma_t and sigma_s). */
+typedef double (*nbt_density_fn)(const double p[3], void *ctx);
+
+/* A pinhole camera: position, view direction, up (need not be unit or
+ * orthogonal to fwd). Row 0 of the image is at the top (towards up). */
+typedef struct {
+    double pos[3], fwd[3], up[3];
+} nbt_camera;
+
+/* The moment kernel of every pixel through the density: each view ray is
+ * a beam from its surface (distance D) to the camera, zeta(z') = int rho
+ * along it (trapezoid rule, steps of at most `step` world units), M0 by
+ * eq. 28, M2 by eq. 29 (trapezoid), then beta^2 = 1.5 M2/M0 and
+ * T = exp(-sigma_t zeta(D)). m gives sigma_t, albedo and the lobes (its
+ * layers are ignored). Sky pixels are beams from sky_dist (the far side of
+ * the medium). *max_err (may be NULL) gets the largest relative change of
+ * M0 or M2 between step and 2 step, over pixels (an estimate of the
+ * discretisation error). */
+nbt_status nbt_screen_medium_kernels(const nbt_screen_input *in, const nbt_beam_medium *m, nbt_density_fn rho,
+                                     void *ctx, const nbt_camera *cam, double step, double sky_dist,
+                                     unsigned nthreads, nbt_screen_pixkern *pix, double *max_err);
+
+/* The unit direction of pixel (x, y)'s view ray. */
+void nbt_camera_ray(const nbt_camera *cam, size_t w, size_t h, double dtheta, size_t x, size_t y, double dir[3]);
 
 /* Distance along the ray from planar depth Z (along the view axis) for a
  * pinhole camera with pixel pitch dtheta on the unit-distance image plane,
