@@ -39,7 +39,8 @@ typedef struct {
     nbt_density_fn rho;
     void *ctx;
     const nbt_camera *cam;
-    double step, sky, bm, *err_row;
+    double step, bm, *err_row;
+    const float *sky;
     nbt_screen_pixkern *pix;
 } march_ctx;
 
@@ -80,11 +81,12 @@ static nbt_status march_row(size_t y, unsigned thread, void *vp)
     c->err_row[y] = 0;
     for (size_t x = 0; x < in->w; x++) {
         size_t i = y * in->w + x;
-        double dir[3], D = in->D[i] >= NBT_SCREEN_SKY ? c->sky : in->D[i];
+        int sky = in->D[i] >= NBT_SCREEN_SKY;
+        double dir[3], D = sky ? (c->sky ? c->sky[i] : INFINITY) : in->D[i];
         nbt_camera_ray(c->cam, in->w, in->h, in->dtheta, x, y, dir);
         nbt_screen_pixkern *p = &c->pix[i];
-        p->T = 1, p->M0 = 0, p->beta_px = 0;
-        if (!(D > 0))
+        p->T = isinf(D) ? 0 : 1, p->M0 = 0, p->beta_px = 0;
+        if (!(D > 0) || isinf(D))
             continue;
         size_t N = (size_t)ceil(D / c->step);
         if (N < 2)
@@ -112,8 +114,6 @@ static nbt_status march_row(size_t y, unsigned thread, void *vp)
         moments(c, r, zeta, N, 2, D, &M0b, &M2b, &Zb);
         moments(c, r, zeta, N, 1, D, &M0, &M2, &Z);
         p->T = exp(-c->m->sigma_t * Z);
-        if (in->D[i] >= NBT_SCREEN_SKY && !(Z > 0))
-            p->T = 1; /* sky seen through clear air */
         double alpha, beta;
         nbt_beam_kernel_params(M0, M2, &alpha, &beta);
         p->M0 = beta > 0 ? M0 : 0;
@@ -128,7 +128,7 @@ static nbt_status march_row(size_t y, unsigned thread, void *vp)
 }
 
 nbt_status nbt_screen_medium_kernels(const nbt_screen_input *in, const nbt_beam_medium *m, nbt_density_fn rho,
-                                     void *ctx, const nbt_camera *cam, double step, double sky_dist,
+                                     void *ctx, const nbt_camera *cam, double step, const float *sky_D,
                                      unsigned nthreads, nbt_screen_pixkern *pix, double *max_err)
 {
     nbt_screen_input probe = *in;
@@ -140,13 +140,16 @@ nbt_status nbt_screen_medium_kernels(const nbt_screen_input *in, const nbt_beam_
         return st;
     if (!rho || !cam)
         NBT_FAIL(NBT_EINVAL, "screen: a density and a camera are needed");
-    if (!(step > 0) || !isfinite(step) || !(sky_dist >= 0) || !isfinite(sky_dist))
-        NBT_FAIL(NBT_EDOM, "screen: step must be > 0 and sky_dist >= 0, both finite");
+    if (!(step > 0) || !isfinite(step))
+        NBT_FAIL(NBT_EDOM, "screen: step must be finite and > 0");
+    for (size_t i = 0; sky_D && i < in->w * in->h; i++)
+        if (in->D[i] >= NBT_SCREEN_SKY && !(sky_D[i] >= 0 && isfinite(sky_D[i])))
+            NBT_FAIL(NBT_EDOM, "screen: sky_D must be finite and >= 0 at sky pixels");
     double r[3];
     cross(cam->fwd, cam->up, r);
     if (!(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] > 0))
         NBT_FAIL(NBT_EDOM, "screen: the camera's up must not be parallel to its view direction");
-    march_ctx c = {in, m, rho, ctx, cam, step, sky_dist, 0, malloc(in->h * sizeof(double)), pix};
+    march_ctx c = {in, m, rho, ctx, cam, step, 0, malloc(in->h * sizeof(double)), sky_D, pix};
     if (!c.err_row)
         NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
     for (size_t l = 0; l < m->nlobes; l++)

@@ -15,6 +15,9 @@
 #include "../gen/cli.h"
 #include "../gen/preview.h"
 #include "scatter.h"
+#ifdef HAVE_OPENVDB
+#include "vdb_shim.h"
+#endif
 
 static void help(void)
 {
@@ -42,7 +45,14 @@ static void help(void)
          "  --threads N            0 = all cores (default)\n"
          "  --compare REF.exr      print 'relL1 X relRMS X edge X bias X max X' for the scattered part\n"
          "                         against REF.exr (an nbt-scatter output for the same input and medium)\n"
-         "  --no-png               no preview\n\n"
+         "  --no-png               no preview\n"
+         "  --density FILE         heterogeneous medium: a density grid (.raw: nbt's raw grid; .vdb: OpenVDB,\n"
+         "                         the float grid 'density' or --grid NAME) scaling sigma_t; per-pixel kernels\n"
+         "                         from eq. 28/29 along each view ray (ref-a, moment kernel). The grid's box\n"
+         "                         must hold the camera and every visible surface.\n"
+         "  --camera X,Y,Z --look-at X,Y,Z --up X,Y,Z\n"
+         "                         the camera in the grid's world (default 0,0,0 looking at 0,0,-1, up 0,1,0)\n"
+         "  --step S               ray-march step in world units (default half a voxel)\n\n"
          "'scene NAME' writes a generated test render: plane, step, layers, slant, blocks (default\n"
          "size 320x240). Exit status: 0 success, 1 failure, 2 bad usage.");
 }
@@ -77,6 +87,19 @@ static void check_writable(const char *opt, const char *path)
         die("%s: cannot write '%s': %s", opt, path, strerror(e));
     }
     free(dup);
+}
+
+static void parse_vec3(const char *opt, const char *arg, double v[3])
+{
+    char *end;
+    const char *p = arg;
+    for (int i = 0; i < 3; i++) {
+        errno = 0;
+        v[i] = strtod(p, &end);
+        if (end == p || errno == ERANGE || !isfinite(v[i]) || *end != (i < 2 ? ',' : '\0'))
+            die_usage("%s: '%s' is not accepted: expected X,Y,Z (three finite numbers)", opt, arg);
+        p = end + 1;
+    }
 }
 
 static char *png_path(const char *out)
@@ -128,8 +151,9 @@ static int cmd_scene(int argc, char **argv)
 }
 
 typedef struct {
-    const char *in, *out, *compare, *corr_path;
-    double fov, sigma_t, albedo, B, tail;
+    const char *in, *out, *compare, *corr_path, *density, *grid_name;
+    double fov, sigma_t, albedo, B, tail, step;
+    double cam[3], look[3], up[3];
     int method; /* 0: ref-a, 1: ref-b */
     int kernel; /* -1: the method's default */
     int ray_depth, png;
@@ -146,12 +170,14 @@ static double now(void)
 static void parse(int argc, char **argv, opts *o)
 {
     enum { O_FOV = 256, O_ST, O_ALB, O_B, O_DTH, O_METHOD, O_KERNEL, O_DEPTH, O_LAYERS, O_TAIL, O_THREADS, O_CMP,
-           O_NOPNG, O_CORR };
+           O_NOPNG, O_CORR, O_DENS, O_GRID, O_CAM, O_LOOK, O_UP, O_STEP };
     static const struct option lo[] = {
         {"output", 1, 0, 'o'},    {"fov-y", 1, 0, O_FOV},     {"sigma-t", 1, 0, O_ST},    {"albedo", 1, 0, O_ALB},
         {"B", 1, 0, O_B},         {"dtheta", 1, 0, O_DTH},    {"method", 1, 0, O_METHOD}, {"kernel", 1, 0, O_KERNEL},
         {"depth", 1, 0, O_DEPTH}, {"layers", 1, 0, O_LAYERS}, {"tail", 1, 0, O_TAIL},     {"threads", 1, 0, O_THREADS},
         {"compare", 1, 0, O_CMP}, {"no-png", 0, 0, O_NOPNG},  {"correction", 1, 0, O_CORR}, {"help", 0, 0, 'h'},
+        {"density", 1, 0, O_DENS},  {"grid", 1, 0, O_GRID},     {"camera", 1, 0, O_CAM},    {"look-at", 1, 0, O_LOOK},
+        {"up", 1, 0, O_UP},         {"step", 1, 0, O_STEP},
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->fov = o->sigma_t = o->albedo = o->B = NAN;
@@ -159,6 +185,8 @@ static void parse(int argc, char **argv, opts *o)
     o->kernel = -1;
     o->png = 1;
     o->layers = 64;
+    o->look[2] = -1; /* camera at the origin looking down -z, +y up (OpenGL's camera space) */
+    o->up[1] = 1;
     int c;
     nbt_skernel_kind kk;
     while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
@@ -207,6 +235,12 @@ static void parse(int argc, char **argv, opts *o)
         case O_CMP: o->compare = optarg; break;
         case O_NOPNG: o->png = 0; break;
         case O_CORR: o->corr_path = optarg; break;
+        case O_DENS: o->density = optarg; break;
+        case O_GRID: o->grid_name = optarg; break;
+        case O_CAM: parse_vec3("--camera", optarg, o->cam); break;
+        case O_LOOK: parse_vec3("--look-at", optarg, o->look); break;
+        case O_UP: parse_vec3("--up", optarg, o->up); break;
+        case O_STEP: o->step = opt_double("--step", optarg, 0, 1, 1e30, 0); break;
         case 'h': help(); exit(0);
         default: die_usage("see 'nbt-scatter --help'");
         }
@@ -226,6 +260,9 @@ static void parse(int argc, char **argv, opts *o)
         die_usage("--B B or --dtheta DEG is required: the phase function's width");
     if (o->kernel < 0)
         o->kernel = o->method ? NBT_SKERNEL_ELEK : NBT_SKERNEL_MOMENT;
+    if (o->density && (o->method != 0 || o->kernel != NBT_SKERNEL_MOMENT))
+        die_usage("--density: heterogeneous media use operator A with the moment kernel (eq. 28/29): "
+                  "--method ref-a, --kernel moment");
     if ((o->kernel == NBT_SKERNEL_CORRECTED) != (o->corr_path != NULL))
         die_usage("--kernel corrected and --correction FILE go together");
 }
@@ -253,6 +290,84 @@ static float *ray_distances(const opts *o, const nbt_image *im, double dtheta)
         if (!isfinite(im->rgb[i]))
             die_usage("%s: colour at pixel (%zu, %zu) is not finite", o->in, (i / 3) % im->w, (i / 3) / im->w);
     return D;
+}
+
+/* the density grid: nbt's raw format, or OpenVDB through the shim */
+static nbt_grid *load_grid(const opts *o)
+{
+    char err[512];
+    nbt_grid *g = NULL;
+    size_t n = strlen(o->density);
+    if (n > 4 && !strcasecmp(o->density + n - 4, ".vdb")) {
+#ifdef HAVE_OPENVDB
+        nbt_vdb_grid v;
+        if (nbt_vdb_read(o->density, o->grid_name, (size_t)1 << 31, &v, err, sizeof err) != 0)
+            die_usage("--density: %s", err);
+        g = nbt_grid_alloc(v.nx, v.ny, v.nz, v.origin, v.voxel);
+        if (!g)
+            die("out of memory");
+        memcpy(g->data, v.data, v.nx * v.ny * v.nz * sizeof *g->data);
+        nbt_vdb_grid_free(&v);
+#else
+        die_usage("--density: '%s' is an OpenVDB file, and this build has no OpenVDB (install libopenvdb-dev "
+                  "and re-run configure), or convert it to nbt's raw grid", o->density);
+#endif
+    } else if (nbt_grid_read_raw(o->density, &g, err, sizeof err) != NBT_OK)
+        die_usage("--density: %s", err);
+    return g;
+}
+
+/* per-pixel kernels through the grid; the grid must hold the camera and every visible surface */
+static nbt_screen_pixkern *medium_kernels(const opts *o, const nbt_grid *g, const nbt_screen_input *in,
+                                          const nbt_beam_medium *m)
+{
+    nbt_camera cam;
+    double lo[3], hi[3], slack = 1e-9 * g->voxel;
+    for (int a = 0; a < 3; a++) {
+        cam.pos[a] = o->cam[a];
+        cam.fwd[a] = o->look[a] - o->cam[a];
+        cam.up[a] = o->up[a];
+    }
+    double cr[3] = {cam.fwd[1] * cam.up[2] - cam.fwd[2] * cam.up[1], cam.fwd[2] * cam.up[0] - cam.fwd[0] * cam.up[2],
+                    cam.fwd[0] * cam.up[1] - cam.fwd[1] * cam.up[0]};
+    if (!(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2] > 0))
+        die_usage("--look-at/--up: the view direction must be non-zero and not parallel to up");
+    nbt_grid_box(g, lo, hi);
+    for (int a = 0; a < 3; a++)
+        if (!(o->cam[a] >= lo[a] - slack && o->cam[a] <= hi[a] + slack))
+            die_usage("--density: the grid's box [%g,%g]x[%g,%g]x[%g,%g] does not hold the camera (%g,%g,%g): it must "
+                      "cover the view (zero density where the air is clear)", lo[0], hi[0], lo[1], hi[1], lo[2], hi[2],
+                      o->cam[0], o->cam[1], o->cam[2]);
+    size_t np = in->w * in->h;
+    float *skyD = malloc(np * sizeof *skyD);
+    nbt_screen_pixkern *pix = malloc(np * sizeof *pix);
+    if (!skyD || !pix)
+        die("out of memory");
+    for (size_t y = 0; y < in->h; y++)
+        for (size_t x = 0; x < in->w; x++) {
+            size_t i = y * in->w + x;
+            double dir[3];
+            nbt_camera_ray(&cam, in->w, in->h, in->dtheta, x, y, dir);
+            skyD[i] = (float)nbt_grid_exit(g, cam.pos, dir);
+            if (in->D[i] >= NBT_SCREEN_SKY)
+                continue;
+            for (int a = 0; a < 3; a++) {
+                double p = cam.pos[a] + in->D[i] * dir[a];
+                if (!(p >= lo[a] - slack && p <= hi[a] + slack))
+                    die_usage("--density: the grid's box [%g,%g]x[%g,%g]x[%g,%g] does not hold the surface seen in "
+                              "pixel (%zu, %zu) at distance %g: it must cover the view", lo[0], hi[0], lo[1], hi[1],
+                              lo[2], hi[2], x, y, (double)in->D[i]);
+            }
+        }
+    double step = o->step > 0 ? o->step : 0.5 * g->voxel, err;
+    if (nbt_screen_medium_kernels(in, m, nbt_grid_density, (void *)g, &cam, step, skyD, (unsigned)o->threads, pix,
+                                  &err) != NBT_OK)
+        die("the per-pixel kernels could not be computed");
+    fprintf(stderr, "nbt-scatter: per-pixel kernels through %s (%zux%zux%zu voxels of %g), step %g: max relative "
+                    "change of M0, M2 on halving the step %.2g\n",
+            o->density, g->nx, g->ny, g->nz, g->voxel, step, err);
+    free(skyD);
+    return pix;
 }
 
 static void on_error(const char *reason, nbt_status st)
@@ -290,6 +405,7 @@ int main(int argc, char **argv)
     nbt_kernel_correction corr;
     if (o.corr_path && nbt_kernel_correction_read(o.corr_path, &corr, err, sizeof err) != NBT_OK)
         die_usage("--correction: %s", err);
+    nbt_grid *grid = o.density ? load_grid(&o) : NULL;
 
     nbt_set_error_handler(on_error); /* file errors above come back in err */
     double dtheta = 2.0 * tan(o.fov * M_PI / 360.0) / (double)im->h;
@@ -306,8 +422,11 @@ int main(int argc, char **argv)
     nbt_screen_rule rule = o.method ? NBT_SCREEN_SOURCE : NBT_SCREEN_NEAR;
     double t0 = now();
     const char *how = "layered FFT";
-    st = o.layers > 0 ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, S, T)
-                      : NBT_EDOM;
+    nbt_screen_pixkern *pix = grid ? medium_kernels(&o, grid, &in, &m) : NULL;
+    in.pix = pix;
+    st = o.layers > 0 && !pix
+             ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, S, T)
+             : NBT_EDOM;
     if (st == NBT_EDOM) {
         how = "brute force";
         nbt_set_error_handler(NULL); /* EDOM from the layer count is expected; the input was checked */
@@ -363,6 +482,8 @@ int main(int argc, char **argv)
     nbt_image_free(im);
     nbt_image_free(ref);
     nbt_screen_kernel_free(k);
+    nbt_grid_free(grid);
+    free(pix);
     free(D);
     free(S);
     free(T);

@@ -1,13 +1,28 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
- * tests: mkexr OUT.exr noz|nan|negative|inf. */
+ * tests (mkexr OUT.exr noz|nan|negative|inf), and a constant density grid
+ * over x, y in [-20, 20], z in [-40, 1] (mkexr OUT.raw grid VALUE). */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdlib.h>
+#include <nbt/grid.h>
 #include <nbt/image.h>
 
 int main(int argc, char **argv)
 {
+    char err[256];
+    if (argc == 4 && !strcmp(argv[2], "grid")) {
+        double o[3] = {-19.5, -19.5, -39.5};
+        nbt_grid *g = nbt_grid_alloc(40, 40, 41, o, 1.0);
+        if (!g)
+            return 1;
+        for (size_t i = 0; i < 40 * 40 * 41; i++)
+            g->data[i] = (float)atof(argv[3]);
+        int rc = nbt_grid_write_raw(g, argv[1], err, sizeof err) != NBT_OK;
+        nbt_grid_free(g);
+        return rc;
+    }
     if (argc != 3)
         return 2;
     const char *kind = argv[2];
@@ -25,7 +40,6 @@ int main(int argc, char **argv)
         im->z[5 * 16 + 3] = -2.0f;
     else if (!strcmp(kind, "inf"))
         im->z[5 * 16 + 3] = INFINITY; /* sky: accepted */
-    char err[256];
     int rc = nbt_image_write_exr(im, argv[1], NULL, 0, err, sizeof err) != NBT_OK;
     if (rc)
         fprintf(stderr, "%s\n", err);

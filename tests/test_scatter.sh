@@ -43,6 +43,25 @@ printf 'beta 0.1 0 0 0 0 0 0\nalpha -0.05 0 0 0 0 0 0\n' >"$tmp/corr.txt"
 "$S" "$tmp/layers.exr" -o "$tmp/k-corr.exr" $M --depth ray --kernel corrected --correction "$tmp/corr.txt" --no-png \
   2>/dev/null && ok || bad "--kernel corrected"
 
+# heterogeneous media: a constant density grid reproduces the homogeneous medium (blocks: no sky),
+# converging with the march step; the grid must hold the camera
+"$MK" "$tmp/c1.raw" grid 1 || bad "mkexr grid"
+"$S" "$tmp/blocks.exr" -o "$tmp/hom.exr" $M --layers 0 --no-png 2>/dev/null || bad "blocks, homogeneous"
+set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het.exr" $M --density "$tmp/c1.raw" --step 0.05 --no-png \
+  --compare "$tmp/hom.exr" 2>"$tmp/log")
+awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid = homogeneous medium: $*"
+grep -q "halving the step" "$tmp/log" && ok || bad "the march reports its error estimate"
+set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het2.exr" $M --density "$tmp/c1.raw" --step 0.5 --no-png \
+  --compare "$tmp/hom.exr" 2>/dev/null)
+awk -v a="$2" 'BEGIN { exit !(a > 3e-5 && a < 3e-3) }' && ok || bad "a coarser step is less accurate: $*"
+expect_usage "grid misses the camera" "does not hold the camera" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
+  --density "$tmp/c1.raw" --camera 0,0,5
+expect_usage "grid with ref-b" "heterogeneous media use operator A" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
+  --density "$tmp/c1.raw" --method ref-b
+expect_usage "not a grid" "not an nbt raw grid" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/corr.txt"
+expect_usage "bad --camera" "--camera: '1,2'" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/c1.raw" \
+  --camera 1,2
+
 # bad input: exit 2, one line, nothing written
 "$MK" "$tmp/noz.exr" noz && "$MK" "$tmp/nan.exr" nan && "$MK" "$tmp/neg.exr" negative && "$MK" "$tmp/sky.exr" inf || bad mkexr
 o="$tmp/out.exr"

@@ -396,8 +396,11 @@ static void test_medium(void)
     nbt_screen_input in = {W, H, rgb, D, 0.02, NULL};
     nbt_camera cam = {{0, 0, 0}, {0, 0, -1}, {0, 1, 0}};
     nbt_screen_pixkern pix[25];
+    float skyD[25];
+    for (size_t i = 0; i < 25; i++)
+        skyD[i] = 20.0f;
     double err, rho = 1.0;
-    nbt_status st = nbt_screen_medium_kernels(&in, &m, dens_const, &rho, &cam, 0.002, 20.0, 2, pix, &err);
+    nbt_status st = nbt_screen_medium_kernels(&in, &m, dens_const, &rho, &cam, 0.002, skyD, 2, pix, &err);
     t_true(st == NBT_OK, "medium kernels: constant density");
     double worst = 0;
     for (size_t i = 0; i < W * H; i++) {
@@ -411,7 +414,8 @@ static void test_medium(void)
     t_true(worst < 1e-6, "medium, constant density: beta = eq. 26 (worst rel %.2g)", worst);
     t_true(worst <= err && err < 1e-5, "medium: the step estimate (%.2g) bounds the true error (%.2g)", err, worst);
     /* a smooth density along the central ray against nbt_beam_moments' adaptive quadrature */
-    st = nbt_screen_medium_kernels(&in, &m, dens_wave, NULL, &cam, 0.004, 20.0, 1, pix, &err);
+    st = nbt_screen_medium_kernels(&in, &m, dens_wave, NULL, &cam, 0.004, skyD, 1, pix, &err);
+    t_true(st == NBT_OK, "medium kernels: a smooth density");
     size_t c = 2 * W + 2;
     double Dc = D[c], M0, M2, alpha, beta;
     nbt_beam_medium mb = m;
@@ -422,6 +426,8 @@ static void test_medium(void)
     t_rel(pix[c].M0, M0, 1e-5, "medium, smooth density: M0 vs adaptive eq. 28");
     t_rel(pix[c].beta_px, beta / (Dc * 0.02), 3 * err + 1e-9, "medium, smooth density: beta vs adaptive eq. 29 (3 x estimate %.2g)", err);
     t_rel(pix[c].T, exp(-m.sigma_t * nbt_beam_zeta(&mb, Dc)), 1e-5, "medium, smooth density: T");
+    nbt_screen_medium_kernels(&in, &m, dens_wave, NULL, &cam, 0.004, NULL, 1, pix, &err);
+    t_true(pix[3].T == 0 && pix[3].M0 == 0, "medium without sky_D: sky behind infinite medium");
     /* the operators take per-pixel kernels: equal ones reproduce the family */
     nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
     for (size_t i = 0; i < W * H; i++) {

@@ -158,12 +158,13 @@ typedef struct {
  * along it (trapezoid rule, steps of at most `step` world units), M0 by
  * eq. 28, M2 by eq. 29 (trapezoid), then beta^2 = 1.5 M2/M0 and
  * T = exp(-sigma_t zeta(D)). m gives sigma_t, albedo and the lobes (its
- * layers are ignored). Sky pixels are beams from sky_dist (the far side of
- * the medium). *max_err (may be NULL) gets the largest relative change of
- * M0 or M2 between step and 2 step, over pixels (an estimate of the
- * discretisation error). */
+ * layers are ignored). A sky pixel i is a beam from sky_D[i], where the
+ * medium ends along its ray (e.g. nbt_grid_exit); sky_D NULL: sky pixels
+ * lie behind infinite medium (T = 0, nothing sent). *max_err (may be NULL)
+ * gets the largest relative change of M0 or M2 between step and 2 step,
+ * over pixels (an estimate of the discretisation error). */
 nbt_status nbt_screen_medium_kernels(const nbt_screen_input *in, const nbt_beam_medium *m, nbt_density_fn rho,
-                                     void *ctx, const nbt_camera *cam, double step, double sky_dist,
+                                     void *ctx, const nbt_camera *cam, double step, const float *sky_D,
                                      unsigned nthreads, nbt_screen_pixkern *pix, double *max_err);
 
 /* The unit direction of pixel (x, y)'s view ray. */
