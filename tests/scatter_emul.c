@@ -32,9 +32,9 @@ static void near_weights(const nbt_gls_input *in, const float *lut, size_t i, do
 {
     double M0 = in->M0[i], b = in->beta_px[i], scale = 1;
     memset(nw, 0, 6 * sizeof *nw);
-    if (!(M0 > 0 && b > 0))
+    if (!(M0 > 0))
         return;
-    double u = (log2(b) - NBT_GLS_LUT_LO) * NBT_GLS_LUT_PER, f;
+    double u = b > 0 ? (log2(b) - NBT_GLS_LUT_LO) * NBT_GLS_LUT_PER : -1, f;
     int j;
     if (u <= 0) {
         j = 0;
@@ -91,6 +91,8 @@ static nbt_status emul_shinya(const nbt_gls_input *in, double *S)
                     size_t iy = (size_t)y1 * w + (size_t)y0;
                     size_t n = key(in->D[iy]) > Dx ? ix : iy; /* the nearer pixel's kernel; ties: the source's */
                     long ax = labs(dx), ay = labs(dy), hi = ax > ay ? ax : ay, lo = ax > ay ? ay : ax;
+                    if (hi > 2 && dx * dx + dy * dy > R * R) /* the window is a disc of radius R */
+                        continue;
                     double wt = 0;
                     if (hi <= 2)
                         wt = nw[6 * n + hi * (hi + 1) / 2 + lo];

@@ -251,6 +251,176 @@ static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_scree
     free(Sd);
 }
 
+/* an odd size (padding, partial work groups): every method = its emulation */
+static void test_odd_size(const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    const size_t w = 37, h = 29, n = w * h;
+    scene s = scene_new("odd", w, h);
+    random_rgb(&s);
+    for (size_t y = 0; y < h; y++)
+        for (size_t x = 0; x < w; x++)
+            s.D[y * w + x] = y < 3 ? INFINITY : x < 3 ? 0.0f : (float)(2.0 + 0.3 * x + (x > 20) * 6.0);
+    s.rgb[3 * (15 * w + 20) + 2] = 300.0f;
+    scene_kernels(&s, km, ke, dth);
+    nbt_gls *g = nbt_gls_alloc(w, h);
+    float *Sg = malloc(n * 3 * sizeof *Sg);
+    double *Se = malloc(n * 3 * sizeof *Se);
+    for (int m = 0; m < NBT_GLS_NMETHODS; m++) {
+        nbt_gls_input in = gls_input(&s, m == NBT_GLS_ELEK, dth);
+        nbt_status st = g ? nbt_gls_exec(g, (nbt_gls_method)m, &in, Sg, NULL) : NBT_EINVAL;
+        scatter_emul((nbt_gls_method)m, &in, Se);
+        double d = gl_vs_emul(Sg, Se, n * 3);
+        t_true(st == NBT_OK && d <= 1e-5, "37x29 with D = 0 and sky, %s: GL = CPU emulation (%.2g)",
+               nbt_gls_method_name((nbt_gls_method)m), d);
+    }
+    nbt_gls_free(g);
+    free(Sg);
+    free(Se);
+    scene_free(&s);
+}
+
+/* (b) invariants and bad input */
+static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    float *S = malloc(NP * 3 * sizeof *S);
+    scene s = scene_new("wall", W, H);
+    const float c[3] = {1.25f, 0.5f, 2.0f};
+    for (size_t i = 0; i < NP; i++) {
+        s.D[i] = 4.1f;
+        for (int k = 0; k < 3; k++)
+            s.rgb[3 * i + k] = c[k];
+    }
+    scene_kernels(&s, km, ke, dth);
+    size_t ctr = (H / 2) * W + W / 2;
+    double M0 = s.M0[ctr];
+    t_true(s.beta[ctr] * 5 < H / 2, "wall kernel fits (beta %.2f px)", s.beta[ctr]);
+    /* shinya: interior = M0 c but for the mass beyond cut beta (1e-3 at 3, 1e-6 at 5),
+     * the near table and the far field (1e-4 together) */
+    const double cuts[2] = {3.0, 5.0}, tol[2] = {1.5e-3, 2e-4};
+    for (int k = 0; k < 2; k++) {
+        nbt_gls_input in = gls_input(&s, 0, dth);
+        in.cut = cuts[k];
+        nbt_gls_exec(g, NBT_GLS_SHINYA, &in, S, NULL);
+        double worst = 0;
+        for (int ch = 0; ch < 3; ch++)
+            worst = fmax(worst, fabs(S[3 * ctr + ch] / (M0 * c[ch]) - 1));
+        t_true(worst <= tol[k], "constant wall, shinya cut %g: interior S = M0 c within %.1g (%.2g)", cuts[k], tol[k],
+               worst);
+    }
+    /* naive, and Elek with a step mask: the pyramid filters have unit sum */
+    for (int m = NBT_GLS_NAIVE; m <= NBT_GLS_ELEK; m++) {
+        nbt_gls_input in = gls_input(&s, 1, dth);
+        in.eps = 0;
+        nbt_gls_exec(g, (nbt_gls_method)m, &in, S, NULL);
+        double worst = 0;
+        for (int ch = 0; ch < 3; ch++)
+            worst = fmax(worst, fabs(S[3 * ctr + ch] / (M0 * c[ch]) - 1));
+        t_true(worst <= 1e-5, "constant wall, %s%s: interior S = M0 c (%.2g)", nbt_gls_method_name((nbt_gls_method)m),
+               m == NBT_GLS_ELEK ? " (eps 0)" : "", worst);
+    }
+    /* beta_px = 0: a kernel without spread keeps M0 on the own pixel */
+    float *beta0 = calloc(NP, sizeof *beta0);
+    nbt_gls_input in0 = gls_input(&s, 0, dth);
+    in0.beta_px = beta0;
+    nbt_gls_exec(g, NBT_GLS_SHINYA, &in0, S, NULL);
+    t_rel(S[3 * ctr + 2], M0 * c[2], 1e-6, "beta_px = 0: shinya keeps M0 c on the own pixel");
+    free(beta0);
+    /* the literal algorithm: equal depths exchange nothing (error 3) */
+    nbt_gls_input in = gls_input(&s, 0, dth);
+    nbt_gls_exec(g, NBT_GLS_SHINYA_LITERAL, &in, S, NULL);
+    t_true(S[3 * ctr] == 0, "constant wall, shinya-literal: receives nothing (strict '>')");
+
+    /* D = 0 everywhere, sky everywhere, albedo 0: S = 0 for every method */
+    nbt_beam_medium m0 = nbt_beam_homogeneous(0.2385, 0.0, 0.0085);
+    nbt_screen_kernel *k0 = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m0, NULL);
+    const char *what[3] = {"D = 0", "sky (1e10 and inf)", "albedo 0"};
+    for (int cs = 0; cs < 3; cs++) {
+        for (size_t i = 0; i < NP; i++)
+            s.D[i] = cs == 0 ? 0.0f : cs == 1 ? (i % 2 ? 1e10f : INFINITY) : 5.5f;
+        s.rgb[3 * ctr + 1] = 900.0f;
+        scene_kernels(&s, cs == 2 ? k0 : km, ke, dth);
+        for (int m = 0; m < NBT_GLS_NMETHODS; m++) {
+            nbt_gls_input in2 = gls_input(&s, 0, dth);
+            nbt_status st = nbt_gls_exec(g, (nbt_gls_method)m, &in2, S, NULL);
+            double mx = 0;
+            for (size_t i = 0; i < NP * 3; i++)
+                mx = fmax(mx, isfinite(S[i]) ? fabs(S[i]) : INFINITY);
+            t_true(st == NBT_OK && mx == 0, "%s: %s gives S = 0 (max %.2g)", what[cs],
+                   nbt_gls_method_name((nbt_gls_method)m), mx);
+        }
+    }
+    nbt_screen_kernel_free(k0);
+
+    /* bad input */
+    for (size_t i = 0; i < NP; i++)
+        s.D[i] = 3.3f;
+    scene_kernels(&s, km, ke, dth);
+    nbt_gls_input b = gls_input(&s, 0, dth);
+    s.D[17] = -1.0f;
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EDOM, "negative depth refused");
+    s.D[17] = NAN;
+    t_true(nbt_gls_exec(g, NBT_GLS_NAIVE, &b, S, NULL) == NBT_EDOM, "NaN depth refused");
+    s.D[17] = 3.3f;
+    s.rgb[5] = INFINITY;
+    t_true(nbt_gls_exec(g, NBT_GLS_ELEK, &b, S, NULL) == NBT_EDOM, "infinite colour refused");
+    s.rgb[5] = 0.5f;
+    s.M0[9] = -0.1f;
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EDOM, "negative M0 refused");
+    s.M0[9] = 0.1f;
+    b.cut = 0;
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EDOM, "cut 0 refused");
+    b.cut = NBT_GLS_CUT;
+    b.eps = -0.5;
+    t_true(nbt_gls_exec(g, NBT_GLS_ELEK, &b, S, NULL) == NBT_EDOM, "eps < 0 refused");
+    b.eps = NBT_GLS_EPS;
+    b.dtheta = 0;
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA_LITERAL, &b, S, NULL) == NBT_EDOM, "dtheta 0 refused (literal)");
+    b.dtheta = dth;
+    b.w = W - 1;
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EINVAL, "a size other than the context's refused");
+    b.w = W;
+    t_true(nbt_gls_exec(g, (nbt_gls_method)7, &b, S, NULL) == NBT_EINVAL, "unknown method refused");
+    t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_OK, "the context still runs after refusals");
+    t_true(nbt_gls_alloc(0, 5) == NULL, "empty image refused");
+    scene_free(&s);
+    free(S);
+}
+
+/* time per pass at 320x240 (the three-layer scene scaled, same kernels in pixels) */
+static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    const size_t w = 320, h = 240, n = w * h;
+    scene s = scene_new("320x240", w, h);
+    random_rgb(&s);
+    for (size_t y = 0; y < h; y++)
+        for (size_t x = 0; x < w; x++) {
+            float D = y < 40 ? INFINITY : 15.2f;
+            if (x >= 60 && x < 220 && y >= 70 && y < 200)
+                D = 7.3f;
+            if ((x - 150) * (x - 150) + (y - 140) * (y - 140) < 1600)
+                D = 2.9f;
+            s.D[y * w + x] = D;
+        }
+    scene_kernels(&s, km, ke, dth);
+    nbt_gls *g = nbt_gls_alloc(w, h);
+    float *S = malloc(n * 3 * sizeof *S);
+    for (int m = 0; m < NBT_GLS_NMETHODS && g; m++) {
+        nbt_gls_input in = gls_input(&s, m == NBT_GLS_ELEK, dth);
+        long R = nbt_gls_window((nbt_gls_method)m, &in);
+        if (R > 32) {
+            printf("# %s at %zux%zu: skipped (window %ld px)\n", nbt_gls_method_name((nbt_gls_method)m), w, h, R);
+            continue;
+        }
+        double ms = 0;
+        nbt_status st = nbt_gls_exec(g, (nbt_gls_method)m, &in, S, &ms);
+        t_true(st == NBT_OK, "%s runs at %zux%zu", nbt_gls_method_name((nbt_gls_method)m), w, h);
+        printf("# %s at %zux%zu: %.1f ms (window %ld px)\n", nbt_gls_method_name((nbt_gls_method)m), w, h, ms, R);
+    }
+    nbt_gls_free(g);
+    free(S);
+    scene_free(&s);
+}
+
 int main(void)
 {
     char err[4096];
@@ -270,6 +440,9 @@ int main(void)
     nbt_screen_kernel *km = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &med, NULL);
     nbt_screen_kernel *ke = nbt_screen_kernel_alloc(NBT_SKERNEL_ELEK, &med, NULL);
     test_scenes(g, km, ke, dth);
+    test_odd_size(km, ke, dth);
+    test_invariants(g, km, ke, dth);
+    time_large(km, ke, dth);
     nbt_screen_kernel_free(km);
     nbt_screen_kernel_free(ke);
     nbt_gls_free(g);
