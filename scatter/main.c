@@ -18,6 +18,21 @@
 #ifdef HAVE_OPENVDB
 #include "vdb_shim.h"
 #endif
+#ifdef HAVE_GL
+#include <nbt/gl_scatter.h>
+#include "../examples/egl_headless.h"
+#endif
+
+#ifdef HAVE_GL
+static const char *gl_method_names(void)
+{
+    static char buf[256];
+    size_t off = 0;
+    for (int m = 0; m < NBT_GLS_NMETHODS && off < sizeof buf; m++)
+        off += (size_t)snprintf(buf + off, sizeof buf - off, "%s%s", m ? ", " : "", nbt_gls_method_name((nbt_gls_method)m));
+    return buf;
+}
+#endif
 
 static void help(void)
 {
@@ -35,7 +50,11 @@ static void help(void)
          "  --B B | --dtheta DEG   Gaussian phase width: B > 0, or dtheta in (0, 90] degrees (dtheta^2 = 4B)\n"
          "  --method M             ref-a (default): operator A, every pixel pair through the nearer pixel's\n"
          "                         kernel (Shinya et al., corrected); ref-b: operator B, every source its own\n"
-         "                         Gaussian (Elek et al.'s PSF). Both exact on the CPU.\n"
+         "                         Gaussian (Elek et al.'s PSF). Both exact on the CPU. On GL (4.3 compute,\n"
+         "                         Mesa's llvmpipe without a GPU): shinya (operator A, windowed), shinya-literal\n"
+         "                         (Alg. 1-4 as printed), naive (one pyramid read), elek (Elek et al.)\n"
+         "  --cut C                shinya: window radius in beta (3)\n"
+         "  --eps E                elek: smoothstep width of the level masks (0.1)\n"
          "  --kernel K             moment (default for ref-a), smallangle, single, lineint, elek (default for\n"
          "                         ref-b), corrected (needs --correction FILE from nbt-fit kernel --correction)\n"
          "  --depth plane|ray      what Z holds: planar depth (default) or distance along the ray\n"
@@ -156,7 +175,10 @@ typedef struct {
     const char *in, *out, *compare, *corr_path, *density, *grid_name;
     double fov, sigma_t, albedo, B, tail, step;
     double cam[3], look[3], up[3];
-    int method; /* 0: ref-a, 1: ref-b */
+    int method; /* 0: ref-a, 1: ref-b, 2: a GL method */
+    int gl_method;
+    double cut, eps;
+    const char *method_name;
     int kernel; /* -1: the method's default */
     int ray_depth, png;
     long layers, threads, quantize;
@@ -172,7 +194,7 @@ static double now(void)
 static void parse(int argc, char **argv, opts *o)
 {
     enum { O_FOV = 256, O_ST, O_ALB, O_B, O_DTH, O_METHOD, O_KERNEL, O_DEPTH, O_LAYERS, O_TAIL, O_THREADS, O_CMP,
-           O_NOPNG, O_CORR, O_DENS, O_GRID, O_CAM, O_LOOK, O_UP, O_STEP, O_QUANT };
+           O_NOPNG, O_CORR, O_DENS, O_GRID, O_CAM, O_LOOK, O_UP, O_STEP, O_QUANT, O_CUT, O_EPS };
     static const struct option lo[] = {
         {"output", 1, 0, 'o'},    {"fov-y", 1, 0, O_FOV},     {"sigma-t", 1, 0, O_ST},    {"albedo", 1, 0, O_ALB},
         {"B", 1, 0, O_B},         {"dtheta", 1, 0, O_DTH},    {"method", 1, 0, O_METHOD}, {"kernel", 1, 0, O_KERNEL},
@@ -180,12 +202,16 @@ static void parse(int argc, char **argv, opts *o)
         {"compare", 1, 0, O_CMP}, {"no-png", 0, 0, O_NOPNG},  {"correction", 1, 0, O_CORR}, {"help", 0, 0, 'h'},
         {"density", 1, 0, O_DENS},  {"grid", 1, 0, O_GRID},     {"camera", 1, 0, O_CAM},    {"look-at", 1, 0, O_LOOK},
         {"up", 1, 0, O_UP},         {"step", 1, 0, O_STEP},     {"quantize", 1, 0, O_QUANT},
+        {"cut", 1, 0, O_CUT},       {"eps", 1, 0, O_EPS},
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->fov = o->sigma_t = o->albedo = o->B = NAN;
     o->tail = 1e-7;
     o->kernel = -1;
     o->png = 1;
+    o->method_name = "ref-a";
+    o->cut = 3.0;
+    o->eps = 0.1;
     o->layers = 64;
     o->look[2] = -1; /* camera at the origin looking down -z, +y up (OpenGL's camera space) */
     o->up[1] = 1;
@@ -210,15 +236,23 @@ static void parse(int argc, char **argv, opts *o)
             break;
         }
         case O_METHOD:
+            o->method_name = optarg;
             if (!strcmp(optarg, "ref-a"))
                 o->method = 0;
             else if (!strcmp(optarg, "ref-b"))
                 o->method = 1;
-            else if (!strcmp(optarg, "shinya") || !strcmp(optarg, "shinya-literal") || !strcmp(optarg, "elek") ||
-                     !strcmp(optarg, "naive") || !strcmp(optarg, "nbt"))
-                die_usage("--method: '%s' (a GL method) is not in this build yet: use ref-a or ref-b", optarg);
-            else
-                die_usage("--method: '%s' is not accepted: expected ref-a or ref-b", optarg);
+            else {
+#ifdef HAVE_GL
+                nbt_gls_method gm;
+                if (nbt_gls_method_parse(optarg, &gm) != NBT_OK)
+                    die_usage("--method: '%s' is not accepted: expected ref-a, ref-b or a GL method (%s)", optarg,
+                              gl_method_names());
+                o->method = 2;
+                o->gl_method = (int)gm;
+#else
+                die_usage("--method: '%s' is not accepted: expected ref-a or ref-b (this build has no GL)", optarg);
+#endif
+            }
             break;
         case O_KERNEL:
             if (nbt_skernel_parse(optarg, &kk) != NBT_OK)
@@ -244,6 +278,8 @@ static void parse(int argc, char **argv, opts *o)
         case O_UP: parse_vec3("--up", optarg, o->up); break;
         case O_STEP: o->step = opt_double("--step", optarg, 0, 1, 1e30, 0); break;
         case O_QUANT: o->quantize = opt_long("--quantize", optarg, 2, 4096); break;
+        case O_CUT: o->cut = opt_double("--cut", optarg, 0, 1, 100, 0); break;
+        case O_EPS: o->eps = opt_double("--eps", optarg, 0, 0, 100, 0); break;
         case 'h': help(); exit(0);
         default: die_usage("see 'nbt-scatter --help'");
         }
@@ -262,12 +298,18 @@ static void parse(int argc, char **argv, opts *o)
     if (isnan(o->B))
         die_usage("--B B or --dtheta DEG is required: the phase function's width");
     if (o->kernel < 0)
-        o->kernel = o->method ? NBT_SKERNEL_ELEK : NBT_SKERNEL_MOMENT;
+        o->kernel = o->method == 1 ? NBT_SKERNEL_ELEK : NBT_SKERNEL_MOMENT;
+    if (o->method == 2 && (o->kernel == NBT_SKERNEL_LINEINT || o->kernel == NBT_SKERNEL_ELEK ||
+                           o->kernel == NBT_SKERNEL_SINGLE))
+        die_usage("--kernel %s: the GL methods take one erfc kernel per pixel (moment, smallangle, corrected); "
+                  "elek's Gaussian comes with --method elek", nbt_skernel_name((nbt_skernel_kind)o->kernel));
+    if (o->method == 2 && o->quantize)
+        die_usage("--quantize belongs to the CPU references");
     if (o->density && o->quantize)
         die_usage("--quantize and --density: per-pixel kernels have no layers to quantise");
-    if (o->density && (o->method != 0 || o->kernel != NBT_SKERNEL_MOMENT))
+    if (o->density && (o->method == 1 || o->kernel != NBT_SKERNEL_MOMENT))
         die_usage("--density: heterogeneous media use operator A with the moment kernel (eq. 28/29): "
-                  "--method ref-a, --kernel moment");
+                  "--method ref-a or a GL method, --kernel moment");
     if ((o->kernel == NBT_SKERNEL_CORRECTED) != (o->corr_path != NULL))
         die_usage("--kernel corrected and --correction FILE go together");
 }
@@ -399,6 +441,67 @@ static float *quantize(const float *D, size_t np, size_t L)
     return q;
 }
 
+#ifdef HAVE_GL
+/* a GL method: per-pixel kernels from the CPU, the passes on the GPU */
+static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_kernel *k,
+                   const nbt_beam_medium *m, double *S, double *T, double *gpu_ms)
+{
+    size_t np = in->w * in->h;
+    float *M0 = malloc(np * sizeof *M0), *beta = malloc(np * sizeof *beta), *sig = NULL, *Sf = malloc(np * 3 * sizeof *Sf);
+    if (!M0 || !beta || !Sf)
+        die("out of memory");
+    nbt_screen_kernel *ke = NULL;
+    if (o->gl_method == NBT_GLS_ELEK) {
+        if (in->pix)
+            die_usage("--method elek: Elek's W(s) is for homogeneous media; use --method shinya, naive or ref-a");
+        ke = nbt_screen_kernel_alloc(NBT_SKERNEL_ELEK, m, NULL);
+        sig = malloc(np * sizeof *sig);
+        if (!ke || !sig)
+            die("out of memory");
+    }
+    for (size_t i = 0; i < np; i++) {
+        nbt_screen_kern kn;
+        if (in->pix) {
+            T[i] = in->pix[i].T, M0[i] = (float)in->pix[i].M0, beta[i] = (float)in->pix[i].beta_px;
+            continue;
+        }
+        if (nbt_screen_kernel_eval(k, in->D[i], &kn) != NBT_OK)
+            die("the kernel at pixel %zu could not be evaluated", i);
+        double px = in->D[i] * in->dtheta;
+        T[i] = kn.T, M0[i] = kn.n ? (float)kn.mass[0] : 0.0f, beta[i] = kn.n ? (float)(kn.scale[0] / px) : 0.0f;
+        if (ke) {
+            if (nbt_screen_kernel_eval(ke, in->D[i], &kn) != NBT_OK)
+                die("the Elek kernel at pixel %zu could not be evaluated", i);
+            sig[i] = kn.n ? (float)(kn.scale[0] / px) : 0.0f;
+        }
+    }
+    char err[4096];
+    if (egl_headless_open(err, sizeof err))
+        die("--method %s needs OpenGL 4.3 through EGL: %s", o->method_name, err);
+    nbt_gls_input gi = {in->w, in->h, in->rgb, in->D, M0, beta, sig, in->dtheta, o->cut, o->eps};
+    nbt_status st = nbt_gls_run((nbt_gls_method)o->gl_method, &gi, Sf, gpu_ms);
+    egl_headless_close();
+    if (st != NBT_OK)
+        die("--method %s failed on GL: %s", o->method_name, nbt_strerror(st));
+    for (size_t i = 0; i < np * 3; i++)
+        S[i] = Sf[i];
+    nbt_screen_kernel_free(ke);
+    free(M0);
+    free(beta);
+    free(sig);
+    free(Sf);
+}
+#endif
+
+static const char *kernel_label(const opts *o)
+{
+#ifdef HAVE_GL
+    if (o->method == 2 && o->gl_method == NBT_GLS_ELEK)
+        return "elek";
+#endif
+    return nbt_skernel_name((nbt_skernel_kind)o->kernel);
+}
+
 static void on_error(const char *reason, nbt_status st)
 {
     (void)st;
@@ -454,7 +557,14 @@ int main(int argc, char **argv)
     nbt_screen_pixkern *pix = grid ? medium_kernels(&o, grid, &in, &m) : NULL;
     in.pix = pix;
     char qhow[64];
-    if (o.quantize) {
+    double gpu_ms = -1;
+    if (o.method == 2) {
+#ifdef HAVE_GL
+        run_gl(&o, &in, k, &m, S, T, &gpu_ms);
+        snprintf(qhow, sizeof qhow, "GL (%.3f ms GPU time)", gpu_ms);
+        how = qhow;
+#endif
+    } else if (o.quantize) {
         float *Dq = quantize(D, np, (size_t)o.quantize);
         in.D = Dq;
         st = nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.quantize + 2 /* sky, D = 0 */, (unsigned)o.threads,
@@ -483,8 +593,9 @@ int main(int argc, char **argv)
     if (st != NBT_OK)
         die("scattering failed: %s", nbt_strerror(st));
     double t1 = now();
-    fprintf(stderr, "nbt-scatter: %s (operator %s, %s kernel) by %s, %zux%zu: %.3f s\n", o.method ? "ref-b" : "ref-a",
-            o.method ? "B" : "A", nbt_skernel_name((nbt_skernel_kind)o.kernel), how, im->w, im->h, t1 - t0);
+    fprintf(stderr, "nbt-scatter: %s (%s, %s kernel) by %s, %zux%zu: %.3f s\n", o.method_name,
+            o.method == 1 ? "operator B" : o.method == 0 ? "operator A" : "approximating operator A",
+            kernel_label(&o), how, im->w, im->h, t1 - t0);
 
     if (ref) {
         double *Sr = malloc(np * 3 * sizeof *Sr);
@@ -511,8 +622,7 @@ int main(int argc, char **argv)
     snprintf(ssa, sizeof ssa, "%.17g", o.albedo);
     snprintf(sb, sizeof sb, "%.17g", o.B);
     snprintf(sfov, sizeof sfov, "%.17g", o.fov);
-    const char *attrs[] = {"nbt.method", o.method ? "ref-b" : "ref-a", "nbt.kernel",
-                           nbt_skernel_name((nbt_skernel_kind)o.kernel), "nbt.sigma_t", sst, "nbt.albedo", ssa, "nbt.B",
+    const char *attrs[] = {"nbt.method", o.method_name, "nbt.kernel", kernel_label(&o), "nbt.sigma_t", sst, "nbt.albedo", ssa, "nbt.B",
                            sb, "nbt.fov_y", sfov, "nbt.depth", o.ray_depth ? "ray" : "plane", "nbt.version",
                            nbt_version()};
     /* preview first, so that a failed EXR write can take it back: all or nothing */

@@ -43,6 +43,24 @@ printf 'beta 0.1 0 0 0 0 0 0\nalpha -0.05 0 0 0 0 0 0\n' >"$tmp/corr.txt"
 "$S" "$tmp/layers.exr" -o "$tmp/k-corr.exr" $M --depth ray --kernel corrected --correction "$tmp/corr.txt" --no-png \
   2>/dev/null && ok || bad "--kernel corrected"
 
+# GL methods (Mesa llvmpipe in CI): shinya approximates operator A closely, the pyramids roughly;
+# a build without GL must refuse them clearly
+"$S" "$tmp/layers.exr" -o "$tmp/ref.exr" $M --depth ray --no-png 2>/dev/null
+if "$S" --help | grep -q "On GL"; then
+  set -- $("$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M --depth ray --method shinya --no-png --compare "$tmp/ref.exr" \
+    2>"$tmp/log")
+  awk -v a="$2" 'BEGIN { exit !(a < 3e-3) }' && ok || bad "GL shinya vs ref-a: $* $(cat "$tmp/log")"
+  grep -q "GPU time" "$tmp/log" && ok || bad "GL methods report their GPU time"
+  for m in shinya-literal naive elek; do
+    set -- $("$S" "$tmp/layers.exr" -o "$tmp/gl-$m.exr" $M --depth ray --method $m --no-png --compare "$tmp/ref.exr" \
+      2>/dev/null)
+    awk -v a="$2" 'BEGIN { exit !(a > 0.01 && a < 2) }' && ok || bad "GL $m runs and differs from operator A: $*"
+  done
+  expect_usage "GL with lineint" "--kernel lineint" "$S" "$tmp/layers.exr" -o "$tmp/out.exr" $M --method naive --kernel lineint
+else
+  expect_usage "no GL in this build" "this build has no GL" "$S" "$tmp/layers.exr" -o "$tmp/out.exr" $M --method shinya
+fi
+
 # heterogeneous media: a constant density grid reproduces the homogeneous medium (blocks: no sky),
 # converging with the march step; the grid must hold the camera
 "$MK" "$tmp/c1.raw" grid 1 || bad "mkexr grid"
