@@ -1,6 +1,6 @@
 #!/bin/sh
-# quickstart.sh        install what is missing (Debian 12), build, run nbt-gen's default scene
-#                      and render the demo (nbt-demo.png)
+# quickstart.sh        install what is missing (Debian 12), build, run nbt-gen's default scene,
+#                      render the demo (nbt-demo.png) and a render seen through fog (nbt-scatter.png)
 # quickstart.sh check  the same set-up (warnings are errors), then the whole test suite
 set -eu
 cd "$(dirname "$0")"
@@ -35,6 +35,10 @@ if [ "$mode" = run ]; then
   if [ -x ./nbt-demo ]; then
     ./nbt-demo nbt-demo.png && echo "quickstart: the demo render (shaders + tables) is ./nbt-demo.png"
   fi
+  # screen-space multiple scattering of a generated render (RGB + planar Z, as Blender writes it)
+  ./nbt-scatter scene layers -o nbt-scatter-in.exr
+  ./nbt-scatter nbt-scatter-in.exr -o nbt-scatter.exr --fov-y 40 --sigma-t 0.25 --albedo 0.95 --dtheta 4 --quantize 64
+  echo "quickstart: a render seen through fog (multiple scattering, operator A) is ./nbt-scatter.png"
   exit 0
 fi
 
