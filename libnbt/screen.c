@@ -509,6 +509,24 @@ nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel 
     return st;
 }
 
+void nbt_screen_quantize(const float *D, size_t n, size_t L, float *out)
+{
+    double lo = INFINITY, hi = 0;
+    for (size_t i = 0; i < n; i++)
+        if (D[i] > 0 && D[i] < NBT_SCREEN_SKY) {
+            lo = fmin(lo, D[i]);
+            hi = fmax(hi, D[i]);
+        }
+    double span = hi > lo ? log(hi / lo) : 0;
+    for (size_t i = 0; i < n; i++) {
+        out[i] = D[i];
+        if (D[i] > 0 && D[i] < NBT_SCREEN_SKY && span > 0 && L >= 2) {
+            double k = nearbyint(log(D[i] / lo) / span * (double)(L - 1));
+            out[i] = (float)(lo * exp(span * k / (double)(L - 1)));
+        }
+    }
+}
+
 /* ---- metrics ---- */
 
 nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kernel *k, const double *S,

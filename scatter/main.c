@@ -417,30 +417,6 @@ static nbt_screen_pixkern *medium_kernels(const opts *o, const nbt_grid *g, cons
     return pix;
 }
 
-/* ray distances snapped to L layers, log-spaced between the nearest and the
- * farthest non-zero finite distance (0 and sky stay as they are) */
-static float *quantize(const float *D, size_t np, size_t L)
-{
-    float *q = malloc(np * sizeof *q);
-    if (!q)
-        die("out of memory");
-    double lo = INFINITY, hi = 0;
-    for (size_t i = 0; i < np; i++)
-        if (D[i] > 0 && isfinite(D[i]) && D[i] < NBT_SCREEN_SKY) {
-            lo = fmin(lo, D[i]);
-            hi = fmax(hi, D[i]);
-        }
-    double span = hi > lo ? log(hi / lo) : 0;
-    for (size_t i = 0; i < np; i++) {
-        q[i] = D[i];
-        if (D[i] > 0 && isfinite(D[i]) && D[i] < NBT_SCREEN_SKY && span > 0) {
-            double k = nearbyint(log(D[i] / lo) / span * (double)(L - 1));
-            q[i] = (float)(lo * exp(span * k / (double)(L - 1)));
-        }
-    }
-    return q;
-}
-
 #ifdef HAVE_GL
 /* a GL method: per-pixel kernels from the CPU, the passes on the GPU */
 static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_kernel *k,
@@ -565,7 +541,10 @@ int main(int argc, char **argv)
         how = qhow;
 #endif
     } else if (o.quantize) {
-        float *Dq = quantize(D, np, (size_t)o.quantize);
+        float *Dq = malloc(np * sizeof *Dq);
+        if (!Dq)
+            die("out of memory");
+        nbt_screen_quantize(D, np, (size_t)o.quantize, Dq);
         in.D = Dq;
         st = nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.quantize + 2 /* sky, D = 0 */, (unsigned)o.threads,
                                 S, NULL);

@@ -320,6 +320,36 @@ static void test_operators(void)
         d = fmax(d, fabs(S3[i] - 2 * S[i] - 3 * S2[i]));
     t_true(d <= 1e-12 * maxabs(S3, N * 3), "operator A is linear in the image (%.2g)", d / maxabs(S3, N * 3));
 
+    /* continuous depth (a slanted floor): quantised layers converge to brute force as 1/L */
+    {
+        float *Dc = malloc(N * sizeof *Dc), *Dq = malloc(N * sizeof *Dq);
+        for (size_t y = 0; y < H; y++)
+            for (size_t x = 0; x < W; x++)
+                Dc[y * W + x] = (float)(y < 8 ? 1e10 : 2.0 + 30.0 / (double)(y - 7));
+        nbt_screen_input ic = in;
+        ic.D = Dc;
+        nbt_screen_brute(&ic, k, NBT_SCREEN_NEAR, tail, 2, S, NULL);
+        double l1[2];
+        const size_t Ls[2] = {16, 64};
+        for (int q = 0; q < 2; q++) {
+            nbt_screen_quantize(Dc, N, Ls[q], Dq);
+            ic.D = Dq;
+            nbt_screen_layered(&ic, k, NBT_SCREEN_NEAR, tail, Ls[q] + 2, 2, S2, NULL);
+            nbt_screen_metrics mq;
+            nbt_screen_compare(&ic, k, S2, S, &mq);
+            l1[q] = mq.rel_l1;
+        }
+        t_true(l1[1] < 0.01 && l1[1] < 0.5 * l1[0], "quantised depth: rel L1 %.2g (16 layers), %.2g (64 layers)", l1[0],
+               l1[1]);
+        double lo = 2.0 + 30.0 / (double)(H - 8), hi = 32.0, r = pow(hi / lo, 1.0 / 15.0), worst = 0;
+        nbt_screen_quantize(Dc, N, 16, Dq);
+        for (size_t i = 8 * W; i < N; i++)
+            worst = fmax(worst, fabs(log(Dq[i] / Dc[i])));
+        t_true(worst <= 0.5 * log(r) * (1 + 1e-6) && Dq[0] == Dc[0], "quantise: within half a layer in log, sky kept");
+        free(Dc);
+        free(Dq);
+    }
+
     /* metrics on a known perturbation */
     nbt_screen_metrics mt;
     for (size_t i = 0; i < N * 3; i++)

@@ -126,6 +126,12 @@ nbt_status nbt_screen_brute(const nbt_screen_input *in, const nbt_screen_kernel 
 nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kernel *k, nbt_screen_rule rule,
                               double tail, size_t max_layers, unsigned nthreads, double *S, double *T);
 
+/* An approximation for continuous depth: out[i] = D[i] snapped to one of L
+ * layers (L >= 2) log-spaced between the nearest and the farthest finite
+ * non-zero distance (0 and sky unchanged), so that nbt_screen_layered with
+ * max_layers = L + 2 applies. The error falls as 1/L (doc/screenspace.md). */
+void nbt_screen_quantize(const float *D, size_t n, size_t L, float *out);
+
 /* Scores of a scattered part S against a reference (both w*h*3). */
 typedef struct {
     double rel_l1;   /* sum |S - R| / sum |R| */
