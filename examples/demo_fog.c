@@ -2,6 +2,9 @@
  * sphere, rendered offscreen with nbt's shaders and tables only: airlight
  * glow and surface radiance (Lambert + Phong n = 20) for g = 0, 0.5, 0.9 and
  * kappa = 0.05, 0.2 (as the thesis' Fig. 5.1-5.3), written as one PNG strip.
+ * A fourth column repeats g = 0.9 with multiple scattering of the surfaces'
+ * light on the way to the camera (nbt/screen.h, operator A with the moment
+ * kernel of a Gaussian lobe of the same mean cosine, depth in 64 layers).
  * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel) */
 #include <config.h>
 #include <math.h>
@@ -21,6 +24,7 @@ static const char *SCENE =
     "uniform vec2 res;\n"
     "uniform vec3 light;\n"
     "uniform float kappa, albedo, I0, exposure;\n"
+    "uniform int raw; // 1: (airlight, surface radiance before the medium, distance) for nbt-scatter's operator\n"
     "out vec4 color;\n"
     "void main() {\n"
     "  vec2 q = (gl_FragCoord.xy / res) * 2.0 - 1.0;\n"
@@ -34,13 +38,16 @@ static const char *SCENE =
     "  vec3 ls = light - o;\n"
     "  float ks = albedo * kappa;\n"
     "  float L = nbt_airlight(ks, kappa, I0, length(ls), acos(clamp(dot(d, normalize(ls)), -1.0, 1.0)), t);\n"
+    "  float Ls = 0.0;\n"
     "  if (t < 1e29) {\n"
     "    vec3 p = o + t * d, lp = light - p, ldir = normalize(lp);\n"
     "    float ths = acos(clamp(dot(n, ldir), -1.0, 1.0));\n"
     "    float thr = acos(clamp(dot(reflect(d, n), ldir), -1.0, 1.0));\n"
     "    float kd = t < 1e29 && n.y > 0.999 ? 0.6 : 0.5, ksp = n.y > 0.999 ? 0.0 : 0.4;\n"
-    "    L += exp(-kappa * t) * nbt_surface(ks, kappa, I0, length(lp), ths, thr, kd, ksp, 20.0);\n"
+    "    Ls = nbt_surface(ks, kappa, I0, length(lp), ths, thr, kd, ksp, 20.0);\n"
+    "    L += exp(-kappa * t) * Ls;\n"
     "  }\n"
+    "  if (raw != 0) { color = vec4(L - (t < 1e29 ? exp(-kappa * t) * Ls : 0.0), Ls, min(t, 1e10), 1.0); return; }\n"
     "  vec3 rgb = vec3(1.0, 0.93, 0.8) * (1.0 - exp(-exposure * L));\n"
     "  color = vec4(pow(rgb, vec3(1.0 / 2.2)), 1.0);\n"
     "}\n";
@@ -83,6 +90,44 @@ static int write_png(const char *path, const unsigned char *rgb, int w, int h)
     return fclose(f) != 0;
 }
 
+/* px holds (airlight, surface radiance, distance) per pixel; replace it by
+ * the tone-mapped colour of airlight + T c + S, S the surfaces' light
+ * scattered on its way (operator A; g = 0.9 -> a Gaussian lobe with
+ * B = (1 - g)/2, whose mean cosine is close to g). */
+static int multiple_scattering(float *px, int pw, int ph, double kappa, double albedo, double exposure)
+{
+    size_t n = (size_t)pw * (size_t)ph;
+    float *rgb = malloc(n * 3 * sizeof *rgb), *D = malloc(n * sizeof *D), *Dq = malloc(n * sizeof *Dq);
+    double *S = malloc(n * 3 * sizeof *S), *T = malloc(n * sizeof *T);
+    nbt_beam_medium m = nbt_beam_homogeneous(kappa, albedo, (1.0 - 0.9) / 2.0);
+    nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
+    int rc = !rgb || !D || !Dq || !S || !T || !k;
+    for (size_t i = 0; !rc && i < n; i++) {
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = px[4 * i + 1];
+        D[i] = px[4 * i + 2];
+    }
+    if (!rc) {
+        nbt_screen_quantize(D, n, 64, Dq);
+        nbt_screen_input in = {(size_t)pw, (size_t)ph, rgb, Dq, 1.2 / ph, NULL}; /* the shader's tangent half-height 0.6 */
+        rc = nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, 1e-6, 66, 0, S, NULL) != NBT_OK;
+    }
+    for (size_t i = 0; !rc && i < n; i++) {
+        nbt_screen_kern kn;
+        nbt_screen_kernel_eval(k, D[i], &kn); /* the direct part at the true distance */
+        double L = px[4 * i] + kn.T * px[4 * i + 1] + S[3 * i];
+        static const double tint[3] = {1.0, 0.93, 0.8};
+        for (int c = 0; c < 3; c++)
+            px[4 * i + c] = (float)pow(tint[c] * (1.0 - exp(-exposure * L)), 1.0 / 2.2);
+    }
+    nbt_screen_kernel_free(k);
+    free(rgb);
+    free(D);
+    free(Dq);
+    free(S);
+    free(T);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     const char *out = "nbt-demo.png";
@@ -94,7 +139,8 @@ int main(int argc, char **argv)
             printf("nbt-demo (nbt) %s\n", nbt_version());
             return 0;
         } else if (!strcmp(argv[i], "--help")) {
-            puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 (columns) x kappa = 0.05, 0.2 (rows).");
+            puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 and 0.9 with multiple scattering (columns)\n"
+                 "x kappa = 0.05, 0.2 (rows).");
             return 0;
         } else
             out = argv[i];
@@ -103,7 +149,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "nbt-demo: --width %d is not accepted: 16..4096\n", pw);
         return 2;
     }
-    int ph = pw * 3 / 4, W = 3 * pw, H = 2 * ph;
+    int ph = pw * 3 / 4, W = 4 * pw, H = 2 * ph;
     char err[4096];
     if (egl_headless_open(err, sizeof err)) {
         fprintf(stderr, "nbt-demo: %s\n", err);
@@ -149,18 +195,25 @@ int main(int argc, char **argv)
         glUniform1f(glGetUniformLocation(prog, "exposure"), 1.5f);
         for (int ki = 0; ki < 2; ki++) {
             glUniform1f(glGetUniformLocation(prog, "kappa"), (float)ks[ki]);
-            double r0 = (double)clock() / CLOCKS_PER_SEC;
-            gl_draw_fullscreen();
-            glReadPixels(0, 0, pw, ph, GL_RGBA, GL_FLOAT, px);
-            t_render += (double)clock() / CLOCKS_PER_SEC - r0;
-            /* panel (gi, ki): row 0 of the strip is kappa 0.05 (top) */
-            for (int y = 0; y < ph; y++)
-                for (int x = 0; x < pw; x++)
-                    for (int c = 0; c < 3; c++) {
-                        float v = px[((size_t)y * pw + x) * 4 + c];
-                        int X = gi * pw + x, Y = (1 - ki) * ph + y;
-                        img[((size_t)Y * W + X) * 3 + c] = (unsigned char)lrintf(255.0f * fminf(fmaxf(v, 0.0f), 1.0f));
-                    }
+            for (int ms = 0; ms < 1 + (gi == 2); ms++) {
+                glUniform1i(glGetUniformLocation(prog, "raw"), ms);
+                double r0 = (double)clock() / CLOCKS_PER_SEC;
+                gl_draw_fullscreen();
+                glReadPixels(0, 0, pw, ph, GL_RGBA, GL_FLOAT, px);
+                t_render += (double)clock() / CLOCKS_PER_SEC - r0;
+                if (ms && multiple_scattering(px, pw, ph, ks[ki], 0.9, 1.5) != 0) {
+                    fprintf(stderr, "nbt-demo: multiple scattering failed\n");
+                    return 1;
+                }
+                /* panel (gi + ms, ki): row 0 of the strip is kappa 0.05 (top) */
+                for (int y = 0; y < ph; y++)
+                    for (int x = 0; x < pw; x++)
+                        for (int c = 0; c < 3; c++) {
+                            float v = px[((size_t)y * pw + x) * 4 + c];
+                            int X = (gi + ms) * pw + x, Y = (1 - ki) * ph + y;
+                            img[((size_t)Y * W + X) * 3 + c] = (unsigned char)lrintf(255.0f * fminf(fmaxf(v, 0.0f), 1.0f));
+                        }
+            }
         }
         glDeleteTextures(3, tex);
         nbt_table_free(Ht);
@@ -169,7 +222,7 @@ int main(int argc, char **argv)
         nbt_phase_free(hp);
     }
     int rc = write_png(out, img, W, H);
-    fprintf(stderr, "nbt-demo: %s (%dx%d): 6 panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
+    fprintf(stderr, "nbt-demo: %s (%dx%d): 8 panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
             "(%s, CPU figures are for relative comparisons only)\n", out, W, H,
             (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER));
     free(img);
