@@ -348,7 +348,7 @@ static nbt_grid *load_grid(const opts *o)
     if (n > 4 && !strcasecmp(o->density + n - 4, ".vdb")) {
 #ifdef HAVE_OPENVDB
         nbt_vdb_grid v;
-        if (nbt_vdb_read(o->density, o->grid_name, (size_t)1 << 31, &v, err, sizeof err) != 0)
+        if (nbt_vdb_read(o->density, o->grid_name, (size_t)1 << 28 /* 1 GiB of float */, &v, err, sizeof err) != 0)
             die_usage("--density: %s", err);
         g = nbt_grid_alloc(v.nx, v.ny, v.nz, v.origin, v.voxel);
         if (!g)

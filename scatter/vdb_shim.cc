@@ -40,19 +40,21 @@ __attribute__((format(printf, 3, 4))) void fail(char *err, size_t errlen, const 
             *c = ' ';
 }
 
-// NULL when the file can be opened for reading, else the reason (strerror text)
-const char *unreadable(const char *path)
+// "" when the file can be opened for reading, else the reason (strerror text;
+// strerror_r, the GNU form that g++ selects, as strerror is not thread-safe)
+std::string unreadable(const char *path)
 {
+    char buf[128];
     struct stat st;
     if (stat(path, &st) != 0)
-        return std::strerror(errno);
+        return strerror_r(errno, buf, sizeof buf);
     if (S_ISDIR(st.st_mode))
-        return std::strerror(EISDIR);
+        return strerror_r(EISDIR, buf, sizeof buf);
     std::FILE *f = std::fopen(path, "rb");
     if (!f)
-        return std::strerror(errno);
+        return strerror_r(errno, buf, sizeof buf);
     std::fclose(f);
-    return nullptr;
+    return "";
 }
 
 // "a (float), b (double)" or "no grids"
@@ -301,8 +303,9 @@ extern "C" int nbt_vdb_read(const char *path, const char *name, size_t max_voxel
         fail(err, errlen, "nbt_vdb_read: need a path and an output grid");
         return -1;
     }
-    if (const char *why = unreadable(path)) {
-        fail(err, errlen, "%s: %s", path, why);
+    const std::string why = unreadable(path);
+    if (!why.empty()) {
+        fail(err, errlen, "%s: %s", path, why.c_str());
         return -1;
     }
     try {
@@ -358,7 +361,7 @@ extern "C" int nbt_vdb_write(const char *path, const char *name, const nbt_vdb_g
 
 extern "C" long nbt_vdb_test_active_tiles(const char *path, const char *name)
 {
-    if (!path || !name || unreadable(path))
+    if (!path || !name || !unreadable(path).empty())
         return -1;
     try {
         init();
