@@ -18,9 +18,12 @@ nbt_status nbt__fail(nbt_status s, const char *reason);
 /* generated from the GLSL modules at build time (nbt_glsl.c) */
 extern const char nbt_glsl_nbt_beam[], nbt_glsl_nbt_scatter_common[], nbt_glsl_nbt_scatter_near[],
     nbt_glsl_nbt_scatter_shinya[], nbt_glsl_nbt_scatter_literal[], nbt_glsl_nbt_scatter_pyr0[],
-    nbt_glsl_nbt_scatter_down[], nbt_glsl_nbt_scatter_naive[], nbt_glsl_nbt_scatter_elek[];
+    nbt_glsl_nbt_scatter_down[], nbt_glsl_nbt_scatter_naive[], nbt_glsl_nbt_scatter_elek[],
+    nbt_glsl_nbt_scatter_nbtc[], nbt_glsl_nbt_scatter_nbt0[], nbt_glsl_nbt_scatter_nbtdown[],
+    nbt_glsl_nbt_scatter_nbtmix[], nbt_glsl_nbt_scatter_nbtup[], nbt_glsl_nbt_scatter_nbt[];
 
-enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, NPASS };
+enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, P_NBT0, P_NBTDOWN, P_NBTMIX, P_NBTUP, P_NBT, NPASS };
+#define FIRST_NBT_PASS P_NBT0 /* these get nbt_scatter_nbtc too */
 
 static const struct {
     const char *name;
@@ -29,15 +32,20 @@ static const struct {
     {"near", nbt_glsl_nbt_scatter_near},       {"shinya", nbt_glsl_nbt_scatter_shinya},
     {"literal", nbt_glsl_nbt_scatter_literal}, {"pyr0", nbt_glsl_nbt_scatter_pyr0},
     {"down", nbt_glsl_nbt_scatter_down},       {"naive", nbt_glsl_nbt_scatter_naive},
-    {"elek", nbt_glsl_nbt_scatter_elek},
+    {"elek", nbt_glsl_nbt_scatter_elek},       {"nbt0", nbt_glsl_nbt_scatter_nbt0},
+    {"nbtdown", nbt_glsl_nbt_scatter_nbtdown}, {"nbtmix", nbt_glsl_nbt_scatter_nbtmix},
+    {"nbtup", nbt_glsl_nbt_scatter_nbtup},     {"nbt", nbt_glsl_nbt_scatter_nbt},
 };
 
-static const char *const MNAMES[NBT_GLS_NMETHODS] = {"shinya", "shinya-literal", "naive", "elek"};
+static const char *const MNAMES[NBT_GLS_NMETHODS] = {"shinya", "shinya-literal", "naive", "elek", "nbt"};
+#define NBT_LAYERS (3 * NBT_GLS_NBT_MAXSLABS + 1)
 
 struct nbt_gls {
     size_t w, h, pw, ph; /* image and padded (pyramid) size */
     GLuint prog[NPASS];
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
+    GLuint tnlut, tsrc, tq, tcol; /* nbt: centre table, source pyramid, level parts, collapse */
+    unsigned slabs;
     GLuint stamp[2]; /* GL_TIMESTAMP before and after the passes */
     float *buf; /* staging, w*h*4 */
 };
@@ -71,20 +79,23 @@ char *nbt_gls_pass_source(unsigned i)
 {
     if (i >= NPASS)
         return NULL;
-    char head[512];
+    char head[768];
     int n = snprintf(head, sizeof head,
                      "#version 430 core\n#define NBT_SC_LUT_LO %d\n#define NBT_SC_LUT_PER %d\n#define NBT_SC_LUT_N %d\n"
-                     "#define NBT_SC_NAIVE_C %.9g\n#define NBT_SC_ELEK_C %.9g\n",
-                     NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C);
-    const char *parts[4] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common, PASSES[i].src};
+                     "#define NBT_SC_NAIVE_C %.9g\n#define NBT_SC_ELEK_C %.9g\n#define NBT_SC_NBT_MAXSLABS %d\n"
+                     "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n",
+                     NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C,
+                     NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR);
+    const char *parts[5] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common,
+                            i >= FIRST_NBT_PASS ? nbt_glsl_nbt_scatter_nbtc : "", PASSES[i].src};
     size_t len = 1;
-    for (int k = 0; k < 4; k++)
+    for (int k = 0; k < 5; k++)
         len += strlen(parts[k]) + 1;
     char *s = malloc(len);
     if (!s || n < 0)
         return free(s), NULL;
     s[0] = '\0';
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 5; k++) {
         strcat(s, parts[k]);
         strcat(s, "\n");
     }
@@ -100,6 +111,198 @@ void nbt_gls_near_table(float *lut)
             lut[8 * i + k] = (float)nbt_screen_atom_pixel(NBT_ATOM_ERFC, b, off[k][0], off[k][1]);
         lut[8 * i + 6] = lut[8 * i + 7] = 0.0f;
     }
+}
+
+/* ---- NBT_GLS_NBT: the kernel fit ---- */
+
+#define KB_N 1024 /* 1-D domain of the level kernels: impulse near KB_N/2 */
+#define KB_C (KB_N / 2)
+static double nbt_kbar_tab[NBT_GLS_NBT_NB][KB_N];
+static double nbt_wtab[NBT_GLS_NBT_N * NBT_GLS_NBT_NB];
+static int nbt_fit_done;
+
+/* 1-D kernels U^l [B] D^l of an impulse, averaged over its 2^l phases */
+static void nbt_level_kernels(void)
+{
+    static const double F[4] = {0.13, 0.37, 0.37, 0.13};
+    static double a[NBT_GLS_K + 1][KB_N];
+    double bl = NBT_GLS_NBT_BLUR, t[KB_N];
+    for (int b = 0; b < NBT_GLS_NBT_NB; b++) {
+        int l = b % (NBT_GLS_NBT_NB / 2) + 1, blur = b >= NBT_GLS_NBT_NB / 2, P = 1 << l;
+        memset(nbt_kbar_tab[b], 0, sizeof nbt_kbar_tab[b]);
+        for (int ph = 0; ph < P; ph++) {
+            memset(a, 0, sizeof a);
+            a[0][KB_C + ph] = 1;
+            for (int j = 1; j <= l; j++)
+                for (int p = 0; p < KB_N >> j; p++) {
+                    double s = 0;
+                    for (int k = 0; k < 4; k++) {
+                        int q = 2 * p - 1 + k;
+                        if (q >= 0 && q < KB_N >> (j - 1))
+                            s += F[k] * a[j - 1][q];
+                    }
+                    a[j][p] = s;
+                }
+            int n = KB_N >> l;
+            if (blur) {
+                for (int p = 0; p < n; p++)
+                    t[p] = (1 - 2 * bl) * a[l][p] + (p > 0 ? bl * a[l][p - 1] : 0) + (p + 1 < n ? bl * a[l][p + 1] : 0);
+                memcpy(a[l], t, (size_t)n * sizeof *t);
+            }
+            for (int j = l; j >= 1; j--) { /* the bilinear octave up-step */
+                int m = KB_N >> (j - 1);
+                for (int q = 0; q < m; q++) {
+                    int p = q >> 1, o = (q & 1) ? p + 1 : p - 1;
+                    a[j - 1][q] = 0.75 * a[j][p] + (o >= 0 && o < m / 2 ? 0.25 * a[j][o] : 0.0);
+                }
+            }
+            for (int x = 0; x < KB_N; x++) {
+                int d = x - (KB_C + ph);
+                if (d > -KB_C && d < KB_C)
+                    nbt_kbar_tab[b][KB_C + d] += a[0][x] / P;
+            }
+        }
+    }
+}
+
+double nbt_gls_nbt_kbar(int b, long d)
+{
+    if (!nbt_fit_done)
+        nbt_gls_nbt_table();
+    return b >= 0 && b < NBT_GLS_NBT_NB && labs(d) < KB_C ? nbt_kbar_tab[b][KB_C + d] : 0.0;
+}
+
+/* a unit erfc atom over a pixel at r > 4: centre value + laplacian/24 */
+static double nbt_far(double b, double r)
+{
+    double u = r / b, phi = exp(-0.5 * u * u) / 2.50662827463100050, G = 0.5 * erfc(u / sqrt(2.0));
+    double lap = u * phi / (b * b * r) + phi / (b * r * r) + G / (r * r * r);
+    return (G / r + lap / 24.0) / (2.50662827463100050 * b);
+}
+
+/* non-negative least squares over the pixels outside the 3x3 centre,
+ * |dx|, |dy| <= R, by cyclic coordinate descent on the normal equations */
+static void nbt_fit_one(double beta, double *w)
+{
+    enum { NB = NBT_GLS_NBT_NB };
+    long R = (long)ceil(5 * beta);
+    R = R < 12 ? 12 : R > 256 ? 256 : R;
+    double G[NB][NB], r[NB], f[NB];
+    memset(G, 0, sizeof G);
+    memset(r, 0, sizeof r);
+    for (long y = -R; y <= R; y++)
+        for (long x = -R; x <= R; x++) {
+            if (labs(x) <= 1 && labs(y) <= 1)
+                continue;
+            double rr = sqrt((double)(x * x + y * y));
+            double t = rr > 4 ? nbt_far(beta, rr) : nbt_screen_atom_pixel(NBT_ATOM_ERFC, beta, x, y);
+            for (int i = 0; i < NB; i++)
+                f[i] = nbt_kbar_tab[i][KB_C + x] * nbt_kbar_tab[i][KB_C + y];
+            for (int i = 0; i < NB; i++) {
+                r[i] += f[i] * t;
+                for (int j = 0; j <= i; j++)
+                    G[i][j] += f[i] * f[j];
+            }
+        }
+    for (int i = 0; i < NB; i++) {
+        w[i] = 0;
+        for (int j = i + 1; j < NB; j++)
+            G[i][j] = G[j][i];
+    }
+    for (int sweep = 0; sweep < 3000; sweep++)
+        for (int i = 0; i < NB; i++) {
+            double s = r[i];
+            for (int j = 0; j < NB; j++)
+                if (j != i)
+                    s -= G[i][j] * w[j];
+            w[i] = G[i][i] > 0 && s > 0 ? s / G[i][i] : 0.0;
+        }
+}
+
+const double *nbt_gls_nbt_table(void)
+{
+    if (!nbt_fit_done) {
+        nbt_level_kernels();
+        for (int i = 0; i < NBT_GLS_NBT_N; i++)
+            nbt_fit_one(exp2(NBT_GLS_NBT_LO + (double)i / NBT_GLS_NBT_PER), nbt_wtab + i * NBT_GLS_NBT_NB);
+        nbt_fit_done = 1;
+    }
+    return nbt_wtab;
+}
+
+void nbt_gls_nbt_weights(double lb, double *a, double *da)
+{
+    const double *t = nbt_gls_nbt_table();
+    double u = (lb - NBT_GLS_NBT_LO) * NBT_GLS_NBT_PER, f;
+    int i, hold = 0;
+    if (!(u > 0)) {
+        i = 0, f = 0, hold = 1;
+    } else if (u >= NBT_GLS_NBT_N - 1) {
+        i = NBT_GLS_NBT_N - 2, f = 1, hold = 1;
+    } else {
+        i = (int)floor(u);
+        f = u - i;
+    }
+    for (int b = 0; b < NBT_GLS_NBT_NB; b++) {
+        double t0 = t[i * NBT_GLS_NBT_NB + b], t1 = t[(i + 1) * NBT_GLS_NBT_NB + b];
+        a[b] = t0 + f * (t1 - t0);
+        if (da)
+            da[b] = hold ? 0.0 : (t1 - t0) * NBT_GLS_NBT_PER;
+    }
+}
+
+void nbt_gls_nbt_near_table(float *lut)
+{
+    static const long off[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    double a[NBT_GLS_NBT_NB];
+    for (int i = 0; i < NBT_GLS_LUT_N; i++) {
+        double lb = NBT_GLS_LUT_LO + (double)i / NBT_GLS_LUT_PER;
+        nbt_gls_nbt_weights(lb, a, NULL);
+        for (int k = 0; k < 8; k++)
+            lut[8 * i + k] = 0.0f;
+        for (int k = 0; k < 3; k++) {
+            double v = nbt_screen_atom_pixel(NBT_ATOM_ERFC, exp2(lb), off[k][0], off[k][1]);
+            for (int b = 0; b < NBT_GLS_NBT_NB; b++)
+                v -= a[b] * nbt_kbar_tab[b][KB_C + off[k][0]] * nbt_kbar_tab[b][KB_C + off[k][1]];
+            lut[8 * i + k] = (float)v;
+        }
+    }
+}
+
+static int is_sky(float D);
+
+void nbt_gls_nbt_plan_of(const nbt_gls_input *in, unsigned slabs, nbt_gls_nbt_plan *p)
+{
+    memset(p, 0, sizeof *p);
+    p->n = slabs < 1 ? 1 : slabs > NBT_GLS_NBT_MAXSLABS ? NBT_GLS_NBT_MAXSLABS : slabs;
+    float dmin = INFINITY, dmax = 0;
+    size_t np = in->w * in->h;
+    for (size_t i = 0; i < np; i++)
+        if (in->D[i] > 0 && !is_sky(in->D[i])) {
+            dmin = fminf(dmin, in->D[i]);
+            dmax = fmaxf(dmax, in->D[i]);
+        }
+    for (unsigned k = 0; k < NBT_GLS_NBT_MAXSLABS; k++)
+        p->bound[k] = INFINITY; /* bound[k], k >= 1: the lower bound of slab k; bound[0] unused */
+    if (dmax > dmin)
+        for (unsigned k = 1; k < p->n; k++)
+            p->bound[k] = (float)(dmin * pow((double)dmax / dmin, (double)k / p->n));
+    double lo[NBT_GLS_NBT_MAXSLABS], hi[NBT_GLS_NBT_MAXSLABS];
+    for (unsigned k = 0; k < p->n; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (size_t i = 0; i < np; i++) {
+        float D = in->D[i];
+        if (!(D > 0) || is_sky(D) || !(in->M0[i] > 0) || !(in->beta_px[i] > 0))
+            continue;
+        unsigned s = 0;
+        for (unsigned k = 1; k < p->n; k++)
+            s += p->bound[k] <= D;
+        double lb = log2(in->beta_px[i]);
+        lo[s] = fmin(lo[s], lb);
+        hi[s] = fmax(hi[s], lb);
+    }
+    for (unsigned k = 0; k < p->n; k++)
+        p->lb[k] = lo[k] <= hi[k] ? (float)(0.5 * (lo[k] + hi[k])) : 0.0f;
 }
 
 static GLuint compile_pass(unsigned i)
@@ -161,6 +364,48 @@ static GLuint make_tex(GLsizei levels, GLenum fmt, size_t w, size_t h, int pyram
     return t;
 }
 
+/* a 2-D array pyramid: mipmapped, bilinear within a level, zero border */
+static GLuint make_arr(GLsizei levels, GLsizei layers, size_t w, size_t h)
+{
+    static const float zero[4] = {0, 0, 0, 0};
+    GLuint t = 0;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, t);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, levels, GL_RGBA32F, (GLsizei)w, (GLsizei)h, layers);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_BORDER);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_BORDER);
+    glTexParameterfv(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BORDER_COLOR, zero);
+    return t;
+}
+
+/* a near table (8 floats per entry) as rows: texel (i, 0) = entries 0..3, (i, 1) = 4..7; 0 without memory */
+static int upload_lut(GLuint tex, const float *lut)
+{
+    float *rows = malloc(NBT_GLS_LUT_N * 8 * sizeof *rows);
+    if (!rows)
+        return 0;
+    for (int i = 0; i < NBT_GLS_LUT_N; i++)
+        for (int k = 0; k < 4; k++) {
+            rows[4 * i + k] = lut[8 * i + k];
+            rows[4 * (NBT_GLS_LUT_N + i) + k] = lut[8 * i + 4 + k];
+        }
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_LUT_N, 2, GL_RGBA, GL_FLOAT, rows);
+    free(rows);
+    return 1;
+}
+
+nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs)
+{
+    if (!g || slabs < 1 || slabs > NBT_GLS_NBT_MAXSLABS)
+        return nbt__fail(NBT_EDOM, "gl_scatter: slabs must lie in 1 .. NBT_GLS_NBT_MAXSLABS");
+    g->slabs = slabs;
+    return NBT_OK;
+}
+
 void nbt_gls_free(nbt_gls *g)
 {
     if (!g)
@@ -168,8 +413,8 @@ void nbt_gls_free(nbt_gls *g)
     for (int i = 0; i < NPASS; i++)
         if (g->prog[i])
             glDeleteProgram(g->prog[i]);
-    GLuint t[8] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb};
-    for (int i = 0; i < 8; i++)
+    GLuint t[12] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tq, g->tcol};
+    for (int i = 0; i < 12; i++)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
@@ -220,34 +465,30 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     g->tlut = make_tex(1, GL_RGBA32F, NBT_GLS_LUT_N, 2, 0);
     g->tpyr = make_tex(NBT_GLS_K + 1, GL_RGBA32F, g->pw, g->ph, 1);
     g->twb = make_tex(NBT_GLS_K + 1, GL_RG32F, g->pw, g->ph, 1);
+    g->tnlut = make_tex(1, GL_RGBA32F, NBT_GLS_LUT_N, 2, 0);
+    /* nbt: pyramid levels 1 .. K as texture levels 0 .. K-1, with a margin texel each side */
+    g->tsrc = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
+    g->tq = make_arr(NBT_GLS_K, 2 * NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
+    g->tcol = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
+    g->slabs = NBT_GLS_NBT_SLABS;
     float *lut = malloc(NBT_GLS_LUT_N * 8 * sizeof *lut);
     if (!lut) {
         nbt_gls_free(g);
         nbt__fail(NBT_ENOMEM, "gl_scatter: out of memory");
         return NULL;
     }
+    nbt_gls_nbt_near_table(lut);
+    upload_lut(g->tnlut, lut);
     nbt_gls_near_table(lut);
     /* rows: texel (i, 0) = entries 0..3 of i, (i, 1) = entries 4..7 */
-    float *rows = malloc(NBT_GLS_LUT_N * 8 * sizeof *rows);
-    if (rows) {
-        for (int i = 0; i < NBT_GLS_LUT_N; i++)
-            for (int k = 0; k < 4; k++) {
-                rows[4 * i + k] = lut[8 * i + k];
-                rows[4 * (NBT_GLS_LUT_N + i) + k] = lut[8 * i + 4 + k];
-            }
-        glBindTexture(GL_TEXTURE_2D, g->tlut);
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_LUT_N, 2, GL_RGBA, GL_FLOAT, rows);
-    }
+    int ok = upload_lut(g->tlut, lut);
     free(lut);
     glGenQueries(2, g->stamp);
-    if (!rows || glGetError() != GL_NO_ERROR) {
-        free(rows);
+    if (!ok || glGetError() != GL_NO_ERROR) {
         nbt_gls_free(g);
-        nbt__fail(rows ? NBT_EIO : NBT_ENOMEM, "gl_scatter: creating the textures failed");
+        nbt__fail(ok ? NBT_EIO : NBT_ENOMEM, "gl_scatter: creating the textures failed");
         return NULL;
     }
-    free(rows);
     return g;
 }
 
@@ -345,6 +586,98 @@ static void build_pyramid(const nbt_gls *g, int masked, float eps)
     }
 }
 
+static void set_plan(const nbt_gls *g, int pass, const nbt_gls_nbt_plan *pl)
+{
+    GLuint p = g->prog[pass];
+    glUniform1i(glGetUniformLocation(p, "nbt_sc_nslab"), (GLint)pl->n);
+    glUniform1fv(glGetUniformLocation(p, "nbt_sc_bound"), NBT_GLS_NBT_MAXSLABS, pl->bound);
+    glUniform1fv(glGetUniformLocation(p, "nbt_sc_lb"), NBT_GLS_NBT_MAXSLABS, pl->lb);
+}
+
+static void dispatch3(size_t w, size_t h, size_t layers)
+{
+    glDispatchCompute((GLuint)((w + 7) / 8), (GLuint)((h + 7) / 8), (GLuint)layers);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+}
+
+/* method nbt: source pyramid, per level the parts of each collapse, the
+ * collapse from level K to 1, the centre weights, the receivers */
+static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
+{
+    unsigned n = pl->n, L = 3 * n + 1, Z = 3 * n;
+    size_t bw = g->pw / 2 + ((size_t)1 << NBT_GLS_K), bh = g->ph / 2 + ((size_t)1 << NBT_GLS_K);
+#define EXT(v, k) (((v) >> (k)) + 2) /* physical extent of level k: logical -1 .. n_k */
+    use(g, P_NBT0);
+    set_plan(g, P_NBT0, pl);
+    glUniform2i(glGetUniformLocation(g->prog[P_NBT0], "nbt_sc_lsize"), (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1));
+    glBindImageTexture(0, g->tsrc, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    dispatch(EXT(g->pw, 1), EXT(g->ph, 1));
+    use(g, P_NBTDOWN);
+    GLuint p = g->prog[P_NBTDOWN];
+    for (int k = 2; k <= NBT_GLS_K; k++) {
+        glUniform2i(glGetUniformLocation(p, "nbt_sc_srcsize"), (GLint)EXT(g->pw, k - 1), (GLint)EXT(g->ph, k - 1));
+        glUniform2i(glGetUniformLocation(p, "nbt_sc_dstsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
+        glBindImageTexture(0, g->tsrc, k - 2, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(1, g->tsrc, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        dispatch3(EXT(g->pw, k), EXT(g->ph, k), L);
+    }
+    /* the weights of each slab's mid beta and their slopes */
+    double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
+    for (unsigned j = 0; j < n; j++)
+        nbt_gls_nbt_weights(pl->lb[j], a[j], da[j]);
+    use(g, P_NBTMIX);
+    set_plan(g, P_NBTMIX, pl);
+    p = g->prog[P_NBTMIX];
+    for (int k = 1; k <= NBT_GLS_K; k++) {
+        float wa[NBT_GLS_NBT_MAXSLABS] = {0}, wda[NBT_GLS_NBT_MAXSLABS] = {0}, wb[NBT_GLS_NBT_MAXSLABS] = {0},
+              wdb[NBT_GLS_NBT_MAXSLABS] = {0};
+        for (unsigned j = 0; j < n; j++) {
+            wa[j] = (float)a[j][k - 1];
+            wda[j] = (float)da[j][k - 1];
+            wb[j] = (float)a[j][NBT_GLS_NBT_NB / 2 + k - 1];
+            wdb[j] = (float)da[j][NBT_GLS_NBT_NB / 2 + k - 1];
+        }
+        glUniform1fv(glGetUniformLocation(p, "nbt_sc_wa"), NBT_GLS_NBT_MAXSLABS, wa);
+        glUniform1fv(glGetUniformLocation(p, "nbt_sc_wda"), NBT_GLS_NBT_MAXSLABS, wda);
+        glUniform1fv(glGetUniformLocation(p, "nbt_sc_wb"), NBT_GLS_NBT_MAXSLABS, wb);
+        glUniform1fv(glGetUniformLocation(p, "nbt_sc_wdb"), NBT_GLS_NBT_MAXSLABS, wdb);
+        glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
+        glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(1, g->tq, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        dispatch(EXT(g->pw, k), EXT(g->ph, k));
+    }
+    use(g, P_NBTUP);
+    set_plan(g, P_NBTUP, pl);
+    p = g->prog[P_NBTUP];
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
+    for (int k = NBT_GLS_K; k >= 1; k--) {
+        glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
+        glUniform2i(glGetUniformLocation(p, "nbt_sc_usize"), (GLint)(bw >> k), (GLint)(bh >> k));
+        glUniform1i(glGetUniformLocation(p, "nbt_sc_level"), k);
+        glBindImageTexture(0, g->tq, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        dispatch3(EXT(g->pw, k), EXT(g->ph, k), Z);
+    }
+    use(g, P_NEAR);
+    bind_tex(2, g->tnlut);
+    glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    dispatch(g->w, g->h);
+    use(g, P_NBT);
+    set_plan(g, P_NBT, pl);
+    glUniform2i(glGetUniformLocation(g->prog[P_NBT], "nbt_sc_usize"), (GLint)bw, (GLint)bh);
+#undef EXT
+    bind_tex(4, g->tn0);
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
+    glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    dispatch(g->w, g->h);
+    bind_tex(2, g->tlut);
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+}
+
 nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms)
 {
     if (!g || in->w != g->w || in->h != g->h)
@@ -377,6 +710,9 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     bind_tex(1, g->tp);
     bind_tex(2, g->tlut);
     long R = nbt_gls_window(m, in);
+    nbt_gls_nbt_plan plan;
+    if (m == NBT_GLS_NBT)
+        nbt_gls_nbt_plan_of(in, g->slabs, &plan);
 
     /* timestamps, not GL_TIME_ELAPSED: llvmpipe reports 1 ns elapsed for
      * compute-only work, while its timestamps (and a GPU's) bracket it */
@@ -414,6 +750,9 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         dispatch(w, h);
         break;
     }
+    case NBT_GLS_NBT:
+        run_nbt(g, &plan);
+        break;
     }
     glQueryCounter(g->stamp[1], GL_TIMESTAMP);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);

@@ -1,6 +1,7 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
  * tests (mkexr OUT.exr noz|nan|negative|inf), and a constant density grid
- * over x, y in [-20, 20], z in [-40, 1] (mkexr OUT.raw grid VALUE). */
+ * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
+ * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE). */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -8,6 +9,9 @@
 #include <stdlib.h>
 #include <nbt/grid.h>
 #include <nbt/image.h>
+#ifdef HAVE_OPENVDB
+#include "../scatter/vdb_shim.h"
+#endif
 
 int main(int argc, char **argv)
 {
@@ -19,7 +23,20 @@ int main(int argc, char **argv)
             return 1;
         for (size_t i = 0; i < 40 * 40 * 41; i++)
             g->data[i] = (float)atof(argv[3]);
-        int rc = nbt_grid_write_raw(g, argv[1], err, sizeof err) != NBT_OK;
+        size_t n = strlen(argv[1]);
+        int rc;
+        if (n > 4 && !strcmp(argv[1] + n - 4, ".vdb")) {
+#ifdef HAVE_OPENVDB
+            nbt_vdb_grid v = {g->nx, g->ny, g->nz, {o[0], o[1], o[2]}, g->voxel, g->data};
+            rc = nbt_vdb_write(argv[1], "density", &v, err, sizeof err) != 0;
+#else
+            rc = 1;
+            snprintf(err, sizeof err, "no OpenVDB in this build");
+#endif
+        } else
+            rc = nbt_grid_write_raw(g, argv[1], err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
         nbt_grid_free(g);
         return rc;
     }

@@ -355,6 +355,224 @@ static nbt_status emul_elek(const nbt_gls_input *in, double *S)
     return st;
 }
 
+/* ---- nbt: fitted pyramid kernels, depth slabs, exact centre taps ---- */
+
+typedef struct {
+    size_t w, h, nl;
+    double *v; /* nl layers of w*h rgb */
+} stack;
+
+static double *at(const stack *a, size_t layer, long x, long y)
+{
+    return a->v + 3 * ((layer * a->h + (size_t)y) * a->w + (size_t)x);
+}
+
+static int stack_new(stack *a, size_t w, size_t h, size_t nl)
+{
+    a->w = w, a->h = h, a->nl = nl;
+    a->v = calloc(w * h * nl * 3, sizeof(double));
+    return a->v != NULL;
+}
+
+/* the texture unit's bilinear read of one layer at texel-centre coordinates, zero border */
+static void stack_bilinear(const stack *a, size_t layer, double tx, double ty, double *out)
+{
+    long i0 = (long)floor(tx), j0 = (long)floor(ty);
+    double fx = tx - i0, fy = ty - j0;
+    out[0] = out[1] = out[2] = 0;
+    for (int dj = 0; dj < 2; dj++)
+        for (int di = 0; di < 2; di++) {
+            long i = i0 + di, j = j0 + dj;
+            if (i < 0 || j < 0 || i >= (long)a->w || j >= (long)a->h)
+                continue;
+            double wgt = (di ? fx : 1 - fx) * (dj ? fy : 1 - fy);
+            const double *v = at(a, layer, i, j);
+            for (int c = 0; c < 3; c++)
+                out[c] += wgt * v[c];
+        }
+}
+
+static int nbt_slab(float D, const nbt_gls_nbt_plan *pl)
+{
+    float k = key(D);
+    if (!(k > 0))
+        return -1;
+    if (k >= SKY_KEY)
+        return (int)pl->n;
+    int s = 0;
+    for (unsigned b = 1; b < pl->n; b++)
+        s += pl->bound[b] <= k;
+    return s;
+}
+
+static double nbt_lbeta(double b)
+{
+    double lb = log2(fmax(b, exp2(NBT_GLS_NBT_LO)));
+    return lb < NBT_GLS_NBT_LO ? NBT_GLS_NBT_LO : lb > NBT_GLS_NBT_HI ? NBT_GLS_NBT_HI : lb;
+}
+
+nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
+{
+    size_t pad = (size_t)1 << NBT_GLS_K, w = in->w, h = in->h, np = w * h;
+    size_t pw = (w + pad - 1) / pad * pad, ph = (h + pad - 1) / pad * pad;
+    nbt_gls_nbt_plan pl;
+    nbt_gls_nbt_plan_of(in, slabs, &pl);
+    long n = (long)pl.n, L = 3 * n + 1, Z = 3 * n;
+    /* level k >= 1 holds logical texels -1 .. (pw >> k): index logical + 1 */
+    stack src[NBT_GLS_K + 1], q[NBT_GLS_K + 1], col[NBT_GLS_K + 1];
+    memset(src, 0, sizeof src);
+    memset(q, 0, sizeof q);
+    memset(col, 0, sizeof col);
+    double *nw = malloc(np * 6 * sizeof *nw), *lev0 = calloc(np * 3 * (size_t)L, sizeof(double));
+    float *lut = malloc(NBT_GLS_LUT_N * 8 * sizeof *lut);
+    int ok = nw && lut && lev0;
+    for (int k = 1; k <= NBT_GLS_K && ok; k++)
+        ok = stack_new(&src[k], (pw >> k) + 2, (ph >> k) + 2, (size_t)L) &&
+             stack_new(&q[k], (pw >> k) + 2, (ph >> k) + 2, 2 * (size_t)Z) &&
+             stack_new(&col[k], (pw >> k) + 2, (ph >> k) + 2, (size_t)Z);
+    nbt_status st = ok ? NBT_OK : NBT_ENOMEM;
+    if (st == NBT_OK) {
+        /* level 0 (image only): A_j = M0 c, E_j = delta M0 c, C_j = c */
+        stack l0 = {w, h, (size_t)L, lev0};
+        for (long y = 0; y < (long)h; y++)
+            for (long x = 0; x < (long)w; x++) {
+                size_t i = (size_t)y * w + (size_t)x;
+                int s = nbt_slab(in->D[i], &pl);
+                if (s < 0)
+                    continue;
+                for (int c = 0; c < 3; c++) {
+                    at(&l0, (size_t)(2 * n + s), x, y)[c] = in->rgb[3 * i + c];
+                    if (s < n) {
+                        double m = (double)in->M0[i] * in->rgb[3 * i + c];
+                        at(&l0, (size_t)s, x, y)[c] = m;
+                        at(&l0, (size_t)(n + s), x, y)[c] = (nbt_lbeta(in->beta_px[i]) - pl.lb[s]) * m;
+                    }
+                }
+            }
+        /* decimation in logical texels; level 0 has no margin */
+        for (int k = 1; k <= NBT_GLS_K; k++) {
+            const stack *f = k == 1 ? &l0 : &src[k - 1];
+            long m = k == 1 ? 0 : 1; /* index of logical 0 in the finer level */
+            for (long z = 0; z < L; z++)
+                for (long py = -1; py <= (long)(ph >> k); py++)
+                    for (long px = -1; px <= (long)(pw >> k); px++) {
+                        double *o = at(&src[k], (size_t)z, px + 1, py + 1);
+                        for (int b = 0; b < 4; b++)
+                            for (int a = 0; a < 4; a++) {
+                                long qx = 2 * px - 1 + a + m, qy = 2 * py - 1 + b + m;
+                                if (qx < 0 || qy < 0 || qx >= (long)f->w || qy >= (long)f->h)
+                                    continue;
+                                const double *v = at(f, (size_t)z, qx, qy);
+                                for (int c = 0; c < 3; c++)
+                                    o[c] += F4[a] * F4[b] * v[c];
+                            }
+                    }
+        }
+        /* the parts of each collapse per level */
+        double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
+        for (long j = 0; j < n; j++)
+            nbt_gls_nbt_weights(pl.lb[j], a[j], da[j]);
+        const int HB = NBT_GLS_NBT_NB / 2;
+        for (int k = 1; k <= NBT_GLS_K; k++)
+            for (long py = 0; py < (long)q[k].h; py++)
+                for (long px = 0; px < (long)q[k].w; px++) {
+                    double acc[2][3] = {{0, 0, 0}, {0, 0, 0}}, suf[3];
+                    for (long j = 0; j < n; j++) {
+                        const double *A = at(&src[k], (size_t)j, px, py), *E = at(&src[k], (size_t)(n + j), px, py);
+                        double w1[2] = {(float)a[j][k - 1], (float)a[j][HB + k - 1]};
+                        double w2[2] = {(float)da[j][k - 1], (float)da[j][HB + k - 1]};
+                        for (int t = 0; t < 2; t++)
+                            for (int c = 0; c < 3; c++) {
+                                acc[t][c] += w1[t] * A[c] + w2[t] * E[c];
+                                at(&q[k], (size_t)(t * Z + j), px, py)[c] = acc[t][c];
+                            }
+                    }
+                    memcpy(suf, at(&src[k], (size_t)(3 * n), px, py), sizeof suf);
+                    for (long i = n - 1; i >= 0; i--) {
+                        double w1[2] = {(float)a[i][k - 1], (float)a[i][HB + k - 1]};
+                        double w2[2] = {(float)da[i][k - 1], (float)da[i][HB + k - 1]};
+                        for (int t = 0; t < 2; t++)
+                            for (int c = 0; c < 3; c++) {
+                                at(&q[k], (size_t)(t * Z + n + i), px, py)[c] = w1[t] * suf[c];
+                                at(&q[k], (size_t)(t * Z + 2 * n + i), px, py)[c] = w2[t] * suf[c];
+                            }
+                        const double *C = at(&src[k], (size_t)(2 * n + i), px, py);
+                        for (int c = 0; c < 3; c++)
+                            suf[c] += C[c];
+                    }
+                }
+        /* the collapse: col_k = q_k + blur + up(col_{k+1}) */
+        const double bw[3] = {NBT_GLS_NBT_BLUR, 1 - 2 * NBT_GLS_NBT_BLUR, NBT_GLS_NBT_BLUR};
+        for (int k = NBT_GLS_K; k >= 1; k--)
+            for (long z = 0; z < Z; z++)
+                for (long py = 0; py < (long)col[k].h; py++)
+                    for (long px = 0; px < (long)col[k].w; px++) {
+                        double *o = at(&col[k], (size_t)z, px, py), u[3];
+                        memcpy(o, at(&q[k], (size_t)z, px, py), 3 * sizeof *o);
+                        for (int dy = -1; dy <= 1; dy++)
+                            for (int dx = -1; dx <= 1; dx++) {
+                                long xx = px + dx, yy = py + dy;
+                                if (xx < 0 || yy < 0 || xx >= (long)col[k].w || yy >= (long)col[k].h)
+                                    continue;
+                                const double *v = at(&q[k], (size_t)(Z + z), xx, yy);
+                                for (int c = 0; c < 3; c++)
+                                    o[c] += bw[dx + 1] * bw[dy + 1] * v[c];
+                            }
+                        if (k < NBT_GLS_K) { /* logical (q + 0.5)/2 - 0.5, index + 1 */
+                            stack_bilinear(&col[k + 1], (size_t)z, (px - 1 + 0.5) / 2 + 0.5, (py - 1 + 0.5) / 2 + 0.5, u);
+                            for (int c = 0; c < 3; c++)
+                                o[c] += u[c];
+                        }
+                    }
+        /* the receivers */
+        nbt_gls_nbt_near_table(lut);
+        for (size_t i = 0; i < np; i++)
+            near_weights(in, lut, i, nw + 6 * i);
+        for (long y = 0; y < (long)h; y++)
+            for (long x = 0; x < (long)w; x++) {
+                size_t ix = (size_t)y * w + (size_t)x;
+                double *o = S + 3 * ix, u[3], v[3];
+                o[0] = o[1] = o[2] = 0;
+                int s = nbt_slab(in->D[ix], &pl);
+                if (s < 0)
+                    continue;
+                double tx = (x + 0.5) / 2 + 0.5, ty = (y + 0.5) / 2 + 0.5; /* logical (x + 0.5)/2 - 0.5, index + 1 */
+                stack_bilinear(&col[1], (size_t)(s < n ? s : n - 1), tx, ty, o);
+                if (s < n && in->M0[ix] > 0) {
+                    double d = nbt_lbeta(in->beta_px[ix]) - pl.lb[s];
+                    stack_bilinear(&col[1], (size_t)(n + s), tx, ty, u);
+                    stack_bilinear(&col[1], (size_t)(2 * n + s), tx, ty, v);
+                    for (int c = 0; c < 3; c++)
+                        o[c] += in->M0[ix] * (u[c] + d * v[c]);
+                }
+                float Dx = key(in->D[ix]);
+                for (long dy = -1; dy <= 1; dy++)
+                    for (long dx = -1; dx <= 1; dx++) {
+                        long y0 = x + dx, y1 = y + dy;
+                        if (y0 < 0 || y1 < 0 || y0 >= (long)w || y1 >= (long)h)
+                            continue;
+                        size_t iy = (size_t)y1 * w + (size_t)y0;
+                        float Dy = key(in->D[iy]);
+                        int mine = Dy > Dx;
+                        if (!mine && !(Dy > 0))
+                            continue;
+                        double wt = nw[6 * (mine ? ix : iy) + labs(dx) + labs(dy)];
+                        for (int c = 0; c < 3; c++)
+                            o[c] += wt * in->rgb[3 * iy + c];
+                    }
+            }
+    }
+    for (int k = 0; k <= NBT_GLS_K; k++) {
+        free(src[k].v);
+        free(q[k].v);
+        free(col[k].v);
+    }
+    free(lev0);
+    free(nw);
+    free(lut);
+    return st;
+}
+
 nbt_status scatter_emul(nbt_gls_method m, const nbt_gls_input *in, double *S)
 {
     switch (m) {
@@ -366,6 +584,8 @@ nbt_status scatter_emul(nbt_gls_method m, const nbt_gls_input *in, double *S)
         return emul_naive(in, S);
     case NBT_GLS_ELEK:
         return emul_elek(in, S);
+    case NBT_GLS_NBT:
+        return scatter_emul_nbt(in, NBT_GLS_NBT_SLABS, S);
     }
     return NBT_EINVAL;
 }

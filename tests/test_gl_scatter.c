@@ -8,7 +8,10 @@
  *       is refused;
  *   (c) accuracy against libnbt's brute-force operators (A for every method,
  *       B for the pyramid methods), printed for the docs; shinya's relative
- *       L1 against A is asserted.
+ *       L1 against A is asserted, and nbt's relative L1, edge band and bias
+ *       against A, also at dtheta / 4 (beta_px to ~30), with its convergence
+ *       in the slab count and its kernel's misplaced mass per beta;
+ *   (d) time per method at 320x240 (after a first, compiling run).
  * Fails with a clear message when no GL context can be created. */
 #include <float.h>
 #include <math.h>
@@ -40,6 +43,18 @@ const char *__asan_default_options(void)
 /* shinya against operator A, relative L1 (measured: see the table printed by
  * this test; the tolerance is about 3x the worst scene) */
 #define SHINYA_L1_TOL 3e-3
+
+/* nbt against operator A on the five scenes (measured, 4 slabs: relative L1
+ * 0.6 .. 2.9% (mean 1.6%), edge band <= 4.4%, bias -0.0 .. +1.1% (slanted);
+ * at dtheta / 4 (beta_px to ~30): see the printed table). Tolerances about
+ * 1.5x the worst measured value of either setting; the goals are 3% mean,
+ * 5% worst, 5% edge, 0.5% bias (the bias goal is not met on the slanted
+ * plane: within a slab a nearer receiver takes the farther source's
+ * kernel, whose M0 is larger). */
+#define NBT_L1_TOL 4.5e-2
+#define NBT_MEAN_TOL 3e-2
+#define NBT_EDGE_TOL 7e-2
+#define NBT_BIAS_TOL 1.8e-2
 
 typedef struct {
     const char *name;
@@ -201,13 +216,40 @@ static void validate_passes(void)
     t_true(names_ok && nbt_gls_method_parse("bogus", &m) == NBT_EINVAL, "method names parse");
 }
 
+/* nbt's gates against operator A */
+static void nbt_gate(const char *name, const nbt_screen_metrics *m)
+{
+    t_true(m->rel_l1 <= NBT_L1_TOL && m->edge <= NBT_EDGE_TOL && fabs(m->bias) <= NBT_BIAS_TOL,
+           "%s: nbt against operator A, relative L1 %.3g <= %.2g, edge %.3g <= %.2g, |bias| %.3g <= %.2g", name,
+           m->rel_l1, NBT_L1_TOL, m->edge, NBT_EDGE_TOL, fabs(m->bias), NBT_BIAS_TOL);
+}
+
+/* llvmpipe compiles a program at its first dispatch: run every method once */
+static void warm_up(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    scene s = scene_new("warm", W, H); /* no random numbers: the scenes stay as they were */
+    for (size_t i = 0; i < NP; i++) {
+        s.D[i] = i % 7 ? 5.0f : 9.0f;
+        s.rgb[3 * i] = s.rgb[3 * i + 1] = s.rgb[3 * i + 2] = 0.5f;
+    }
+    scene_kernels(&s, km, ke, dth);
+    float *S = malloc(s.w * s.h * 3 * sizeof *S);
+    for (int m = 0; m < NBT_GLS_NMETHODS; m++) {
+        nbt_gls_input in = gls_input(&s, 0, dth);
+        nbt_gls_exec(g, (nbt_gls_method)m, &in, S, NULL);
+    }
+    free(S);
+    scene_free(&s);
+}
+
 /* (a) GL = emulation, and (c) accuracy, on the five scenes */
 static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
 {
     float *Sg = malloc(NP * 3 * sizeof *Sg);
     double *Se = malloc(NP * 3 * sizeof *Se), *SA = malloc(NP * 3 * sizeof *SA), *SB = malloc(NP * 3 * sizeof *SB),
            *Sd = malloc(NP * 3 * sizeof *Sd);
-    double worst_l1 = 0;
+    double worst_l1 = 0, nbt_sum = 0;
+    warm_up(g, km, ke, dth);
     printf("# method vs operator: relL1 relRMS edge bias max (64x48, dtheta %g)\n", dth);
     for (int sc = 0; sc < 5; sc++) {
         scene s = make_scene(sc);
@@ -218,7 +260,7 @@ static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_scree
         for (int m = 0; m < NBT_GLS_NMETHODS; m++)
             for (int es = 0; es < 2; es++) {
                 /* the pyramid methods run with both kernels; shinya only with the erfc kernel */
-                if (es && (m == NBT_GLS_SHINYA || m == NBT_GLS_SHINYA_LITERAL))
+                if (es && (m == NBT_GLS_SHINYA || m == NBT_GLS_SHINYA_LITERAL || m == NBT_GLS_NBT))
                     continue;
                 nbt_gls_input in = gls_input(&s, es, dth);
                 double ms = 0;
@@ -235,6 +277,10 @@ static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_scree
                 printf("%-10s %-15s vs %s: %8.4f %8.4f %8.4f %+8.4f %8.4f  (%.1f ms)\n", s.name,
                        nbt_gls_method_name((nbt_gls_method)m), es ? "B" : "A", mA.rel_l1, mA.rel_rms, mA.edge, mA.bias,
                        mA.max, ms);
+                if (m == NBT_GLS_NBT) {
+                    nbt_sum += mA.rel_l1;
+                    nbt_gate(s.name, &mA);
+                }
                 if (m == NBT_GLS_SHINYA) {
                     worst_l1 = fmax(worst_l1, mA.rel_l1);
                     t_true(mA.rel_l1 <= SHINYA_L1_TOL, "%s: shinya against operator A, relative L1 %.2g <= %.1g",
@@ -244,11 +290,121 @@ static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_scree
         scene_free(&s);
     }
     printf("# shinya vs A: worst relative L1 %.3g\n", worst_l1);
+    t_true(nbt_sum / 5 <= NBT_MEAN_TOL, "nbt against operator A: mean relative L1 %.3g <= %.2g", nbt_sum / 5, NBT_MEAN_TOL);
     free(Sg);
     free(Se);
     free(SA);
     free(SB);
     free(Sd);
+}
+
+/* nbt at wider kernels (dtheta / 4: beta_px up to ~30) against operator A,
+ * next to the other pyramid methods, and its convergence in the slab count
+ * at both settings (the scenes are regenerated: same seeds, not the same
+ * random textures as test_scenes) */
+static void test_nbt_wide(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    float *Sg = malloc(NP * 3 * sizeof *Sg);
+    double *SA = malloc(NP * 3 * sizeof *SA), *Sd = malloc(NP * 3 * sizeof *Sd);
+    const double dths[2] = {dth, dth / 4};
+    for (int set = 0; set < 2; set++) {
+        double sum = 0, bmax = 0;
+        printf("# dtheta %g: method vs A: relL1 edge bias (beta_px range); nbt by slab count 1..%d: relL1/edge/bias\n",
+               dths[set], NBT_GLS_NBT_MAXSLABS);
+        for (int sc = 0; sc < 5; sc++) {
+            scene s = make_scene(sc);
+            scene_kernels(&s, km, ke, dths[set]);
+            double b0 = INFINITY, b1 = 0;
+            for (size_t i = 0; i < NP; i++)
+                if (s.M0[i] > 0)
+                    b0 = fmin(b0, s.beta[i]), b1 = fmax(b1, s.beta[i]);
+            bmax = fmax(bmax, b1);
+            nbt_screen_input sin = {.w = s.w, .h = s.h, .rgb = s.rgb, .D = s.D, .dtheta = dths[set]};
+            nbt_screen_brute(&sin, km, NBT_SCREEN_NEAR, 1e-7, 2, SA, NULL);
+            const nbt_gls_method ms[3] = {NBT_GLS_NBT, NBT_GLS_ELEK, NBT_GLS_NAIVE};
+            for (int k = 0; k < 3; k++) {
+                nbt_gls_input in = gls_input(&s, 0, dths[set]);
+                nbt_gls_exec(g, ms[k], &in, Sg, NULL);
+                for (size_t i = 0; i < NP * 3; i++)
+                    Sd[i] = Sg[i];
+                nbt_screen_metrics mA;
+                nbt_screen_compare(&sin, km, Sd, SA, &mA);
+                printf("%-10s %-6s vs A: %8.4f %8.4f %+8.4f  (beta_px %.1f .. %.1f)\n", s.name,
+                       nbt_gls_method_name(ms[k]), mA.rel_l1, mA.edge, mA.bias, b0, b1);
+                if (ms[k] == NBT_GLS_NBT && set == 1) {
+                    sum += mA.rel_l1;
+                    nbt_gate(s.name, &mA);
+                }
+            }
+            printf("%-10s slabs:", s.name);
+            for (unsigned n = 1; n <= NBT_GLS_NBT_MAXSLABS; n++) {
+                nbt_gls_input in = gls_input(&s, 0, dths[set]);
+                nbt_gls_set_slabs(g, n);
+                nbt_gls_exec(g, NBT_GLS_NBT, &in, Sg, NULL);
+                for (size_t i = 0; i < NP * 3; i++)
+                    Sd[i] = Sg[i];
+                nbt_screen_metrics mA;
+                nbt_screen_compare(&sin, km, Sd, SA, &mA);
+                printf(" %.4f/%.4f/%+.4f", mA.rel_l1, mA.edge, mA.bias);
+            }
+            printf("\n");
+            nbt_gls_set_slabs(g, NBT_GLS_NBT_SLABS);
+            scene_free(&s);
+        }
+        if (set == 1) {
+            t_true(bmax >= 25, "the wide setting reaches beta_px %.1f >= 25", bmax);
+            t_true(sum / 5 <= NBT_MEAN_TOL, "nbt at dtheta %g: mean relative L1 %.3g <= %.2g", dths[set], sum / 5,
+                   NBT_MEAN_TOL);
+        }
+    }
+    t_true(nbt_gls_set_slabs(g, 0) == NBT_EDOM && nbt_gls_set_slabs(g, NBT_GLS_NBT_MAXSLABS + 1) == NBT_EDOM,
+           "nbt: slab counts outside 1 .. %d refused", NBT_GLS_NBT_MAXSLABS);
+    free(Sg);
+    free(SA);
+    free(Sd);
+}
+
+/* nbt's own kernel: the impulse response (CPU emulation, = GL above) on a
+ * constant-depth plane against the pixel-integrated erfc kernel, at three
+ * sub-pixel phases of the 2^K pyramid grid; misplaced mass = L1 / mass */
+static void test_nbt_kernel(void)
+{
+    const size_t w = 384, h = 384, n = w * h;
+    float *rgb = calloc(n * 3, sizeof *rgb), *D = malloc(n * sizeof *D), *M0 = malloc(n * sizeof *M0),
+          *b = malloc(n * sizeof *b);
+    double *S = malloc(n * 3 * sizeof *S);
+    const double betas[7] = {1, 2, 3, 4, 8, 16, 30};
+    const long ph[3][2] = {{192, 192}, {177, 203}, {161, 190}};
+    printf("# nbt kernel: misplaced mass (L1 of impulse response - erfc kernel, / mass) per beta_px, 3 phases\n");
+    double worst = 0;
+    for (int k = 0; k < 7; k++) {
+        for (size_t i = 0; i < n; i++)
+            D[i] = 5.0f, M0[i] = 1.0f, b[i] = (float)betas[k];
+        double mean = 0, wk = 0;
+        for (int p = 0; p < 3; p++) {
+            size_t c = (size_t)ph[p][1] * w + (size_t)ph[p][0];
+            rgb[3 * c] = 1.0f;
+            nbt_gls_input in = {w, h, rgb, D, M0, b, NULL, 0.01, NBT_GLS_CUT, NBT_GLS_EPS};
+            scatter_emul(NBT_GLS_NBT, &in, S);
+            rgb[3 * c] = 0.0f;
+            double l1 = 0;
+            for (long y = 0; y < (long)h; y++)
+                for (long x = 0; x < (long)w; x++)
+                    l1 += fabs(S[3 * ((size_t)y * w + (size_t)x)] -
+                               nbt_screen_atom_pixel(NBT_ATOM_ERFC, betas[k], x - ph[p][0], y - ph[p][1]));
+            mean += l1 / 3;
+            wk = fmax(wk, l1);
+        }
+        printf("#   beta_px %5.1f: mean %.4f worst %.4f\n", betas[k], mean, wk);
+        worst = fmax(worst, wk);
+    }
+    /* measured worst 0.088 (beta 2-3): tolerance 1.5x */
+    t_true(worst <= 0.13, "nbt kernel: misplaced mass %.3g <= 0.13 for beta_px 1 .. 30", worst);
+    free(rgb);
+    free(D);
+    free(M0);
+    free(b);
+    free(S);
 }
 
 /* an odd size (padding, partial work groups): every method = its emulation */
@@ -317,6 +473,15 @@ static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_s
             worst = fmax(worst, fabs(S[3 * ctr + ch] / (M0 * c[ch]) - 1));
         t_true(worst <= 1e-5, "constant wall, %s%s: interior S = M0 c (%.2g)", nbt_gls_method_name((nbt_gls_method)m),
                m == NBT_GLS_ELEK ? " (eps 0)" : "", worst);
+    }
+    /* nbt: the fit's mass (Sum of the weights' mass + centre taps) within 0.5% for beta <= 45 px */
+    {
+        nbt_gls_input in = gls_input(&s, 0, dth);
+        nbt_gls_exec(g, NBT_GLS_NBT, &in, S, NULL);
+        double worst = 0;
+        for (int ch = 0; ch < 3; ch++)
+            worst = fmax(worst, fabs(S[3 * ctr + ch] / (M0 * c[ch]) - 1));
+        t_true(worst <= 2e-3, "constant wall, nbt: interior S = M0 c within 2e-3 (%.2g)", worst);
     }
     /* beta_px = 0: a kernel without spread keeps M0 on the own pixel */
     float *beta0 = calloc(NP, sizeof *beta0);
@@ -411,10 +576,17 @@ static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke,
             printf("# %s at %zux%zu: skipped (window %ld px)\n", nbt_gls_method_name((nbt_gls_method)m), w, h, R);
             continue;
         }
-        double ms = 0;
-        nbt_status st = nbt_gls_exec(g, (nbt_gls_method)m, &in, S, &ms);
+        double ms = 0, best = INFINITY;
+        nbt_status st = nbt_gls_exec(g, (nbt_gls_method)m, &in, S, &ms); /* the first run compiles (llvmpipe) */
+        for (int r = 0; r < 3 && st == NBT_OK && m != NBT_GLS_SHINYA; r++) {
+            st = nbt_gls_exec(g, (nbt_gls_method)m, &in, S, &ms);
+            best = fmin(best, ms);
+        }
+        if (m == NBT_GLS_SHINYA)
+            best = ms;
         t_true(st == NBT_OK, "%s runs at %zux%zu", nbt_gls_method_name((nbt_gls_method)m), w, h);
-        printf("# %s at %zux%zu: %.1f ms (window %ld px)\n", nbt_gls_method_name((nbt_gls_method)m), w, h, ms, R);
+        printf("# %s at %zux%zu: %.1f ms (best of 3 after a first run; window %ld px)\n",
+               nbt_gls_method_name((nbt_gls_method)m), w, h, best, R);
     }
     nbt_gls_free(g);
     free(S);
@@ -440,6 +612,8 @@ int main(void)
     nbt_screen_kernel *km = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &med, NULL);
     nbt_screen_kernel *ke = nbt_screen_kernel_alloc(NBT_SKERNEL_ELEK, &med, NULL);
     test_scenes(g, km, ke, dth);
+    test_nbt_wide(g, km, ke, dth);
+    test_nbt_kernel();
     test_odd_size(km, ke, dth);
     test_invariants(g, km, ke, dth);
     time_large(km, ke, dth);

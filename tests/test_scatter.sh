@@ -72,6 +72,17 @@ grep -q "halving the step" "$tmp/log" && ok || bad "the march reports its error 
 set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het2.exr" $M --density "$tmp/c1.raw" --step 0.5 --no-png \
   --compare "$tmp/hom.exr" 2>/dev/null)
 awk -v a="$2" 'BEGIN { exit !(a > 3e-5 && a < 3e-3) }' && ok || bad "a coarser step is less accurate: $*"
+# the same grid as OpenVDB gives the same image (or a clear refusal without OpenVDB)
+if "$MK" "$tmp/c1.vdb" grid 1 2>/dev/null; then
+  set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het3.exr" $M --density "$tmp/c1.vdb" --step 0.05 --no-png \
+    --compare "$tmp/het.exr" 2>/dev/null)
+  awk -v a="$2" 'BEGIN { exit !(a < 1e-6) }' && ok || bad ".vdb grid = raw grid: $*"
+  expect_usage "no such vdb grid" "temperature" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/c1.vdb" \
+    --grid temperature
+else
+  : >"$tmp/c1.vdb"
+  expect_usage "no OpenVDB in this build" "no OpenVDB" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/c1.vdb"
+fi
 expect_usage "grid misses the camera" "does not hold the camera" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
   --density "$tmp/c1.raw" --camera 0,0,5
 expect_usage "grid with ref-b" "heterogeneous media use operator A" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \

@@ -34,6 +34,26 @@
  *   NBT_GLS_ELEK            Elek et al. eq. 3-12 (eq. 4 corrected): masked
  *       pyramid with smoothstep width eps, luminance-weighted W, level from
  *       the blurred W map, linear-bicubic reads.
+ *   NBT_GLS_NBT             our approximation of operator A (nbt_scatter_nbt*.glsl):
+ *       the erfc kernel is fitted, per beta, as non-negative weights over
+ *       NBT_GLS_NBT_NB pyramid kernels U^l [B] D^l, l = 1..K (D: the 4-tap
+ *       decimation, U: one bilinear octave up-step, B: an optional 3x3 blur
+ *       [b, 1-2b, b]^2 at level l, b = NBT_GLS_NBT_BLUR, which puts a kernel
+ *       half-way between two octaves), plus exact 3x3 centre taps (the
+ *       kernel's pixel integrals minus the pyramid's phase-averaged spill
+ *       there). Depth slabs (NBT_GLS_NBT_SLABS, log-spaced over the finite
+ *       depths; sky is one more): a receiver in slab i takes the centre taps
+ *       by the exact nearer-pixel rule, the pyramid scatter of the sources
+ *       in slabs <= i with their own kernels, and the pyramid gather, with
+ *       its own kernel, of slabs > i (sky included). Kernel weights per slab
+ *       are taken at the slab's middle log2 beta with a first-order
+ *       correction in each pixel's log2 beta (source side: an extra
+ *       pyramid of delta M0 c; receiver side: an extra collapse). The
+ *       approximation: pairs within one slab use the source's kernel, the
+ *       fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
+ *       beta = 1 .. 30 px, tests/test_gl_scatter.c) and the second order in
+ *       delta log2 beta. Weights are fitted (NNLS) for beta_px in
+ *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held at the ends beyond.
  * The pyramid methods use sigma_px when given, otherwise the Gaussian of the
  * same second moment as the erfc kernel, sigma = beta_px / sqrt 3. Pyramids
  * have NBT_GLS_K + 1 levels over the image padded with zeros to a multiple
@@ -57,9 +77,10 @@ typedef enum {
     NBT_GLS_SHINYA,
     NBT_GLS_SHINYA_LITERAL,
     NBT_GLS_NAIVE,
-    NBT_GLS_ELEK
+    NBT_GLS_ELEK,
+    NBT_GLS_NBT
 } nbt_gls_method;
-#define NBT_GLS_NMETHODS 4
+#define NBT_GLS_NMETHODS 5
 
 typedef struct {
     size_t w, h;
@@ -89,6 +110,42 @@ typedef struct {
 /* Fills lut[NBT_GLS_LUT_N * 8]. */
 void nbt_gls_near_table(float *lut);
 
+/* NBT_GLS_NBT: the fit. Basis kernel b < NB/2 is level b + 1, b >= NB/2
+ * level b - NB/2 + 1 with the blur. Weights tabulated at log2 beta_px =
+ * LO + i / PER, i < N, linear in between. */
+#define NBT_GLS_NBT_NB 12
+#define NBT_GLS_NBT_BLUR 0.16
+#define NBT_GLS_NBT_LO (-1)
+#define NBT_GLS_NBT_HI 7
+#define NBT_GLS_NBT_PER 4
+#define NBT_GLS_NBT_N ((NBT_GLS_NBT_HI - NBT_GLS_NBT_LO) * NBT_GLS_NBT_PER + 1)
+#define NBT_GLS_NBT_SLABS 4    /* default depth slabs */
+#define NBT_GLS_NBT_MAXSLABS 6
+
+/* The fitted weights (NNLS, computed once per process on first use, about
+ * 0.1 s; not thread-safe on that first call): tab[i * NB + b]. */
+const double *nbt_gls_nbt_table(void);
+/* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
+ * beyond the ends) and their slope da[NB] in lb (the segment's; 0 beyond). */
+void nbt_gls_nbt_weights(double lb, double *a, double *da);
+/* The 1-D phase-averaged level kernel of basis b at offset d (|d| < 512),
+ * the 2-D one being the product of two. */
+double nbt_gls_nbt_kbar(int b, long d);
+/* The centre-tap table of NBT_GLS_NBT, laid out as nbt_gls_near_table
+ * (entries a00, a10, a11 used; the others 0): the atom's pixel integral
+ * minus the pyramid's phase-averaged spill. */
+void nbt_gls_nbt_near_table(float *lut);
+
+/* The slab plan for an input: n finite slabs, slab of a finite D > 0 =
+ * the number of bound[k] <= D (float compare), mid log2 beta_px lb[j] of
+ * each (the middle of its pixels' range with M0 > 0; 0 when empty). */
+typedef struct {
+    unsigned n;
+    float bound[NBT_GLS_NBT_MAXSLABS];
+    float lb[NBT_GLS_NBT_MAXSLABS];
+} nbt_gls_nbt_plan;
+void nbt_gls_nbt_plan_of(const nbt_gls_input *in, unsigned slabs, nbt_gls_nbt_plan *p);
+
 /* A context for images of w x h: textures and compiled programs, reused by
  * every run. NULL (reason through libnbt's error handler) without a GL 4.3
  * context, on a bad size or when a shader does not compile. */
@@ -105,6 +162,10 @@ void nbt_gls_free(nbt_gls *g);
  * size mismatch or an unknown method, NBT_EIO on a GL error. */
 nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
 
+/* NBT_GLS_NBT's slab count for later runs (1 .. NBT_GLS_NBT_MAXSLABS;
+ * NBT_GLS_NBT_SLABS at alloc); NBT_EDOM outside. */
+nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs);
+
 /* GL state left behind by exec: program 0; textures on units 0-4, images on
  * units 0-3 and the active texture unit are the context's. */
 
@@ -115,7 +176,7 @@ nbt_status nbt_gls_run(nbt_gls_method m, const nbt_gls_input *in, float *S, doub
  * literal; 0 for the pyramid methods), capped at max(w, h). */
 long nbt_gls_window(nbt_gls_method m, const nbt_gls_input *in);
 
-/* "shinya", "shinya-literal", "naive", "elek"; parse: NBT_EINVAL for others. */
+/* "shinya", "shinya-literal", "naive", "elek", "nbt"; parse: NBT_EINVAL for others. */
 const char *nbt_gls_method_name(nbt_gls_method m);
 nbt_status nbt_gls_method_parse(const char *name, nbt_gls_method *m);
 

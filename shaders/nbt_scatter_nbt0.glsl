@@ -1,0 +1,51 @@
+// shaders/nbt_scatter_nbt0.glsl: method nbt (nbt/gl_scatter.h), level 1 of
+// the source pyramid straight from the image (level 0 is never stored):
+// one layer per slab and kind (n finite slabs, slab n = sky),
+//   layer j        A_j = M0 c          pixels of finite slab j (j < n)
+//   layer n + j    E_j = delta M0 c    delta = lb(beta_px) - nbt_sc_lb[j]
+//   layer 2n + j   C_j = c             pixels of slab j (j <= n, sky included)
+// each decimated by the 4-tap {0.13, 0.37, 0.37, 0.13} filter at 2p - 1 ..
+// 2p + 2 (zero outside the image). D = 0 pixels are in no slab (they send
+// and receive nothing).
+// Margins: level l >= 1 holds logical texels -1 .. n_l (n_l = padded size
+// >> l), all the texels an image on [0, n_0) reaches, at physical texel
+// logical + 1 of texture level l - 1, so no light is lost by the pyramid
+// itself at the image's border (the infinite zero-extended pyramid).
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) uniform writeonly image2DArray nbt_sc_src;
+uniform ivec2 nbt_sc_lsize; // physical extent of level 1: n_1 + 2
+
+const float NBT_SC_F4[4] = float[4](0.13, 0.37, 0.37, 0.13);
+
+void main()
+{
+    ivec2 P = ivec2(gl_GlobalInvocationID.xy);
+    if (!nbt_sc_inside(P, nbt_sc_lsize))
+        return;
+    ivec2 p = P - 1; // logical
+    int n = nbt_sc_nslab;
+    vec3 acc[3 * NBT_SC_NBT_MAXSLABS + 1];
+    for (int j = 0; j <= 3 * n; j++)
+        acc[j] = vec3(0.0);
+    for (int b = 0; b < 4; b++)
+        for (int a = 0; a < 4; a++) {
+            ivec2 q = 2 * p - 1 + ivec2(a, b);
+            if (!nbt_sc_inside(q, nbt_sc_size))
+                continue;
+            vec4 cq = texelFetch(nbt_sc_c, q, 0);
+            int s = nbt_sc_slab(cq.a);
+            if (s < 0)
+                continue;
+            float f = NBT_SC_F4[a] * NBT_SC_F4[b];
+            acc[2 * n + s] += f * cq.rgb;
+            if (s < n) {
+                vec2 pq = texelFetch(nbt_sc_p, q, 0).xy;
+                vec3 m = (f * pq.x) * cq.rgb;
+                acc[s] += m;
+                acc[n + s] += (nbt_sc_lbeta(pq.y) - nbt_sc_lb[s]) * m;
+            }
+        }
+    for (int j = 0; j <= 3 * n; j++)
+        imageStore(nbt_sc_src, ivec3(P, j), vec4(acc[j], 0.0));
+}
