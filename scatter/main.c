@@ -48,11 +48,13 @@ static void help(void)
          "  --sigma-t X            extinction coefficient per scene unit, > 0\n"
          "  --albedo A             single-scattering albedo, [0, 1]\n"
          "  --B B | --dtheta DEG   Gaussian phase width: B > 0, or dtheta in (0, 90] degrees (dtheta^2 = 4B)\n"
-         "  --method M             ref-a (default): operator A, every pixel pair through the nearer pixel's\n"
-         "                         kernel (Shinya et al., corrected); ref-b: operator B, every source its own\n"
-         "                         Gaussian (Elek et al.'s PSF). Both exact on the CPU. On GL (4.3 compute,\n"
-         "                         Mesa's llvmpipe without a GPU): shinya (operator A, windowed), shinya-literal\n"
-         "                         (Alg. 1-4 as printed), naive (one pyramid read), elek (Elek et al.)\n"
+         "  --method M             ref-a: operator A, every pixel pair through the nearer pixel's kernel\n"
+         "                         (Shinya et al., corrected); ref-b: operator B, every source its own Gaussian\n"
+         "                         (Elek et al.'s PSF). Both exact on the CPU. On GL (4.3 compute, Mesa's\n"
+         "                         llvmpipe without a GPU): nbt (operator A from fitted pyramid weights, exact\n"
+         "                         near taps and depth slabs; the default in builds with GL, else ref-a),\n"
+         "                         shinya (operator A, windowed), shinya-literal (Alg. 1-4 as printed),\n"
+         "                         naive (one pyramid read), elek (Elek et al.)\n"
          "  --cut C                shinya: window radius in beta (3)\n"
          "  --eps E                elek: smoothstep width of the level masks (0.1)\n"
          "  --kernel K             moment (default for ref-a), smallangle, single, lineint, elek (default for\n"
@@ -209,7 +211,13 @@ static void parse(int argc, char **argv, opts *o)
     o->tail = 1e-7;
     o->kernel = -1;
     o->png = 1;
+#ifdef HAVE_GL
+    o->method_name = "nbt";
+    o->method = 2;
+    o->gl_method = NBT_GLS_NBT;
+#else
     o->method_name = "ref-a";
+#endif
     o->cut = 3.0;
     o->eps = 0.1;
     o->layers = 64;

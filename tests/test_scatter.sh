@@ -5,7 +5,8 @@
 . "${top_srcdir:-.}/tests/testlib.sh"
 S=$(abspath "${NBT_SCATTER:-./nbt-scatter}")
 MK=$(abspath "${NBT_MKEXR:-./tests/mkexr}")
-M="--fov-y 35 --sigma-t 0.15 --albedo 0.9 --dtheta 10"
+M0="--fov-y 35 --sigma-t 0.15 --albedo 0.9 --dtheta 10"
+M="$M0 --method ref-a"   # the exact reference; the default method (nbt on GL builds) is tested below
 
 "$S" --version | grep -q "nbt-scatter (nbt)" && ok || bad "--version"
 "$S" --help | grep -q "Usage" && ok || bad "--help"
@@ -51,6 +52,9 @@ if "$S" --help | grep -q "On GL"; then
     2>"$tmp/log")
   awk -v a="$2" 'BEGIN { exit !(a < 3e-3) }' && ok || bad "GL shinya vs ref-a: $* $(cat "$tmp/log")"
   grep -q "GPU time" "$tmp/log" && ok || bad "GL methods report their GPU time"
+  set -- $("$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M0 --depth ray --no-png --compare "$tmp/ref.exr" 2>"$tmp/log")
+  grep -q "^nbt-scatter: nbt " "$tmp/log" && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 0.05 && b < 0.02 && b > -0.02) }' \
+    && ok || bad "default method nbt vs ref-a (L1 < 5%, |bias| < 2%): $* $(cat "$tmp/log")"
   for m in shinya-literal naive elek; do
     set -- $("$S" "$tmp/layers.exr" -o "$tmp/gl-$m.exr" $M --depth ray --method $m --no-png --compare "$tmp/ref.exr" \
       2>/dev/null)
