@@ -28,11 +28,11 @@ run() { # scene ref label knob args...
 }
 for sc in plane step layers slant blocks; do
   "$S" scene $sc -o "$tmp/$sc.exr" --size "$size"
-  "$S" "$tmp/$sc.exr" -o "$tmp/$sc-A.exr" $M 2>"$tmp/logA"
+  "$S" "$tmp/$sc.exr" -o "$tmp/$sc-A.exr" $M --method ref-a 2>"$tmp/logA"
   "$S" "$tmp/$sc.exr" -o "$tmp/$sc-B.exr" $M --method ref-b 2>"$tmp/logB"
   printf "%-7s %-15s %-10s %-4s %9s %9s %9s %9s %8.3f %9s\n" "$sc" ref-a "$(grep -q FFT "$tmp/logA" && echo fft || echo brute)" \
     A 0 0 0 0 "$(sed -n 's/.*: \([0-9.]*\) s$/\1/p' "$tmp/logA")" -
-  for L in 8 16 32 64; do run $sc A ref-a "quant=$L" --quantize $L; done
+  for L in 8 16 32 64; do run $sc A ref-a "quant=$L" --method ref-a --quantize $L; done
   [ $gl -eq 1 ] || continue
   for c in 1 2 3 5; do run $sc A shinya "cut=$c" --method shinya --cut $c; done
   run $sc A shinya-literal - --method shinya-literal

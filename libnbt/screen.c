@@ -35,6 +35,14 @@ nbt_status nbt_skernel_parse(const char *name, nbt_skernel_kind *kind)
     return NBT_EINVAL;
 }
 
+static nbt_screen_kernel *kernel_new(void)
+{
+    nbt_screen_kernel *k = calloc(1, sizeof *k);
+    if (!k)
+        nbt__fail(NBT_ENOMEM, "screen: out of memory");
+    return k;
+}
+
 nbt_screen_kernel *nbt_screen_kernel_alloc(nbt_skernel_kind kind, const nbt_beam_medium *medium,
                                            const nbt_kernel_correction *corr)
 {
@@ -48,11 +56,9 @@ nbt_screen_kernel *nbt_screen_kernel_alloc(nbt_skernel_kind kind, const nbt_beam
         nbt__fail(NBT_EINVAL, "screen: unknown kernel, or CORRECTED without a correction");
         return NULL;
     }
-    nbt_screen_kernel *k = calloc(1, sizeof *k);
-    if (!k) {
-        nbt__fail(NBT_ENOMEM, "screen: out of memory");
+    nbt_screen_kernel *k = kernel_new();
+    if (!k)
         return NULL;
-    }
     k->kind = kind;
     k->m = *medium;
     if (corr)
@@ -79,11 +85,9 @@ nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx)
         nbt__fail(NBT_EINVAL, "screen: custom kernel without a function");
         return NULL;
     }
-    nbt_screen_kernel *k = calloc(1, sizeof *k);
-    if (!k) {
-        nbt__fail(NBT_ENOMEM, "screen: out of memory");
+    nbt_screen_kernel *k = kernel_new();
+    if (!k)
         return NULL;
-    }
     k->fn = fn;
     k->ctx = ctx;
     return k;

@@ -5,6 +5,7 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -119,7 +120,7 @@ void nbt_gls_near_table(float *lut)
 #define KB_C (KB_N / 2)
 static double nbt_kbar_tab[NBT_GLS_NBT_NB][KB_N];
 static double nbt_wtab[NBT_GLS_NBT_N * NBT_GLS_NBT_NB];
-static int nbt_fit_done;
+static pthread_once_t nbt_fit_once = PTHREAD_ONCE_INIT;
 
 /* 1-D kernels U^l [B] D^l of an impulse, averaged over its 2^l phases */
 static void nbt_level_kernels(void)
@@ -167,8 +168,7 @@ static void nbt_level_kernels(void)
 
 double nbt_gls_nbt_kbar(int b, long d)
 {
-    if (!nbt_fit_done)
-        nbt_gls_nbt_table();
+    nbt_gls_nbt_table();
     return b >= 0 && b < NBT_GLS_NBT_NB && labs(d) < KB_C ? nbt_kbar_tab[b][KB_C + d] : 0.0;
 }
 
@@ -219,14 +219,16 @@ static void nbt_fit_one(double beta, double *w)
         }
 }
 
+static void nbt_fit_all(void)
+{
+    nbt_level_kernels();
+    for (int i = 0; i < NBT_GLS_NBT_N; i++)
+        nbt_fit_one(exp2(NBT_GLS_NBT_LO + (double)i / NBT_GLS_NBT_PER), nbt_wtab + i * NBT_GLS_NBT_NB);
+}
+
 const double *nbt_gls_nbt_table(void)
 {
-    if (!nbt_fit_done) {
-        nbt_level_kernels();
-        for (int i = 0; i < NBT_GLS_NBT_N; i++)
-            nbt_fit_one(exp2(NBT_GLS_NBT_LO + (double)i / NBT_GLS_NBT_PER), nbt_wtab + i * NBT_GLS_NBT_NB);
-        nbt_fit_done = 1;
-    }
+    pthread_once(&nbt_fit_once, nbt_fit_all); /* once per process, whichever thread asks first */
     return nbt_wtab;
 }
 

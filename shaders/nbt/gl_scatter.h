@@ -123,7 +123,7 @@ void nbt_gls_near_table(float *lut);
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.1 s; not thread-safe on that first call): tab[i * NB + b]. */
+ * 0.1 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
  * beyond the ends) and their slope da[NB] in lb (the segment's; 0 beyond). */
