@@ -5,7 +5,8 @@
  *   sqrt( sum (model - mc)^2 / sum mc^2 )  over the (z, r) grid,
  * with the model averaged over each annulus as the counter is. Also the
  * counter's own relative standard error on the same norm, and the moments.
- * Usage: beam_accuracy [photons] [DATA_DIR]  (writes rms.dat for gnuplot) */
+ * Usage: beam_accuracy [photons] [DATA_DIR] [DEG,DEG...]  (writes rms.dat for gnuplot;
+ * DATA_DIR '-' writes nothing; the phase widths default to 30,60) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,12 +36,24 @@ static int f_ann(double r, void *vp, unsigned fdim, double *f)
 int main(int argc, char **argv)
 {
     double photons = argc > 1 ? atof(argv[1]) : 1e6;
-    const char *dir = argc > 2 ? argv[2] : NULL;
+    const char *dir = argc > 2 && strcmp(argv[2], "-") ? argv[2] : NULL;
     static const char *names[NMODEL] = {"ishimaru", "smallangle", "lineint", "single", "elek"};
     static const nbt_psi_model models[NMODEL] = {NBT_PSI_ISHIMARU, NBT_PSI_SMALLANGLE, NBT_PSI_LINEINT,
                                                  NBT_PSI_SINGLE, NBT_PSI_ELEK};
     double albedos[] = {0.1, 0.3, 0.5, 0.7, 0.8, 0.9, 0.95, 0.99};
-    double degs[] = {30, 60};
+    double degs[8] = {30, 60};
+    size_t nd = 2;
+    if (argc > 3) {
+        char *p = argv[3], *end;
+        for (nd = 0; nd < 8 && *p; p = *end ? end + 1 : end) {
+            degs[nd] = strtod(p, &end);
+            if (end == p || !(degs[nd] > 0 && degs[nd] < 180)) {
+                fprintf(stderr, "beam_accuracy: phase widths: degrees in (0, 180), comma-separated\n");
+                return 2;
+            }
+            nd++;
+        }
+    }
     size_t na = sizeof albedos / sizeof albedos[0];
     FILE *dat = NULL;
     if (dir) {
@@ -63,7 +76,7 @@ int main(int argc, char **argv)
     for (int k = 0; k < NMODEL; k++)
         printf(" %10s", names[k]);
     printf("   M2(z=10): mc / ishimaru / smallangle\n");
-    for (int d = 0; d < 2; d++) {
+    for (size_t d = 0; d < nd; d++) {
         double th = degs[d] * M_PI / 180, B = th * th / 4;
         nbt_phase *ph = nbt_phase_gauss(B);
         for (size_t ia = 0; ia < na; ia++) {
