@@ -23,7 +23,7 @@ extern const char nbt_glsl_nbt_beam[], nbt_glsl_nbt_scatter_common[], nbt_glsl_n
     nbt_glsl_nbt_scatter_nbtc[], nbt_glsl_nbt_scatter_nbt0[], nbt_glsl_nbt_scatter_nbtdown[],
     nbt_glsl_nbt_scatter_nbtmix[], nbt_glsl_nbt_scatter_nbtup[], nbt_glsl_nbt_scatter_nbt[];
 
-enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, P_NBT0, P_NBTDOWN, P_NBTMIX, P_NBTUP, P_NBT, NPASS };
+enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, P_NBT0, P_NBTDOWN, P_NBTUP, P_NBT, NPASS };
 #define FIRST_NBT_PASS P_NBT0 /* these get nbt_scatter_nbtc too */
 
 static const struct {
@@ -34,8 +34,8 @@ static const struct {
     {"literal", nbt_glsl_nbt_scatter_literal}, {"pyr0", nbt_glsl_nbt_scatter_pyr0},
     {"down", nbt_glsl_nbt_scatter_down},       {"naive", nbt_glsl_nbt_scatter_naive},
     {"elek", nbt_glsl_nbt_scatter_elek},       {"nbt0", nbt_glsl_nbt_scatter_nbt0},
-    {"nbtdown", nbt_glsl_nbt_scatter_nbtdown}, {"nbtmix", nbt_glsl_nbt_scatter_nbtmix},
-    {"nbtup", nbt_glsl_nbt_scatter_nbtup},     {"nbt", nbt_glsl_nbt_scatter_nbt},
+    {"nbtdown", nbt_glsl_nbt_scatter_nbtdown}, {"nbtup", nbt_glsl_nbt_scatter_nbtup},
+    {"nbt", nbt_glsl_nbt_scatter_nbt},
 };
 
 static const char *const MNAMES[NBT_GLS_NMETHODS] = {"shinya", "shinya-literal", "naive", "elek", "nbt"};
@@ -45,7 +45,7 @@ struct nbt_gls {
     size_t w, h, pw, ph; /* image and padded (pyramid) size */
     GLuint prog[NPASS];
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
-    GLuint tnlut, tsrc, tq, tcol; /* nbt: centre table, source pyramid, level parts, collapse */
+    GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
     unsigned slabs;
     GLuint stamp[2]; /* GL_TIMESTAMP before and after the passes */
     float *buf; /* staging, w*h*4 */
@@ -87,16 +87,17 @@ char *nbt_gls_pass_source(unsigned i)
                      "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n",
                      NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C,
                      NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR);
-    const char *parts[5] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common,
-                            i >= FIRST_NBT_PASS ? nbt_glsl_nbt_scatter_nbtc : "", PASSES[i].src};
+    const char *parts[6] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common,
+                            i >= FIRST_NBT_PASS ? nbt_glsl_nbt_scatter_nbtc : "",
+                            i == P_NBTUP ? nbt_glsl_nbt_scatter_nbtmix : "", PASSES[i].src};
     size_t len = 1;
-    for (int k = 0; k < 5; k++)
+    for (int k = 0; k < 6; k++)
         len += strlen(parts[k]) + 1;
     char *s = malloc(len);
     if (!s || n < 0)
         return free(s), NULL;
     s[0] = '\0';
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; k < 6; k++) {
         strcat(s, parts[k]);
         strcat(s, "\n");
     }
@@ -415,8 +416,8 @@ void nbt_gls_free(nbt_gls *g)
     for (int i = 0; i < NPASS; i++)
         if (g->prog[i])
             glDeleteProgram(g->prog[i]);
-    GLuint t[12] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tq, g->tcol};
-    for (int i = 0; i < 12; i++)
+    GLuint t[11] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol};
+    for (int i = 0; i < 11; i++)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
@@ -470,7 +471,6 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     g->tnlut = make_tex(1, GL_RGBA32F, NBT_GLS_LUT_N, 2, 0);
     /* nbt: pyramid levels 1 .. K as texture levels 0 .. K-1, with a margin texel each side */
     g->tsrc = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
-    g->tq = make_arr(NBT_GLS_K, 2 * NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->tcol = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->slabs = NBT_GLS_NBT_SLABS;
     float *lut = malloc(NBT_GLS_LUT_N * 8 * sizeof *lut);
@@ -602,11 +602,12 @@ static void dispatch3(size_t w, size_t h, size_t layers)
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
 }
 
-/* method nbt: source pyramid, per level the parts of each collapse, the
- * collapse from level K to 1, the centre weights, the receivers */
+/* method nbt: source pyramid, the collapse from level K to 1 (each level's
+ * parts mixed from the source layers in the same pass, never stored), the
+ * centre weights, the receivers */
 static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
 {
-    unsigned n = pl->n, L = 3 * n + 1, Z = 3 * n;
+    unsigned n = pl->n, L = 3 * n + 1;
     size_t bw = g->pw / 2 + ((size_t)1 << NBT_GLS_K), bh = g->ph / 2 + ((size_t)1 << NBT_GLS_K);
 #define EXT(v, k) (((v) >> (k)) + 2) /* physical extent of level k: logical -1 .. n_k */
     use(g, P_NBT0);
@@ -627,10 +628,12 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
     for (unsigned j = 0; j < n; j++)
         nbt_gls_nbt_weights(pl->lb[j], a[j], da[j]);
-    use(g, P_NBTMIX);
-    set_plan(g, P_NBTMIX, pl);
-    p = g->prog[P_NBTMIX];
-    for (int k = 1; k <= NBT_GLS_K; k++) {
+    use(g, P_NBTUP);
+    set_plan(g, P_NBTUP, pl);
+    p = g->prog[P_NBTUP];
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
+    for (int k = NBT_GLS_K; k >= 1; k--) {
         float wa[NBT_GLS_NBT_MAXSLABS] = {0}, wda[NBT_GLS_NBT_MAXSLABS] = {0}, wb[NBT_GLS_NBT_MAXSLABS] = {0},
               wdb[NBT_GLS_NBT_MAXSLABS] = {0};
         for (unsigned j = 0; j < n; j++) {
@@ -644,22 +647,11 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glUniform1fv(glGetUniformLocation(p, "nbt_sc_wb"), NBT_GLS_NBT_MAXSLABS, wb);
         glUniform1fv(glGetUniformLocation(p, "nbt_sc_wdb"), NBT_GLS_NBT_MAXSLABS, wdb);
         glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
-        glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, g->tq, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch(EXT(g->pw, k), EXT(g->ph, k));
-    }
-    use(g, P_NBTUP);
-    set_plan(g, P_NBTUP, pl);
-    p = g->prog[P_NBTUP];
-    glActiveTexture(GL_TEXTURE3);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
-    for (int k = NBT_GLS_K; k >= 1; k--) {
-        glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
         glUniform2i(glGetUniformLocation(p, "nbt_sc_usize"), (GLint)(bw >> k), (GLint)(bh >> k));
         glUniform1i(glGetUniformLocation(p, "nbt_sc_level"), k);
-        glBindImageTexture(0, g->tq, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
         glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch3(EXT(g->pw, k), EXT(g->ph, k), Z);
+        dispatch(EXT(g->pw, k), EXT(g->ph, k));
     }
     use(g, P_NEAR);
     bind_tex(2, g->tnlut);

@@ -11,6 +11,9 @@
 // >> l), all the texels an image on [0, n_0) reaches, at physical texel
 // logical + 1 of texture level l - 1, so no light is lost by the pyramid
 // itself at the image's border (the infinite zero-extended pyramid).
+// The loops run to the largest slab count with constant indices (llvmpipe
+// keeps such arrays in registers; an index that varies per pixel costs a
+// memory round trip per access).
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2DArray nbt_sc_src;
@@ -25,9 +28,10 @@ void main()
         return;
     ivec2 p = P - 1; // logical
     int n = nbt_sc_nslab;
-    vec3 acc[3 * NBT_SC_NBT_MAXSLABS + 1];
-    for (int j = 0; j <= 3 * n; j++)
-        acc[j] = vec3(0.0);
+    vec3 A[NBT_SC_NBT_MAXSLABS], E[NBT_SC_NBT_MAXSLABS], C[NBT_SC_NBT_MAXSLABS + 1];
+    for (int j = 0; j < NBT_SC_NBT_MAXSLABS; j++)
+        A[j] = E[j] = C[j] = vec3(0.0);
+    C[NBT_SC_NBT_MAXSLABS] = vec3(0.0);
     for (int b = 0; b < 4; b++)
         for (int a = 0; a < 4; a++) {
             ivec2 q = 2 * p - 1 + ivec2(a, b);
@@ -38,14 +42,28 @@ void main()
             if (s < 0)
                 continue;
             float f = NBT_SC_F4[a] * NBT_SC_F4[b];
-            acc[2 * n + s] += f * cq.rgb;
+            vec3 fc = f * cq.rgb, m = vec3(0.0), e = vec3(0.0);
             if (s < n) {
                 vec2 pq = texelFetch(nbt_sc_p, q, 0).xy;
-                vec3 m = (f * pq.x) * cq.rgb;
-                acc[s] += m;
-                acc[n + s] += (nbt_sc_lbeta(pq.y) - nbt_sc_lb[s]) * m;
+                m = pq.x * fc;
+                float lbs = 0.0;
+                for (int j = 0; j < NBT_SC_NBT_MAXSLABS; j++)
+                    lbs = s == j ? nbt_sc_lb[j] : lbs;
+                e = (nbt_sc_lbeta(pq.y) - lbs) * m;
             }
+            for (int j = 0; j < NBT_SC_NBT_MAXSLABS; j++) {
+                bool here = s == j;
+                A[j] += here ? m : vec3(0.0);
+                E[j] += here ? e : vec3(0.0);
+                C[j] += here ? fc : vec3(0.0);
+            }
+            C[NBT_SC_NBT_MAXSLABS] += s == n ? fc : vec3(0.0);
         }
-    for (int j = 0; j <= 3 * n; j++)
-        imageStore(nbt_sc_src, ivec3(P, j), vec4(acc[j], 0.0));
+    for (int j = 0; j < NBT_SC_NBT_MAXSLABS; j++)
+        if (j < n) {
+            imageStore(nbt_sc_src, ivec3(P, j), vec4(A[j], 0.0));
+            imageStore(nbt_sc_src, ivec3(P, n + j), vec4(E[j], 0.0));
+            imageStore(nbt_sc_src, ivec3(P, 2 * n + j), vec4(C[j], 0.0));
+        }
+    imageStore(nbt_sc_src, ivec3(P, 3 * n), vec4(C[NBT_SC_NBT_MAXSLABS], 0.0));
 }

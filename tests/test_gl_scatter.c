@@ -10,7 +10,9 @@
  *       B for the pyramid methods), printed for the docs; shinya's relative
  *       L1 against A is asserted, and nbt's relative L1, edge band and bias
  *       against A, also at dtheta / 4 (beta_px to ~30), with its convergence
- *       in the slab count and its kernel's misplaced mass per beta;
+ *       in the slab count and its kernel's misplaced mass per beta; naive's
+ *       (vs A) and elek's (vs A and B) relative L1 and edge band are gated
+ *       against regressions;
  *   (d) time per method at 320x240 (after a first, compiling run).
  * Fails with a clear message when no GL context can be created. */
 #include <float.h>
@@ -55,6 +57,18 @@ const char *__asan_default_options(void)
 #define NBT_MEAN_TOL 3e-2
 #define NBT_EDGE_TOL 7e-2
 #define NBT_BIAS_TOL 1.8e-2
+
+/* regression gates for the other pyramid methods on the five scenes of (c),
+ * about 1.5x the worst measured value (relative L1 / edge band):
+ *   naive vs A (erfc kernel):  0.307 (step+lamp) / 0.592 (blocks)
+ *   elek vs A (erfc kernel):   0.241 (step+lamp) / 0.616 (blocks)
+ *   elek vs B (Elek's kernel): 0.163 (step+lamp) / 0.492 (blocks) */
+#define NAIVE_A_L1_TOL 0.46
+#define NAIVE_A_EDGE_TOL 0.89
+#define ELEK_A_L1_TOL 0.36
+#define ELEK_A_EDGE_TOL 0.92
+#define ELEK_B_L1_TOL 0.25
+#define ELEK_B_EDGE_TOL 0.74
 
 typedef struct {
     const char *name;
@@ -280,6 +294,13 @@ static void test_scenes(nbt_gls *g, const nbt_screen_kernel *km, const nbt_scree
                 if (m == NBT_GLS_NBT) {
                     nbt_sum += mA.rel_l1;
                     nbt_gate(s.name, &mA);
+                }
+                if ((m == NBT_GLS_NAIVE && !es) || m == NBT_GLS_ELEK) {
+                    double tl = m == NBT_GLS_NAIVE ? NAIVE_A_L1_TOL : es ? ELEK_B_L1_TOL : ELEK_A_L1_TOL;
+                    double te = m == NBT_GLS_NAIVE ? NAIVE_A_EDGE_TOL : es ? ELEK_B_EDGE_TOL : ELEK_A_EDGE_TOL;
+                    t_true(mA.rel_l1 <= tl && mA.edge <= te,
+                           "%s: %s against operator %s, relative L1 %.3g <= %.2g, edge %.3g <= %.2g", s.name,
+                           nbt_gls_method_name((nbt_gls_method)m), es ? "B" : "A", mA.rel_l1, tl, mA.edge, te);
                 }
                 if (m == NBT_GLS_SHINYA) {
                     worst_l1 = fmax(worst_l1, mA.rel_l1);
