@@ -26,11 +26,12 @@ double nbt__s_of_t(double t)
     return s_of_sc(t, sin(t), cos(t));
 }
 
-/* Legendre orders or 4 pi p at mu = c. */
-static void weights_at(const nbt__weights *w, double c, double *f)
+/* Legendre orders or 4 pi p at mu = c, sn = sqrt(1 - c^2) computed without
+ * cancellation by the caller. */
+static void weights_at(const nbt__weights *w, double c, double sn, double *f)
 {
     if (w->phase)
-        f[0] = 4.0 * NBT_PI * nbt_phase_eval(w->phase, c);
+        f[0] = 4.0 * NBT_PI * nbt__phase_eval_cs(w->phase, c, sn);
     else if (w->b)
         f[0] = nbt__legendre_series(w->b, w->kmax, c);
     else
@@ -51,7 +52,7 @@ static int seg_t(double t, void *vp, unsigned fdim, double *f)
         double s = s_of_sc(t, st, ct);
         e = isinf(s) ? 0.0 : exp(-c->u * (s - c->base));
     }
-    weights_at(c->w, -st, f);
+    weights_at(c->w, -st, fabs(ct), f);
     for (unsigned k = 0; k < fdim; k++)
         f[k] *= e;
     return 0;
@@ -63,17 +64,19 @@ static int seg_y(double y, void *vp, unsigned fdim, double *f)
 {
     const seg_ctx *c = vp;
     double s = c->base + y / c->u;
-    double mu, jac;
+    double mu, sn, jac;
     if (s <= 1.0) {
         double s2 = s * s;
         mu = (1.0 - s2) / (1.0 + s2);
+        sn = 2.0 * s / (1.0 + s2);
         jac = 2.0 / (1.0 + s2);
     } else {
         double r = 1.0 / s, r2 = r * r;
         mu = (r2 - 1.0) / (r2 + 1.0);
+        sn = 2.0 * r / (1.0 + r2);
         jac = 2.0 * r2 / (1.0 + r2);
     }
-    weights_at(c->w, mu, f);
+    weights_at(c->w, mu, sn, f);
     double e = exp(-y) * jac / c->u;
     for (unsigned k = 0; k < fdim; k++)
         f[k] *= e;

@@ -28,6 +28,11 @@ static inline unsigned nbt__fdim(const nbt__weights *w)
     return (w->phase || w->b) ? 1u : (unsigned)(w->kmax + 1);
 }
 
+/* p at mu = cos(theta) with sn = sin(theta) >= 0 given accurately (the
+ * Gaussian kinds need the angle itself: acos(mu) loses all but the top bits
+ * of pi - theta near mu = -1, where 1 + mu rounds in steps of 1.1e-16). */
+double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn);
+
 /* A cosine of the scattering angle distributed as p, from uniforms in [0, 1). */
 double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void *rs);
 

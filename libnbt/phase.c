@@ -165,11 +165,11 @@ void nbt_phase_free(nbt_phase *p)
 nbt_phase_kind nbt_phase_get_kind(const nbt_phase *p) { return p->kind; }
 const char *nbt_phase_name(const nbt_phase *p) { return p->name; }
 
-/* theta/sin(theta) exp(-theta^2/4B) * Z for one Gaussian at mu. */
-static double gauss_eval(double B, double Z, double mu)
+/* theta/sin(theta) exp(-theta^2/4B) * Z for one Gaussian at mu = cos(theta),
+ * st = sin(theta). */
+static double gauss_eval(double B, double Z, double mu, double st)
 {
-    double th = acos(mu);
-    double st = sqrt((1.0 - mu) * (1.0 + mu));
+    double th = atan2(st, mu);
     double ratio;
     if (th < 1e-4)
         ratio = 1.0 + th * th / 6.0;
@@ -199,6 +199,17 @@ double nbt_phase_eval(const nbt_phase *p, double mu)
         mu = 1.0;
     if (mu < -1.0)
         mu = -1.0;
+    return nbt__phase_eval_cs(p, mu, sqrt((1.0 - mu) * (1.0 + mu)));
+}
+
+double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn)
+{
+    if (mu > 1.0)
+        mu = 1.0;
+    if (mu < -1.0)
+        mu = -1.0;
+    if (!(sn >= 0.0))
+        sn = 0.0;
     switch (p->kind) {
     case NBT_PHASE_ISO:
         return 1.0 / (4.0 * NBT_PI);
@@ -212,7 +223,7 @@ double nbt_phase_eval(const nbt_phase *p, double mu)
     case NBT_PHASE_SOG: {
         double s = 0;
         for (size_t i = 0; i < p->n; i++)
-            s += p->w[i] * gauss_eval(p->B[i], p->Z[i], mu);
+            s += p->w[i] * gauss_eval(p->B[i], p->Z[i], mu, sn);
         return s;
     }
     case NBT_PHASE_TABLE: {
