@@ -10,6 +10,8 @@
 #define SEG_MAX_INTERVALS 2000
 /* exp(-y) beyond this y is below 1e-34 of the segment's leading value */
 #define Y_TAIL 80.0
+/* components kept on the stack when a segment is split */
+#define NBT__SEG_MAXDIM 64
 
 /* s = tan(pi/4 + t/2) = (1 + sin t)/cos t = cos t/(1 - sin t) from sin t, cos t */
 static double s_of_sc(double t, double st, double ct)
@@ -83,6 +85,28 @@ static int seg_y(double y, void *vp, unsigned fdim, double *f)
     return 0;
 }
 
+/* In z = log(w), w = 1/s = cot(pi/4 + t/2) = cos t/(1 + sin t), for t in
+ * [0, pi/2): exp(-u (1/w - base)) w(mu) 2w/(1+w^2), mu = (w^2-1)/(w^2+1),
+ * sin(theta) = cos t = 2w/(1+w^2). Used for 0 < u < 1 on t > 0, where the
+ * exponential falls from 1 to 0 over w ~ u near t = pi/2: a boundary layer
+ * of width ~u in t that in z is smooth and O(1) wide. */
+static int seg_z(double z, void *vp, unsigned fdim, double *f)
+{
+    const seg_ctx *c = vp;
+    double w = exp(z), w2 = w * w;
+    double sn = 2.0 * w / (1.0 + w2);
+    weights_at(c->w, (w2 - 1.0) / (w2 + 1.0), sn, f);
+    double e = exp(-c->u * (1.0 / w - c->base)) * sn;
+    for (unsigned k = 0; k < fdim; k++)
+        f[k] *= e;
+    return 0;
+}
+
+static double w_of_t(double t)
+{
+    return t >= NBT_PI_2 ? 0.0 : cos(t) / (1.0 + sin(t));
+}
+
 nbt_status nbt__airlight_segment(nbt_quad_ws *ws, const nbt__weights *w, double u,
                                  double v1, double v2, int shifted, double tol,
                                  double *out, double *err)
@@ -90,8 +114,45 @@ nbt_status nbt__airlight_segment(nbt_quad_ws *ws, const nbt__weights *w, double 
     unsigned fdim = nbt__fdim(w);
     double s1 = nbt__s_of_t(v1);
     seg_ctx c = {w, u, shifted ? s1 : 0.0};
-    if (u < 1.0)
+    if (u < 1.0 && (u == 0.0 || v2 <= 0.0 || v1 >= v2))
         return nbt_quad_gk(ws, seg_t, &c, fdim, v1, v2, 0.0, tol, out, err);
+    if (u < 1.0) {
+        /* t in [v1, 0] as it is, t in [max(v1, 0), v2] in z = log w; below
+         * w_c the exponential is under e^-Y_TAIL of its value at the start */
+        double a[NBT__SEG_MAXDIM], ae[NBT__SEG_MAXDIM];
+        double *r0 = fdim <= NBT__SEG_MAXDIM ? a : NULL, *e0 = fdim <= NBT__SEG_MAXDIM ? ae : NULL;
+        nbt_status st = NBT_OK;
+        double t0 = v1;
+        if (v1 < 0.0) {
+            if (!r0) {
+                r0 = malloc(2 * fdim * sizeof(double));
+                if (!r0)
+                    NBT_FAIL(NBT_ENOMEM, "H: out of memory");
+                e0 = r0 + fdim;
+            }
+            st = nbt_quad_gk(ws, seg_t, &c, fdim, v1, 0.0, 0.0, tol, r0, e0);
+            t0 = 0.0;
+        }
+        double wa = w_of_t(t0), wb = w_of_t(v2);
+        double wc = 1.0 / (fmax(c.base, 1.0 / wa) + Y_TAIL / u);
+        nbt_status s2 = NBT_OK;
+        if (wb < wc)
+            wb = wc;
+        if (wb < wa)
+            s2 = nbt_quad_gk(ws, seg_z, &c, fdim, log(wb), log(wa), 0.0, tol, out, err);
+        else
+            for (unsigned k = 0; k < fdim; k++)
+                out[k] = err[k] = 0.0;
+        if (v1 < 0.0) {
+            for (unsigned k = 0; k < fdim; k++) {
+                out[k] += r0[k];
+                err[k] += e0[k];
+            }
+            if (r0 != a)
+                free(r0);
+        }
+        return st != NBT_OK ? st : s2;
+    }
     double y1 = u * (s1 - c.base);
     double y2 = v2 >= NBT_PI_2 ? INFINITY : u * (nbt__s_of_t(v2) - c.base);
     double cap = fmax(y1, 0.0) + Y_TAIL;

@@ -74,6 +74,13 @@ def main():
                 vv = mpf(float(v))
                 vv = min(vv, pi / 2) if v != "1.5707963267948966" else pi / 2
                 f.write("%d %s %s %s\n" % (k, u, v, nstr(hk(k, mpf(u), vv), 25)))
+        # the boundary layer at v -> pi/2 for small u (width ~u in v): v at
+        # pi/2 and 2e-6, 1e-4, 1e-2 below it
+        for k in (0, 1, 2, 3):
+            for u in ("1e-6", "1e-4", "1e-2"):
+                for v in ("1.5707963267948966", "1.5707943267948966", "1.5706963267948966", "1.5607963267948966"):
+                    vv = pi / 2 if v == "1.5707963267948966" else mpf(float(v))
+                    f.write("%d %s %s %s\n" % (k, u, v, nstr(hk(k, mpf(u), vv), 25)))
     jpts = [("0", "0"), ("0", "1.2"), ("0.37", "0.4"), ("1", "1.5707963267948966"),
             ("2.385", "0.9"), ("2.385", "2.2"), ("10", "0.2"), ("10", "2.9")]
     with open(os.path.join(HERE, "jk.txt"), "w") as f:
