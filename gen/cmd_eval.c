@@ -206,27 +206,28 @@ static int eval_phys(const args_t *a, phys_t *ph)
         double *b = malloc((used + 1) * sizeof(double));
         if (!b || nbt_phase_moments(p, used, b) != NBT_OK)
             die("cannot compute the Legendre moments");
-        if (ph->surface)
+        if (ph->surface) {
             st = nbt_surface_table((const nbt_table *const *)sets[0].t, sets[0].count,
                                    (const nbt_table *const *)sets[1].t, sets[1].count, b, used, &ph->sg, &v);
-        else
-            st = nbt_airlight_table((const nbt_table *const *)sets[0].t, sets[0].count, b, used, &ph->ag, &v);
-        /* error: each channel's recorded interpolation error (twice for a
-         * difference of lookups), weighted as in the series, plus truncation */
-        double w = 0;
-        for (int i = 0; i < nsets; i++) {
-            double coef = ph->surface ? (i == 0 ? ph->sg.kd : ph->sg.ks) : 1.0;
-            for (size_t t = 0; t < sets[i].count; t++)
-                for (size_t c = 0; c < sets[i].t[t]->nch; c++) {
-                    int k = sets[i].t[t]->k[c];
-                    w += coef * (ph->surface ? 1 : 2) * fabs(k < 0 ? 1.0 : (2.0 * k + 1.0) * b[k]) *
-                         sets[i].t[t]->max_err[c];
-                }
+            /* error: each channel's recorded interpolation error, weighted as
+             * in the series, plus truncation */
+            double w = 0;
+            for (int i = 0; i < nsets; i++) {
+                double coef = i == 0 ? ph->sg.kd : ph->sg.ks;
+                for (size_t t = 0; t < sets[i].count; t++)
+                    for (size_t c = 0; c < sets[i].t[t]->nch; c++) {
+                        int k = sets[i].t[t]->k[c];
+                        w += coef * fabs(k < 0 ? 1.0 : (2.0 * k + 1.0) * b[k]) * sets[i].t[t]->max_err[c];
+                    }
+            }
+            e = ph->sg.kappa_s * ph->sg.I0 / (4 * M_PI * ph->sg.dsp) * w;
+        } else {
+            /* the library's bound: the recorded errors of the lookups, or near
+             * the source axis the ray integral's own error */
+            st = nbt_airlight_table_e((const nbt_table *const *)sets[0].t, sets[0].count, b, used,
+                                      fixed ? p : NULL, &ph->ag, &v, &e);
         }
-        double pre = ph->surface ? ph->sg.kappa_s * ph->sg.I0 / (4 * M_PI * ph->sg.dsp)
-                                 : ph->ag.kappa_s * ph->ag.I0 * exp(-ph->ag.kappa_t * ph->ag.dsv * cos(ph->ag.gamma)) /
-                                       (4 * M_PI * ph->ag.dsv * sin(ph->ag.gamma));
-        e = pre * w + (fixed ? 0.0 : se); /* se: the series' own error at that many terms */
+        e += fixed ? 0.0 : se; /* se: the series' own error at that many terms */
         if (st == NBT_ETOL)
             fprintf(stderr, "nbt-gen: warning: outside the table's range, clamped\n");
         if (st == NBT_ETOL)

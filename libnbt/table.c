@@ -2,6 +2,7 @@
  * the fill-then-measure step shared by the H and J table builders. */
 #include <config.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <nbt/table.h>
@@ -191,8 +192,11 @@ nbt_status nbt__table_set_prepare(nbt_table *const *ts, size_t nt, const nbt_pha
     *kmax = 0;
     for (size_t i = 0; i < nt; i++)
         for (size_t c = 0; c < ts[i]->nch; c++) {
-            if (fixed)
+            if (fixed) {
                 ts[i]->k[c] = -1;
+                if (!ts[i]->phase[0]) /* name the phase, so the table alone says what it holds */
+                    snprintf(ts[i]->phase, sizeof ts[i]->phase, "%s", nbt_phase_name(fixed));
+            }
             else if ((size_t)ts[i]->k[c] > *kmax)
                 *kmax = (size_t)ts[i]->k[c];
             (*kmap)[(*nch)++] = ts[i]->k[c];

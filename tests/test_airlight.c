@@ -191,6 +191,61 @@ int main(void)
     }
     t_true(within == 100, "table airlight within its recorded error bound: %d/100", within);
 
+    /* ---- table route towards the source axis (issue 9): gamma -> pi and
+     * gamma -> 0 with the surface before the source. The reference is the
+     * same 4-term series by the library's other route (nbt_airlight_series,
+     * which is exact there); the table route must stay within 10% of it
+     * (its documented switch: the lookup is kept only where its recorded
+     * bound is <= 10% of its value), and within its own reported bound. */
+    const nbt_table *tabs1[1] = {t};
+    double near[] = {1e-1, 1e-2, 1e-3, 1e-5, 1e-9, 3e-14, 0};
+    int axis_ok = 0, axis_n = 0;
+    for (int side = 0; side < 2; side++)
+        for (size_t i = 0; i < sizeof near / sizeof near[0]; i++)
+            for (int kap = 0; kap < 2; kap++) {
+                /* side 0: source behind (gamma = pi - d); side 1: ahead, surface before it */
+                nbt_airlight_geom ga = {0.0385 + 0.2 * kap, 0.05 + 0.3 * kap, 2.385, 7.0,
+                                        side ? near[i] : M_PI - near[i], side ? 3.7 : INFINITY};
+                double Lt, Le, Et, Lr, Erq;
+                nbt_status s1 = nbt_airlight_table(tabs1, 1, b, 4, &ga, &Lt);
+                nbt_status s2 = nbt_airlight_table_e(tabs1, 1, b, 4, NULL, &ga, &Le, &Et);
+                nbt_status s3 = nbt_airlight_series(b, 4, &ga, 1e-12, &Lr, &Erq);
+                int ok = s1 == NBT_OK && s2 == NBT_OK && s3 == NBT_OK && Lr > 0 && fabs(Lt - Lr) <= 0.1 * Lr + Erq &&
+                         Le == Lt && fabs(Le - Lr) <= Et + Erq + 1e-12 * Lr && Et <= 0.1 * Le;
+                if (!ok)
+                    printf("axis: gamma = %s %g, kappa_t %g: table %.17g (bound %.3g) series %.17g (%d %d %d)\n",
+                           side ? "" : "pi -", near[i], ga.kappa_t, Lt, Et, Lr, s1, s2, s3);
+                axis_ok += ok;
+                axis_n++;
+            }
+    t_true(axis_ok == axis_n, "table route near the source axis within 10%% of the series and within its bound: %d/%d",
+           axis_ok, axis_n);
+    /* closed forms on the axis, kappa -> 0: p_4(mu) = sum_k (2k+1) b_k mu^k/4pi at mu = -1 (behind) or +1 (ahead)
+     *   gamma = pi:                     L = ks I0 p_4(-1) (1/dsv - 1/(dsv + dvp))
+     *   gamma = 0, dvp < dsv:           L = ks I0 p_4(+1) (1/(dsv - dvp) - 1/dsv) */
+    double pm = 0, pp = 0;
+    for (int k = 0; k < 4; k++) {
+        pm += (2 * k + 1) * b[k] * (k % 2 ? -1 : 1) / (4 * M_PI);
+        pp += (2 * k + 1) * b[k] / (4 * M_PI);
+    }
+    nbt_airlight_geom gc = {1e-12, 1e-12, 2.385, 3.0, M_PI, 5.0};
+    double Lc, Ec;
+    st = nbt_airlight_table_e(tabs1, 1, b, 4, NULL, &gc, &Lc, &Ec);
+    t_rel(Lc, 1e-12 * 2.385 * pm * (1 / 3.0 - 1 / 8.0), 1e-9, "table route, gamma = pi: closed form (status %d)", st);
+    gc.gamma = 0;
+    gc.dvp = 2.0;
+    st = nbt_airlight_table_e(tabs1, 1, b, 4, NULL, &gc, &Lc, &Ec);
+    t_rel(Lc, 1e-12 * 2.385 * pp * (1 / 1.0 - 1 / 3.0), 1e-9, "table route, gamma = 0, surface first: closed form (status %d)", st);
+    /* a fixed-phase table: the phase from the table's own name (hg:g=0.385) */
+    nbt_table *tf = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 1);
+    t_true(tf && nbt_h_table_build(tf, hg, &o) == NBT_OK, "fixed-phase H table builds");
+    const nbt_table *tabsf[1] = {tf};
+    nbt_airlight_geom gf = {0.0385, 0.05, 2.385, 7.0, M_PI - 1e-9, INFINITY};
+    double Lf, Ef, Ld3, Ed3;
+    st = nbt_airlight_table_e(tabsf, 1, NULL, 0, NULL, &gf, &Lf, &Ef);
+    nbt_airlight_direct(hg, &gf, 1e-12, &Ld3, &Ed3);
+    t_rel(Lf, Ld3, 1e-8, "fixed-phase table route at gamma = pi - 1e-9 = direct (status %d, bound %.2e)", st, Ef);
+    nbt_table_free(tf);
     nbt_table_free(t);
     nbt_phase_free(hg);
     nbt_phase_free(hg9);

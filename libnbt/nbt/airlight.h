@@ -51,8 +51,28 @@ nbt_status nbt_airlight_direct(const nbt_phase *p, const nbt_airlight_geom *g, d
  * directly, never formed by subtracting H values). */
 nbt_status nbt_airlight_series(const double *b, size_t nterms, const nbt_airlight_geom *g,
                                double tol, double *La, double *abserr);
-/* Table lookup: Legendre tables (any number, channels give k; b indexed by k,
- * orders without a channel are left out) or one fixed-phase table (b unused). */
+/* Table route: Legendre tables (any number, channels give k; b indexed by k,
+ * orders without a channel are left out) or one fixed-phase table (b unused).
+ * The lookup is L_a above with two lookups per channel; its bound is the
+ * tables' recorded max_err, twice per channel, weighted by |w_k| and the
+ * prefactor, so it grows as 1/h towards the source axis (gamma -> 0 with the
+ * surface before the source, gamma -> pi) while L_a stays finite. Wherever
+ * that bound exceeds 10% of the looked-up value (and on the axis itself,
+ * gamma = 0 or pi, where the lookup is undefined) the same phase function
+ * is integrated along the ray instead (as nbt_airlight_direct does): the
+ * channels' truncated series for Legendre tables; for a fixed-phase table
+ * the phase `fixed`, or, when NULL, the table's phase name parsed with
+ * nbt_phase_parse (file phases, e.g. "sog:2 terms", cannot be: the lookup is
+ * then returned with its bound; on the axis NBT_EDOM). abserr: the lookup's
+ * bound (NaN where max_err was not measured) or the ray quadrature's error
+ * estimate. The series' truncation is the caller's (as in nbt_airlight_series).
+ * NBT_ETOL: u = kappa_t h beyond the table's u range (the lookup clamps to
+ * the edge; the bound does not cover that). The GLSL shaders do only the
+ * lookup, with gamma clamped (doc/shaders.md). */
+nbt_status nbt_airlight_table_e(const nbt_table *const *tables, size_t ntables, const double *b,
+                                size_t nterms, const nbt_phase *fixed, const nbt_airlight_geom *g,
+                                double *La, double *abserr);
+/* The same, without the bound and with fixed = NULL. */
 nbt_status nbt_airlight_table(const nbt_table *const *tables, size_t ntables, const double *b,
                               size_t nterms, const nbt_airlight_geom *g, double *La);
 
