@@ -12,11 +12,16 @@
 #include "cli.h"
 #include "commands.h"
 
+/* libnbt-gl's airlight and surface shaders take at most 4 RGBA packs per
+ * kind (GLSL 3.30 indexes sampler arrays with constants only): 16 orders. */
+#define NBT_SCENE_GL_ORDERS 16
+
 typedef struct {
     double kt_lo, kt_hi, ks_lo, ks_hi, d_lo, d_hi, g_lo, g_hi, tol;
     int have_kt, have_ks, have_d, have_g, airlight, diffuse, half;
     char phase[256];
     int phong[16];
+    long orders_max;  /* Legendre orders the tables may hold (default: what libnbt-gl takes) */
     size_t nphong;
 } scene_t;
 
@@ -47,6 +52,7 @@ static void parse_scene(const char *path, scene_t *s)
     memset(s, 0, sizeof *s);
     s->airlight = s->diffuse = 1;
     s->tol = 1e-3;
+    s->orders_max = NBT_SCENE_GL_ORDERS;
     char buf[1024], opt[160];
     int line = 0;
     while (fgets(buf, sizeof buf, f)) {
@@ -87,6 +93,8 @@ static void parse_scene(const char *path, scene_t *s)
             s->diffuse = yesno(path, line, key, val);
         } else if (!strcmp(key, "half")) {
             s->half = yesno(path, line, key, val);
+        } else if (!strcmp(key, "orders_max")) {
+            s->orders_max = opt_long(opt, val, 1, 512);
         } else if (!strcmp(key, "tol")) {
             s->tol = opt_double(opt, val, 1e-7, 0, 0.5, 0);
         } else if (!strcmp(key, "phong")) {
@@ -97,7 +105,7 @@ static void parse_scene(const char *path, scene_t *s)
             }
         } else
             die_usage("%s:%d: unknown key '%s': accepted are kappa_t, kappa_s, distance, g, phase, airlight, "
-                      "diffuse, phong, tol, half", path, line, key);
+                      "diffuse, phong, tol, half, orders_max", path, line, key);
     }
     fclose(f);
     if (!s->have_kt || !s->have_d)
@@ -148,9 +156,16 @@ int cmd_scene(int argc, char **argv)
         die_usage("%s: kappa_t * distance = %g exceeds 1e6 (the medium is opaque long before)", argv[optind], xmax);
     size_t nterms = 1;
     double ttol = s.tol;
-    if (!ph && legendre_budget(fmax(fabs(s.g_lo), fabs(s.g_hi)), xmax, s.tol, &nterms, &ttol) != 0)
-        die("%s: |g| up to %g needs more than 512 Legendre terms at tol %g: use a fixed phase "
-            "(phase = hg:g=...) or a larger tol", argv[optind], fmax(fabs(s.g_lo), fabs(s.g_hi)), s.tol);
+    if (!ph && legendre_budget(fmax(fabs(s.g_lo), fabs(s.g_hi)), xmax, s.tol, (size_t)s.orders_max, &nterms, &ttol) != 0) {
+        if (nterms > 512)
+            die("%s: |g| up to %g needs more than 512 Legendre orders at tol %g: use a fixed phase "
+                "(phase = hg:g=...) or a larger tol", argv[optind], fmax(fabs(s.g_lo), fabs(s.g_hi)), s.tol);
+        die("%s: |g| up to %g needs %zu Legendre orders at tol %g, more than orders_max = %ld%s: use a fixed phase "
+            "(phase = hg:g=...), a larger tol or a smaller |g|%s", argv[optind], fmax(fabs(s.g_lo), fabs(s.g_hi)),
+            nterms, s.tol, s.orders_max,
+            s.orders_max == NBT_SCENE_GL_ORDERS ? " (libnbt-gl's shaders take at most 16: 4 packs of 4)" : "",
+            s.orders_max == NBT_SCENE_GL_ORDERS ? ", or raise orders_max (up to 512) for tables used off the GPU" : "");
+    }
     if (mkdir(dir, 0777) != 0) {
         struct stat sb;
         if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))

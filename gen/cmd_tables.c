@@ -393,11 +393,11 @@ static size_t choose_terms(double gmax, double umax, double tol, double *achieve
     return N;
 }
 
-int legendre_budget(double gmax, double xmax, double tol, size_t *nterms, double *table_tol)
+int legendre_budget(double gmax, double xmax, double tol, size_t nmax, size_t *nterms, double *table_tol)
 {
     double trunc;
     *nterms = choose_terms(gmax, xmax, 0.5 * tol, &trunc);
-    if (*nterms > 512)
+    if (*nterms > 512 || *nterms > nmax)
         return 1;
     /* Interpolation gets the other half of tol. In the series each order's
      * error is weighted by (2k+1)|g|^k, so each table must be that much
@@ -500,7 +500,7 @@ int cmd_tables(int argc, char **argv)
         s.tol = 1e-3;
     if (have_g) {
         double ttol;
-        if (legendre_budget(fmax(fabs(g_lo), fabs(g_hi)), s.xmax, have_tol ? s.tol : 1e-3, &s.nterms, &ttol) != 0)
+        if (legendre_budget(fmax(fabs(g_lo), fabs(g_hi)), s.xmax, have_tol ? s.tol : 1e-3, 512, &s.nterms, &ttol) != 0)
             die("--g: |g| up to %g needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G",
                 fmax(fabs(g_lo), fabs(g_hi)));
         if (!have_size)

@@ -53,6 +53,9 @@ double now_seconds(void);
  * up to xmax) and the per-table interpolation target (tol/2 over the error
  * amplification sum (2k+1)|g|^k). Prints both as '#' lines. 0, or 1 when
  * more than 512 terms would be needed. */
-int legendre_budget(double gmax, double xmax, double tol, size_t *nterms, double *table_tol);
+/* Legendre terms for |g| <= gmax at tol (half truncation, half tables); 1 when
+ * more than nmax (<= 512) terms are needed (*nterms then holds the need, or
+ * 513 past 512), without printing. */
+int legendre_budget(double gmax, double xmax, double tol, size_t nmax, size_t *nterms, double *table_tol);
 
 #endif

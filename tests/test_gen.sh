@@ -175,6 +175,25 @@ srcdir=${top_srcdir:-.}
 "$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>/dev/null &&
   [ -s "$tmp/scene/H_k0-3.exr" ] && [ -s "$tmp/scene/J1_k0-3.exr" ] && [ -s "$tmp/scene/J20_k0-3.exr" ] &&
   grep -q "Legendre terms" "$tmp/out" && ok || bad "example scene: $(cat "$tmp/out")"
+# the example scene fits libnbt-gl: at most 16 orders (4 packs of 4)
+nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
+[ -n "$nt" ] && [ "$nt" -le 16 ] && [ "$(ls "$tmp/scene"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
+  bad "example scene: $nt orders, H files $(ls "$tmp/scene")"
+# a scene needing more orders than the shaders take (|g| <= 0.8 at tol 1e-2
+# needs ~38): by default the planner stops with one line naming orders_max
+# and the limit, and writes nothing; orders_max = 512 builds ceil(N/4) packs
+printf 'kappa_t = 0.1\ndistance = 10\ng = 0:0.8\ndiffuse = no\ntol = 1e-2\n' >"$tmp/g8.scene"
+"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8" >/dev/null 2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "orders_max = 16" "$tmp/err" && grep -q "at most 16" "$tmp/err" &&
+  [ ! -e "$tmp/g8" ] && ok || bad "scene beyond the shaders' 16 orders: rc=$rc, $(cat "$tmp/err"), $(ls "$tmp/g8" 2>&1 | head -3)"
+printf 'orders_max = 512\n' >>"$tmp/g8.scene"
+"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8" >"$tmp/out" 2>/dev/null; rc=$?
+nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
+[ $rc -eq 0 ] && [ -n "$nt" ] && [ "$nt" -gt 16 ] && [ "$(ls "$tmp/g8"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
+  bad "orders_max = 512: rc=$rc, $nt orders, $(ls "$tmp/g8" 2>&1 | tr '\n' ' ')"
+rm -rf "$tmp/g8" "$tmp/g8.scene" "$tmp/out" "$tmp/err"
+printf 'kappa_t = 0.1\ndistance = 10\ng = 0.5\norders_max = 0\n' >"$tmp/bad.scene"
+expect_usage "orders_max out of range" "orders_max" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 printf 'kappa_t = 0.1\ndistance = 10\nphase = hg:g=0.8\nfog = thick\n' >"$tmp/bad.scene"
 expect_usage "unknown scene key" "unknown key 'fog'" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 printf 'kappa_t = -0.1\ndistance = 10\nphase = iso\n' >"$tmp/bad.scene"
