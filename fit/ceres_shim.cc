@@ -8,7 +8,9 @@
 #include <memory>
 #include <mutex>
 #include <vector>
+#include <cfloat>
 #include <ceres/ceres.h>
+#include <Eigen/Dense>
 #include <glog/logging.h>
 #include "ceres_shim.h"
 
@@ -109,6 +111,46 @@ void set_text(char *dst, size_t n, const std::string &s)
     std::snprintf(dst, n, "%s", s.c_str());
 }
 
+// J^T J at the solution with unit-norm columns: its conditioning, rank and,
+// when asked and of full rank, the covariance (J^T J)^-1.
+void conditioning(ceres::Problem &problem, int np, int nres, bool want_cov, nbt_fit_summary *s)
+{
+    double cost;
+    ceres::CRSMatrix crs;
+    if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, &crs))
+        return;
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(nres, np);
+    for (int i = 0; i < crs.num_rows; i++)
+        for (int k = crs.rows[i]; k < crs.rows[i + 1]; k++)
+            J(i, crs.cols[k]) = crs.values[k];
+    Eigen::MatrixXd H = J.transpose() * J;
+    if (!H.allFinite())
+        return;
+    Eigen::VectorXd d = H.diagonal().cwiseSqrt();
+    for (int j = 0; j < np; j++)
+        if (!(d(j) > 0)) // a parameter the residuals do not depend on: a zero row and column, eigenvalue 0
+            d(j) = 1;
+    Eigen::MatrixXd Hs = d.cwiseInverse().asDiagonal() * H * d.cwiseInverse().asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Hs);
+    if (es.info() != Eigen::Success)
+        return;
+    const Eigen::VectorXd &lam = es.eigenvalues(); // ascending
+    double top = lam(np - 1);
+    s->rcond = top > 0 ? std::max(0.0, lam(0)) / top : 0;
+    for (int j = 0; j < np; j++)
+        s->rank += lam(j) > np * DBL_EPSILON * top;
+    if (!want_cov || s->rank < np)
+        return;
+    Eigen::MatrixXd C = es.eigenvectors() * lam.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+    C = d.cwiseInverse().asDiagonal() * C * d.cwiseInverse().asDiagonal();
+    if (!C.allFinite())
+        return;
+    for (int i = 0; i < np; i++)
+        for (int j = 0; j < np; j++)
+            s->covariance[i * np + j] = C(i, j);
+    s->covariance_ok = 1;
+}
+
 } // namespace
 
 extern "C" void nbt_fit_options_default(nbt_fit_options *o)
@@ -140,6 +182,7 @@ extern "C" int nbt_fit_solve(int np, double *p, const double *lower, const doubl
             return 1;
         }
     try {
+        std::vector<double> start(p, p + np);
         FLAGS_minloglevel = 3; // glog: nothing below FATAL on stderr (nbt reports through the summary)
         Cache cache(np, nres, f, data, o->analytic_jacobian != 0);
         ceres::Problem::Options po;
@@ -183,15 +226,19 @@ extern "C" int nbt_fit_solve(int np, double *p, const double *lower, const doubl
         s->usable = sum.IsSolutionUsable();
         set_text(s->termination, sizeof s->termination, ceres::TerminationTypeToString(sum.termination_type));
         set_text(s->message, sizeof s->message, sum.message);
-        if (o->covariance && s->usable) {
-            ceres::Covariance::Options co;
-            co.algorithm_type = ceres::DENSE_SVD;
-            co.null_space_rank = -1; // pseudo-inverse where the problem is rank deficient
-            ceres::Covariance cov(co);
-            std::vector<std::pair<const double *, const double *>> blocks = {{p, p}};
-            if (cov.Compute(blocks, &problem))
-                s->covariance_ok = cov.GetCovarianceBlock(p, p, s->covariance);
+        s->rcond = NAN;
+        for (int i = 0; i < np * np; i++)
+            s->covariance[i] = NAN;
+        for (int i = 0; i < np; i++) {
+            double scale = 1e-8 * std::fabs(start[i]);
+            if (lower && std::isfinite(lower[i]) && p[i] <= lower[i] + std::max(scale, 1e-8 * std::fabs(lower[i])))
+                s->at_bound[i] = -1;
+            else if (upper && std::isfinite(upper[i]) && p[i] >= upper[i] - std::max(scale, 1e-8 * std::fabs(upper[i])))
+                s->at_bound[i] = 1;
+            s->nbound += s->at_bound[i] != 0;
         }
+        if (s->usable)
+            conditioning(problem, np, nres, o->covariance != 0, s);
         return s->usable ? 0 : 1;
     } catch (const std::exception &e) {
         set_text(s->termination, sizeof s->termination, "EXCEPTION");

@@ -24,7 +24,7 @@ typedef struct {
     nbt_fit_loss loss;          /* default none */
     double loss_scale;          /* default 1 */
     int analytic_jacobian;      /* 1: f fills jac; 0: central differences (default) */
-    int covariance;             /* 1: fill summary.covariance ((J^T J)^-1 at the solution) */
+    int covariance;             /* 1: fill summary.covariance ((J^T J)^-1 at the solution) when J^T J has full rank */
     /* optional per-iteration callback (iteration, cost), e.g. for a log on stderr */
     void (*progress)(int iteration, double cost, void *data);
     void *progress_data;
@@ -39,6 +39,22 @@ typedef struct {
     double initial_cost, final_cost;  /* 1/2 sum r^2 */
     char termination[32];       /* CONVERGENCE, NO_CONVERGENCE, FAILURE, USER_FAILURE, EXCEPTION, BAD_INPUT */
     char message[256];
+    /* At a usable solution (else rcond NaN, rank 0): J^T J (J with the loss
+     * applied, as Ceres evaluates it) with its columns scaled to unit norm,
+     * which makes it independent of the parameters' units: the reciprocal
+     * of its 2-norm condition number (1: orthogonal columns, 0: singular; a
+     * zero column gives 0) and its numerical rank (eigenvalues above
+     * np * DBL_EPSILON times the largest). */
+    double rcond;
+    int rank;
+    /* Parameters on a bound: -1 at the lower, +1 at the upper, 0 inside;
+     * "on" means within 1e-8 max(|bound|, |start value|). nbound counts them. */
+    signed char at_bound[NBT_FIT_MAX_PARAMS];
+    int nbound;
+    /* With options.covariance: (J^T J)^-1, row-major np x np, when J^T J
+     * has full rank (covariance_ok 1); otherwise covariance_ok 0 and NaNs:
+     * never a pseudo-inverse, which would report 0 variance along the
+     * directions the data do not constrain. */
     int covariance_ok;
     double covariance[NBT_FIT_MAX_PARAMS * NBT_FIT_MAX_PARAMS];
 } nbt_fit_summary;
