@@ -13,6 +13,7 @@
 #include "../gen/cli.h"
 #include "ceres_shim.h"
 #include "commands.h"
+#include "fit_status.h"
 #include "kernel_model.h"
 #include "psi_data.h"
 
@@ -20,19 +21,24 @@ static void help(void)
 {
     puts("Usage: nbt-fit kernel MC.csv|MC.exr [MORE ...] [-o FIT.csv] [--albedo W --sigma-t ST --B B]\n"
          "                      [--shape erfc|erfc2] [--weight stderr|rms] [--loss none|huber|cauchy]\n"
-         "                      [--correction OUT.txt | --apply CORR.txt]\n\n"
+         "                      [--correction OUT.txt | --apply CORR.txt] [--strict]\n\n"
          "Per plane z, fits alpha(z), beta(z) of Psi = alpha/r G(r/beta) to photon counts (nbt-fit mc\n"
          "output), averaged over each annulus as counted, weighted by the standard errors (or, with\n"
          "--weight rms, by the RMS metric's weights 2 pi r), starting\n"
          "from the moment solution (eq. 25/26). FIT.csv (default stdout): z,alpha,beta,alpha_stderr,\n"
-         "beta_stderr,rms_before,rms_after, one block per input (erfc2, a narrow plus a broad kernel,\n"
+         "beta_stderr,rms_before,rms_after,status, one block per input (erfc2, a narrow plus a broad kernel,\n"
          "adds alpha2,beta2; erfc+gauss, plus a diffuse 2-D Gaussian M exp(-r^2/2s^2)/(2 pi s^2), adds\n"
          "M,s; with their errors). rms: sqrt(sum (model - mc)^2 / sum mc^2)\n"
          "of 2 pi r Psi over the plane; 'RMS FILE moment X fitted Y' lines on stderr cover all planes.\n"
          "The medium comes from an EXR's metadata or --albedo/--sigma-t/--B (Gaussian phase).\n"
          "--correction OUT.txt: fit log(beta/beta_moment) and log(alpha/alpha_moment) as polynomials in\n"
          "x = ln(sigma_t z) (and albedo a, b = ln B where the inputs differ in them) to all inputs;\n"
-         "--apply CORR.txt: report the RMS of a correction on inputs it was not fitted to.");
+         "--apply CORR.txt: report the RMS of a correction on inputs it was not fitted to.\n"
+         "status (also on stderr, one line per flagged fit): noconv (did not converge), bound (a parameter\n"
+         "on a bound; widths are bounded by 100 x the plane's largest radius), illcond (J^T J singular or\n"
+         "ill-conditioned, or a standard error that cannot be computed), worse (RMS above the moment\n"
+         "kernel's), else ok; the first that applies, in this order. Flagged fits print nan standard\n"
+         "errors. --strict: any flagged fit is an error (exit 2, nothing written).");
 }
 
 typedef struct {
@@ -121,7 +127,7 @@ static int corr_res(const double *p, double *r, double *jac, void *vp)
     return 0;
 }
 
-static int write_correction(const char *path, const corr_ctx *c, const double *cb, const double *ca)
+static int write_correction(const char *path, const corr_ctx *c, const double *cb, const double *ca, const char *status)
 {
     char *tmp;
     FILE *f = out_open(path, &tmp);
@@ -142,6 +148,7 @@ static int write_correction(const char *path, const corr_ctx *c, const double *c
                "# t = 1, x, x^2, a, a x, b, b x with x = ln(sigma_t z), a = albedo, b = ln B\n"
                "# fitted on %zu runs: albedo [%g, %g], B [%g, %g], sigma_t z [%g, %g]\n",
             c->nruns, alo, ahi, blo, bhi, tlo, thi);
+    fprintf(f, "# fit status: %s\n", status);
     fprintf(f, "beta");
     for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
         fprintf(f, " %.17g", cb[i]);
@@ -172,9 +179,10 @@ int cmd_kernel(int argc, char **argv)
         {"sigma-t", required_argument, 0, 's'}, {"B", required_argument, 0, 'B'},
         {"shape", required_argument, 0, 'S'},  {"loss", required_argument, 0, 'l'},
         {"correction", required_argument, 0, 'c'}, {"apply", required_argument, 0, 'A'},
-        {"weight", required_argument, 0, 'w'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+        {"weight", required_argument, 0, 'w'}, {"strict", no_argument, 0, 'T'},
+        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     const char *out = NULL, *corr_out = NULL, *apply = NULL;
-    int ncomp = 1, rmsw = 0;
+    int ncomp = 1, rmsw = 0, strict = 0;
     double albedo = NAN, sigma_t = NAN, B = NAN;
     nbt_fit_options fo;
     nbt_fit_options_default(&fo);
@@ -219,6 +227,7 @@ int cmd_kernel(int argc, char **argv)
             break;
         case 'c': corr_out = optarg; break;
         case 'A': apply = optarg; break;
+        case 'T': strict = 1; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit kernel --help'");
         }
@@ -260,37 +269,44 @@ int cmd_kernel(int argc, char **argv)
         free(runs);
         return 0;
     }
-    FILE *f = stdout;
-    char *tmp = NULL;
-    if (out && !(f = out_open(out, &tmp)))
-        die("cannot write '%s'", out);
+    /* everything is held back until every fit is judged: --strict writes nothing when one is flagged */
+    fit_text rows = {0};
+    fit_report rep;
+    fit_report_init(&rep, strict);
+    static const char *const names[4][4] = {{0}, {"alpha", "beta"}, {"alpha", "beta", "alpha2", "beta2"},
+                                            {"alpha", "beta", "M", "s"}};
     if (ncomp == 1)
-        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after\n");
+        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,status\n");
     else if (ncomp == 2)
-        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,alpha2,beta2,alpha2_stderr,beta2_stderr,rms_before,rms_after\n");
+        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,alpha2,beta2,alpha2_stderr,beta2_stderr,rms_before,"
+                            "rms_after,status\n");
     else
-        fprintf(f, "z,alpha,beta,alpha_stderr,beta_stderr,M,s,M_stderr,s_stderr,rms_before,rms_after\n");
+        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,M,s,M_stderr,s_stderr,rms_before,rms_after,status\n");
     int rc = 0;
     for (size_t q = 0; q < nruns && rc == 0; q++) {
         psi_data *d = &runs[q];
         double nb_all = 0, na_all = 0, den_all = 0;
+        int nflag = 0;
         for (size_t j = 0; j < d->nplanes; j++) {
-            double floor_se = INFINITY;
-            for (size_t k = 0; k < d->nbins; k++)
+            double floor_se = INFINITY, rmax = 0;
+            for (size_t k = 0; k < d->nbins; k++) {
                 if (d->se[j * d->nbins + k] > 0)
                     floor_se = fmin(floor_se, d->se[j * d->nbins + k]);
-            if (isinf(floor_se)) {
-                if (out)
-                    out_close(f, tmp, out, 0);
-                die_usage("%s: plane z = %g has no photons counted (all-zero histogram): cannot fit", d->name, d->z[j]);
+                rmax = fmax(rmax, d->hi[j * d->nbins + k]);
             }
-            double p[4], lo[4] = {0, 1e-9 * d->z[j], 0, 1e-9 * d->z[j]}, hi[4] = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
+            if (isinf(floor_se))
+                die_usage("%s: plane z = %g has no photons counted (all-zero histogram): cannot fit", d->name, d->z[j]);
+            /* widths beyond 100 times the plane's largest radius look like beta = infinity (Psi ~ 1/r) on
+             * it: the data cannot tell them apart, so a fit that runs there ends on this bound */
+            double wmax = 100 * rmax;
+            double p[4], lo[4] = {0, 1e-9 * d->z[j], 0, 1e-9 * d->z[j]}, hi[4] = {HUGE_VAL, wmax, HUGE_VAL, wmax};
             moment_kernel(d, d->z[j], &p[0], &p[1]);
             double a0 = p[0], b0 = p[1];
             if (!(p[0] > 0 && p[1] > 0)) { /* no scattering in theory: start from the data's scale */
                 p[0] = d->psi[j * d->nbins] * d->hi[j * d->nbins];
                 p[1] = 0.3 * d->z[j];
             }
+            p[1] = fmin(p[1], 0.5 * wmax);
             plane_ctx pc = {d, j, floor_se, ncomp, rmsw, 0};
             {
                 double n00 = 0, d00 = 0;
@@ -317,6 +333,7 @@ int cmd_kernel(int argc, char **argv)
                     x[2] = fs[t] * sqrt(2 * M_PI) * base[0] * base[1];
                     x[3] = ws[t] * base[1];
                 }
+                x[3] = fmin(x[3], wmax);
                 if (nbt_fit_solve(np, x, lo, hi, (int)d->nbins, plane_res, &pc, &fo, &s) == 0 && s.final_cost < bestcost) {
                     bestcost = s.final_cost;
                     memcpy(best, x, sizeof best);
@@ -332,34 +349,48 @@ int cmd_kernel(int argc, char **argv)
             }
             memcpy(p, best, sizeof best);
             s = bs;
-            /* standard errors: (J^T J)^-1, scaled by chi^2/dof when the model does not fit within the noise */
-            double dof = (double)d->nbins - np, chi2 = 2 * s.final_cost, sc = dof > 0 ? fmax(1.0, chi2 / dof) : 1.0;
+            /* standard errors: (J^T J)^-1, scaled by chi^2/dof when the model does not fit within the noise;
+             * the RMS metric's weights carry no noise level, so there the scatter about the fit sets it */
+            double dof = (double)d->nbins - np, chi2 = 2 * s.final_cost;
+            double sc = dof <= 0 ? NAN : rmsw ? chi2 / dof : fmax(1.0, chi2 / dof);
             double se_[4];
             for (int e = 0; e < np; e++)
                 se_[e] = s.covariance_ok ? sqrt(s.covariance[e * np + e] * sc) : NAN;
             double n0 = 0, d0 = 0, n1 = 0, d1 = 0;
             kernel_rms_parts(d, j, a0, b0, &n0, &d0);
             shape_rms_parts(d, j, ncomp, p, &n1, &d1);
+            double rms0 = a0 > 0 && b0 > 0 ? sqrt(n0 / d0) : NAN, rms1 = sqrt(n1 / d1);
+            char why[512], where[400];
+            fit_status st = fit_judge(&s, np, names[ncomp], p, lo, hi, se_, rms0, rms1, "the moment kernel", why,
+                                      sizeof why);
+            snprintf(where, sizeof where, "%s: plane z = %g", d->name, d->z[j]);
+            fit_report_fit(&rep, where, st, why);
+            if (st != FIT_OK) { /* not a precise value: no standard errors */
+                nflag++;
+                for (int e = 0; e < np; e++)
+                    se_[e] = NAN;
+            }
             if (ncomp == 1)
-                fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g\n", d->z[j], p[0], p[1], se_[0], se_[1],
-                        sqrt(n0 / d0), sqrt(n1 / d1));
+                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%s\n", d->z[j], p[0], p[1], se_[0], se_[1],
+                             sqrt(n0 / d0), rms1, fit_status_word(st));
             else
-                fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g\n", d->z[j], p[0], p[1],
-                        se_[0], se_[1], p[2], p[3], se_[2], se_[3], sqrt(n0 / d0), sqrt(n1 / d1));
+                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%s\n", d->z[j], p[0],
+                             p[1], se_[0], se_[1], p[2], p[3], se_[2], se_[3], sqrt(n0 / d0), rms1, fit_status_word(st));
             nb_all += n0;
             na_all += n1;
             den_all += d0;
         }
         if (rc == 0)
-            fprintf(stderr, "RMS %s moment %.4f fitted %.4f\n", d->name, sqrt(nb_all / den_all),
-                    sqrt(na_all / den_all));
+            fit_report_note(&rep, "RMS %s moment %.4f fitted %.4f (%d of %zu planes flagged)\n", d->name,
+                            sqrt(nb_all / den_all), sqrt(na_all / den_all), nflag, d->nplanes);
     }
-    if (out && out_close(f, tmp, out, rc == 0) && rc == 0) {
-        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
-        rc = 1;
-    }
+    double corr_b[NBT_KERNEL_CORR_TERMS], corr_a[NBT_KERNEL_CORR_TERMS];
+    corr_ctx c = {runs, nruns, {1, 1, 1, 0, 0, 0, 0}, NULL};
+    char corr_status[600] = "ok";
     if (rc == 0 && corr_out) {
-        corr_ctx c = {runs, nruns, {1, 1, 1, 0, 0, 0, 0}, calloc(nruns, sizeof(double))};
+        c.scale = calloc(nruns, sizeof(double));
+        if (!c.scale)
+            die("out of memory");
         size_t nres = 0;
         for (size_t q = 0; q < nruns; q++) {
             double num = 0, den = 0;
@@ -373,28 +404,72 @@ int cmd_kernel(int argc, char **argv)
             if (runs[q].B != runs[0].B)
                 c.active[5] = c.active[6] = 1;
         }
-        double p[2 * NBT_KERNEL_CORR_TERMS] = {0}, cb[NBT_KERNEL_CORR_TERMS], ca[NBT_KERNEL_CORR_TERMS];
+        double p[2 * NBT_KERNEL_CORR_TERMS] = {0};
+        const char *pn[2 * NBT_KERNEL_CORR_TERMS];
+        static const char *const bn[NBT_KERNEL_CORR_TERMS] = {"beta:1", "beta:x", "beta:x^2", "beta:a", "beta:a x", "beta:b", "beta:b x"},
+                                 *const an[NBT_KERNEL_CORR_TERMS] = {"alpha:1", "alpha:x", "alpha:x^2", "alpha:a", "alpha:a x", "alpha:b", "alpha:b x"};
         int np = 0;
         for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
-            np += 2 * c.active[i];
+            if (c.active[i])
+                pn[np++] = bn[i];
+        for (int i = 0; i < NBT_KERNEL_CORR_TERMS; i++)
+            if (c.active[i])
+                pn[np++] = an[i];
         nbt_fit_options co;
         nbt_fit_options_default(&co);
         nbt_fit_summary s;
+        /* p = 0 is the moment kernel: the fit starts from it */
         if (nbt_fit_solve(np, p, NULL, NULL, (int)nres, corr_res, &c, &co, &s)) {
             fprintf(stderr, "%s: the correction fit failed: %s (%s)\n", cli_prog, s.termination, s.message);
             rc = 1;
         } else {
-            unpack(&c, p, cb, ca);
-            for (size_t q = 0; q < nruns; q++)
-                fprintf(stderr, "RMS %s moment %.4f corrected %.4f\n", runs[q].name, run_rms(&runs[q], NULL, NULL, 0),
-                        run_rms(&runs[q], cb, ca, 1));
-            if (write_correction(corr_out, &c, cb, ca)) {
-                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, corr_out);
+            unpack(&c, p, corr_b, corr_a);
+            /* worse: on any input, the corrected kernel's RMS above the moment kernel's */
+            double before = 0, after = 0, worst = 0;
+            for (size_t q = 0; q < nruns; q++) {
+                double r0 = run_rms(&runs[q], NULL, NULL, 0), r1 = run_rms(&runs[q], corr_b, corr_a, 1);
+                fit_report_note(&rep, "RMS %s moment %.4f corrected %.4f\n", runs[q].name, r0, r1);
+                if (q == 0 || r1 - r0 > worst) {
+                    worst = r1 - r0;
+                    before = r0;
+                    after = r1;
+                }
+            }
+            char why[512];
+            fit_status st = fit_judge(&s, np, pn, p, NULL, NULL, NULL, before, after, "the moment kernel", why, sizeof why);
+            if (st == FIT_OK && s.final_cost > s.initial_cost) {
+                snprintf(why, sizeof why, "its cost %.6g is above the moment kernel's %.6g", s.final_cost, s.initial_cost);
+                st = FIT_WORSE;
+            }
+            fit_report_fit(&rep, "correction", st, why);
+            snprintf(corr_status, sizeof corr_status, "%s%s%s", fit_status_word(st), st == FIT_OK ? "" : ": ", why);
+        }
+    }
+    if (rc != 0) { /* a hard failure: say what was judged so far, write nothing */
+        fit_report_finish(&rep);
+        fit_text_free(&rows);
+    } else if (fit_report_finish(&rep)) {
+        fit_text_free(&rows);
+        rc = EXIT_USAGE;
+    } else {
+        if (out) {
+            char *tmp;
+            FILE *f = out_open(out, &tmp);
+            if (f)
+                fit_text_write(&rows, f);
+            if (!f || out_close(f, tmp, out, 1)) {
+                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
                 rc = 1;
             }
+        } else
+            fit_text_write(&rows, stdout);
+        fit_text_free(&rows);
+        if (rc == 0 && corr_out && write_correction(corr_out, &c, corr_b, corr_a, corr_status)) {
+            fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, corr_out);
+            rc = 1;
         }
-        free(c.scale);
     }
+    free(c.scale);
     for (size_t q = 0; q < nruns; q++)
         psi_data_free(&runs[q]);
     free(runs);

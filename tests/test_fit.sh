@@ -64,7 +64,7 @@ else
   K="--albedo 0.7 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12"
   "$NBT_FIT" mc $K --seed 21 -o "$tmp/k1.csv" >/dev/null 2>&1 && "$NBT_FIT" mc $K --seed 22 -o "$tmp/k2.exr" >/dev/null 2>&1 || bad "mc for kernel"
   "$NBT_FIT" kernel "$tmp/k1.csv" --albedo 0.7 --sigma-t 1 --B 0.0685 -o "$tmp/kfit.csv" 2>"$tmp/krms" && ok || bad "kernel fit: $(cat "$tmp/krms")"
-  [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after" ] &&
+  [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,status" ] &&
     [ "$(wc -l <"$tmp/kfit.csv")" -eq 5 ] && ok || bad "kernel CSV: header and one row per plane"
   awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/krms" && ok || bad "the fitted kernel beats the moment kernel: $(cat "$tmp/krms")"
   "$NBT_FIT" kernel "$tmp/k2.exr" --shape erfc+gauss -o "$tmp/kg.csv" 2>"$tmp/kgrms" && ok || bad "erfc+gauss on EXR input (medium from metadata): $(cat "$tmp/kgrms")"

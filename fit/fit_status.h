@@ -1,0 +1,62 @@
+/* fit/fit_status.h: judging a finished fit honestly. Every fit nbt-fit
+ * reports gets one status word; a fit that is not "ok" is flagged on stderr
+ * (one line naming the fit and the reason) and its standard errors are not
+ * printed as numbers. --strict turns any flag into an error (exit 2, one
+ * message, nothing written). See doc/fit.md. */
+#ifndef NBT_FIT_STATUS_H
+#define NBT_FIT_STATUS_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "ceres_shim.h"
+
+/* In ascending precedence: when several apply, the larger one is reported. */
+typedef enum {
+    FIT_OK = 0,  /* converged, inside its bounds, well-conditioned, no worse than its start */
+    FIT_WORSE,   /* ends with a larger error (RMS) than the model it started from */
+    FIT_ILLCOND, /* J^T J singular or ill-conditioned (rcond < FIT_RCOND_MIN), or a standard error not finite */
+    FIT_BOUND,   /* a parameter ended on one of the bounds the fit was given */
+    FIT_NOCONV   /* the solver stopped without converging (iteration limit) */
+} fit_status;
+
+/* The column-scaled J^T J's reciprocal condition number below which the
+ * covariance is not trusted: a correlation between parameters within
+ * ~1e-10 of +-1, or a parameter the data barely move. */
+#define FIT_RCOND_MIN 1e-10
+
+const char *fit_status_word(fit_status s);
+
+/* The status of a usable fit with np parameters named names[] (for the
+ * reason), solution p, the bounds it was given (NULL: none), standard errors
+ * se (NULL: not computed, else NaN where they could not be), and its error
+ * 'after' against the error 'before' of the model named start it began from
+ * (NaN: not compared). The winning status's reason goes into why. */
+fit_status fit_judge(const nbt_fit_summary *s, int np, const char *const *names, const double *p, const double *lo,
+                     const double *hi, const double *se, double before, double after, const char *start, char *why,
+                     size_t whylen);
+
+/* A growing text buffer (output held back until every fit is judged). */
+typedef struct {
+    char *s;
+    size_t len, cap;
+} fit_text;
+void fit_text_add(fit_text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void fit_text_write(const fit_text *t, FILE *f);
+void fit_text_free(fit_text *t);
+
+/* The stderr report of one command: notes and flag lines, held back. */
+typedef struct {
+    int strict, nfits, nflagged;
+    char first[512]; /* the first flag line, for --strict's one message */
+    fit_text log;
+} fit_report;
+void fit_report_init(fit_report *r, int strict);
+/* Count a fit; a status other than FIT_OK adds "PROG: WHERE: WORD: WHY". */
+void fit_report_fit(fit_report *r, const char *where, fit_status st, const char *why);
+void fit_report_note(fit_report *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* 1 when --strict and something was flagged: then one line on stderr says
+ * so and the caller writes nothing and exits 2. Otherwise prints the held-back
+ * lines to stderr and returns 0. Frees the log either way. */
+int fit_report_finish(fit_report *r);
+
+#endif
