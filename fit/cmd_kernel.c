@@ -361,7 +361,7 @@ int cmd_kernel(int argc, char **argv)
             shape_rms_parts(d, j, ncomp, p, &n1, &d1);
             double rms0 = a0 > 0 && b0 > 0 ? sqrt(n0 / d0) : NAN, rms1 = sqrt(n1 / d1);
             char why[512], where[400];
-            fit_status st = fit_judge(&s, np, names[ncomp], p, lo, hi, se_, rms0, rms1, "the moment kernel", why,
+            fit_status st = fit_judge(&s, np, names[ncomp], p, lo, hi, se_, NULL, rms0, rms1, "the moment kernel", why,
                                       sizeof why);
             snprintf(where, sizeof where, "%s: plane z = %g", d->name, d->z[j]);
             fit_report_fit(&rep, where, st, why);
@@ -436,7 +436,7 @@ int cmd_kernel(int argc, char **argv)
                 }
             }
             char why[512];
-            fit_status st = fit_judge(&s, np, pn, p, NULL, NULL, NULL, before, after, "the moment kernel", why, sizeof why);
+            fit_status st = fit_judge(&s, np, pn, p, NULL, NULL, NULL, NULL, before, after, "the moment kernel", why, sizeof why);
             if (st == FIT_OK && s.final_cost > s.initial_cost) {
                 snprintf(why, sizeof why, "its cost %.6g is above the moment kernel's %.6g", s.final_cost, s.initial_cost);
                 st = FIT_WORSE;

@@ -11,6 +11,7 @@
 #include "../gen/cli.h"
 #include "ceres_shim.h"
 #include "commands.h"
+#include "fit_status.h"
 #include "kernel_model.h"
 #include "psi_data.h"
 
@@ -21,7 +22,7 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt] [--against MC.exr]\n\n"
+    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt] [--against MC.exr] [--strict]\n\n"
          "Fits w_1..w_K >= 0 (sum 1) and B_1..B_K > 0 of p = sum w_i p_G(B_i), p_G the Gaussian\n"
          "phase function of Shinya et al. eq. 13 on the sphere (as nbt's photon counter samples it),\n"
          "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), 1e-6 <= B <= 1e3,\n"
@@ -32,7 +33,11 @@ static void help(void)
          "--against MC.exr (photon counts from nbt-fit mc, whose metadata names the medium): the\n"
          "narrow-beam moment kernel depends on the lobes only through B_mix = sum w_i B_i, so all\n"
          "widths are scaled by one factor to make it match the counts best (RMS of 2 pi r Psi);\n"
-         "the RMS before and after is printed and the scaled lobes are written.");
+         "the RMS before and after is printed and the scaled lobes are written.\n"
+         "Each fit is judged (status on its line, and in SOG.txt; a line on stderr when not ok): noconv\n"
+         "(did not converge), bound (a weight or width on its bound), illcond (J^T J singular or\n"
+         "ill-conditioned: redundant lobes), worse (error above its start's), else ok; the first that\n"
+         "applies, in this order. --strict: any flagged fit is an error (exit 2, nothing written).");
 }
 
 typedef struct {
@@ -125,7 +130,8 @@ static int against_res(const double *p, double *r, double *jac, void *vp)
     return 0;
 }
 
-static int refit_against(const char *path, int K, double *w, double *B)
+static int refit_against(const char *path, int K, double *w, double *B, fit_report *rep, fit_text *txt, char *status,
+                         size_t statuslen)
 {
     psi_data d;
     char err[512];
@@ -157,11 +163,22 @@ static int refit_against(const char *path, int K, double *w, double *B)
         return 1;
     }
     double f = exp(p[0]), after = against_rms(&c, f, NULL);
+    /* judged against the moment kernel with the fitted lobes (factor 1); a factor on
+     * its bound (1e-3 or 1e3) means the counts want widths beyond what is allowed */
+    static const char *const names[1] = {"ln(factor)"};
+    char why[512];
+    fit_status st = fit_judge(&s, 1, names, p, lo, hi, NULL, NULL, before, after, "the moment kernel with the fitted lobes", why,
+                              sizeof why);
     if (after > bestr) { /* keep the grid's best if the local refinement wandered */
         f = exp(bestf);
         after = bestr;
     }
-    printf("against %s: moment-kernel RMS %.4f with the fitted lobes, %.4f with widths x %.4g\n", path, before, after, f);
+    char where[600];
+    snprintf(where, sizeof where, "phase --against %s", path);
+    fit_report_fit(rep, where, st, why);
+    snprintf(status, statuslen, "%s", fit_status_word(st));
+    fit_text_add(txt, "against %s: moment-kernel RMS %.4f with the fitted lobes, %.4f with widths x %.4g status %s\n", path,
+                 before, after, f, fit_status_word(st));
     for (int i = 0; i < K; i++)
         B[i] *= f;
     psi_data_free(&d);
@@ -172,9 +189,10 @@ int cmd_phase(int argc, char **argv)
 {
     static const struct option opts[] = {{"target", required_argument, 0, 't'}, {"terms", required_argument, 0, 'k'},
                                          {"output", required_argument, 0, 'o'}, {"against", required_argument, 0, 'a'},
-                                         {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
+                                         {"strict", no_argument, 0, 'T'},       {"help", no_argument, 0, 'h'},
+                                         {0, 0, 0, 0}};
     const char *target = NULL, *out = NULL, *against = NULL;
-    int K = 0, o;
+    int K = 0, o, strict = 0;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
         switch (o) {
@@ -182,6 +200,7 @@ int cmd_phase(int argc, char **argv)
         case 'k': K = (int)opt_long("--terms", optarg, 1, MAXK); break;
         case 'o': out = optarg; break;
         case 'a': against = optarg; break;
+        case 'T': strict = 1; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit phase --help'");
         }
@@ -220,7 +239,14 @@ int cmd_phase(int argc, char **argv)
     nbt_fit_options fo;
     nbt_fit_options_default(&fo);
     fo.max_iterations = 500;
+    fo.covariance = 1;
     double werr = 0, w[MAXK], B[MAXK];
+    /* output is held back until every fit is judged (--strict writes nothing when one is flagged) */
+    fit_report rep;
+    fit_report_init(&rep, strict);
+    fit_text txt = {0};
+    char kstatus[600] = "ok", astatus[32] = "";
+    double prev_err = INFINITY;
     for (int k = 1; k <= K; k++) {
         c.K = k;
         double p[2 * MAXK], cand[2][2 * MAXK];
@@ -246,41 +272,83 @@ int cmd_phase(int argc, char **argv)
         }
         /* bounds keep lobes physical: weights' logits within +-30, 1e-6 <= B <= 1e3 */
         double lo[2 * MAXK], hi[2 * MAXK];
+        char nbuf[2 * MAXK][24];
+        const char *names[2 * MAXK];
         for (int i = 0; i < 2 * k - 1; i++) {
             lo[i] = i < k - 1 ? -30 : log(1e-6);
             hi[i] = i < k - 1 ? 30 : log(1e3);
+            if (i < k - 1)
+                snprintf(nbuf[i], sizeof nbuf[i], "logit(w_%d/w_1)", i + 2);
+            else
+                snprintf(nbuf[i], sizeof nbuf[i], "ln B_%d", i - (k - 1) + 1);
+            names[i] = nbuf[i];
         }
-        double berr = INFINITY;
+        double berr = INFINITY, bstart = NAN;
+        nbt_fit_summary bs;
+        memset(&bs, 0, sizeof bs);
         for (int t = 0; t < ncand; t++) {
             memcpy(p, cand[t], sizeof p);
             for (int i = 0; i < 2 * k - 1; i++)
                 p[i] = fmin(hi[i], fmax(lo[i], p[i]));
+            double e0 = fit_error(&c, p);
             nbt_fit_summary s;
             nbt_fit_solve(2 * k - 1, p, lo, hi, NNODE, phase_res, &c, &fo, &s);
             double e = fit_error(&c, p);
             if (s.usable && e < berr) {
                 berr = e;
+                bstart = e0;
+                bs = s;
                 memcpy(best, p, sizeof best);
             }
         }
         if (!isfinite(berr))
             die("the fit with %d terms failed", k);
+        /* standard errors of the logits and ln B, the fit's own error per node taken as the noise: a
+         * lobe the target does not determine to a factor e (a redundant lobe) is not a result */
+        int np = 2 * k - 1;
+        double se[2 * MAXK], se_max[2 * MAXK], sig2 = berr * berr / (NNODE - np);
+        for (int i = 0; i < np; i++) {
+            se[i] = bs.covariance_ok ? sqrt(bs.covariance[i * np + i] * sig2) : NAN;
+            se_max[i] = 1;
+        }
+        /* worse: above the error of K - 1 lobes (which K lobes contain, with a zero weight), or of the start */
+        char why[512], where[64], sname[64];
+        double before = k == 1 ? bstart : prev_err;
+        snprintf(sname, sizeof sname, k == 1 ? "its start" : "the %d-lobe fit", k - 1);
+        fit_status st = fit_judge(&bs, np, names, best, lo, hi, se, se_max, before, berr, sname, why, sizeof why);
+        prev_err = berr;
+        snprintf(where, sizeof where, "phase K = %d", k);
+        fit_report_fit(&rep, where, st, why);
+        if (k == K)
+            snprintf(kstatus, sizeof kstatus, "%s%s%s", fit_status_word(st), st == FIT_OK ? "" : ": ", why);
         werr = berr;
-        printf("K %d error %.6g\n", k, berr);
+        fit_text_add(&txt, "K %d error %.6g status %s\n", k, berr, fit_status_word(st));
     }
     params_to_sog(K, best, w, B);
-    if (against && refit_against(against, K, w, B) != 0) {
+    if (against && refit_against(against, K, w, B, &rep, &txt, astatus, sizeof astatus) != 0) {
+        fit_report_finish(&rep);
+        fit_text_free(&txt);
         nbt_phase_free(tp);
         return 1;
     }
     int rc = 0;
+    if (fit_report_finish(&rep)) {
+        fit_text_free(&txt);
+        nbt_phase_free(tp);
+        return EXIT_USAGE;
+    }
+    fit_text_write(&txt, stdout);
+    fit_text_free(&txt);
     if (out) {
         char *tmp;
         FILE *f = out_open(out, &tmp);
         if (!f)
             die("cannot write '%s'", out);
-        fprintf(f, "# sum of %d Gaussian lobes fitted to %s by nbt-fit phase; L2 error %.6g relative\n# w B\n", K,
-                target, werr);
+        fprintf(f, "# sum of %d Gaussian lobes fitted to %s by nbt-fit phase; L2 error %.6g relative\n", K, target, werr);
+        fprintf(f, "# fit status: %s\n", kstatus);
+        if (against)
+            fprintf(f, "# widths scaled to match %s, refit status: %s\n", against, astatus);
+        fprintf(f, "# w B\n");
         for (int i = 0; i < K; i++)
             fprintf(f, "%.17g %.17g\n", w[i], B[i]);
         if (out_close(f, tmp, out, 1)) {

@@ -21,8 +21,8 @@ const char *fit_status_word(fit_status s)
 }
 
 fit_status fit_judge(const nbt_fit_summary *s, int np, const char *const *names, const double *p, const double *lo,
-                     const double *hi, const double *se, double before, double after, const char *start, char *why,
-                     size_t whylen)
+                     const double *hi, const double *se, const double *se_max, double before, double after,
+                     const char *start, char *why, size_t whylen)
 {
     if (!s->converged) {
         snprintf(why, whylen, "did not converge (%s after %d iterations)", s->termination, s->iterations);
@@ -44,12 +44,17 @@ fit_status fit_judge(const nbt_fit_summary *s, int np, const char *const *names,
                  "parameters", s->rank < np ? "singular" : "ill-conditioned", s->rank, np, s->rcond, FIT_RCOND_MIN);
         return FIT_ILLCOND;
     }
-    if (se)
-        for (int i = 0; i < np; i++)
-            if (!isfinite(se[i])) {
-                snprintf(why, whylen, "the standard error of %s cannot be computed", names[i]);
-                return FIT_ILLCOND;
-            }
+    for (int i = 0; se && i < np; i++) {
+        if (!isfinite(se[i])) {
+            snprintf(why, whylen, "the standard error of %s cannot be computed", names[i]);
+            return FIT_ILLCOND;
+        }
+        if (se_max && se[i] > se_max[i]) {
+            snprintf(why, whylen, "%s = %.6g has standard error %.3g > %g: the data do not determine it", names[i], p[i],
+                     se[i], se_max[i]);
+            return FIT_ILLCOND;
+        }
+    }
     if (after > before) { /* false when either is NaN */
         snprintf(why, whylen, "RMS %.4g is above the RMS %.4g of %s it started from", after, before, start);
         return FIT_WORSE;

@@ -28,12 +28,13 @@ const char *fit_status_word(fit_status s);
 
 /* The status of a usable fit with np parameters named names[] (for the
  * reason), solution p, the bounds it was given (NULL: none), standard errors
- * se (NULL: not computed, else NaN where they could not be), and its error
- * 'after' against the error 'before' of the model named start it began from
- * (NaN: not compared). The winning status's reason goes into why. */
+ * se (NULL: not computed, else NaN where they could not be; illcond also
+ * where se[i] > se_max[i], se_max NULL: no limit), and its error 'after'
+ * against the error 'before' of the model named start it began from (NaN:
+ * not compared). The winning status's reason goes into why. */
 fit_status fit_judge(const nbt_fit_summary *s, int np, const char *const *names, const double *p, const double *lo,
-                     const double *hi, const double *se, double before, double after, const char *start, char *why,
-                     size_t whylen);
+                     const double *hi, const double *se, const double *se_max, double before, double after,
+                     const char *start, char *why, size_t whylen);
 
 /* A growing text buffer (output held back until every fit is judged). */
 typedef struct {
