@@ -80,6 +80,80 @@ else
     awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
+  grep -q '^# fit status: \(ok\|worse\|illcond\|noconv\)' "$tmp/corr.txt" && ok || bad "the correction file records its fit status: $(grep status "$tmp/corr.txt")"
+
+  # ---- honest fits: every fit judged (doc/fit.md) ----
+  # check_rows CSV ERR WIDTHCOLS AMPCOLS SECOLS: every row 'ok' has finite standard errors, an RMS no
+  # worse than the moment kernel's, no width on its bound (100 x the plane's largest radius, = 100 z
+  # here) and no amplitude at 0; every other row has nan standard errors and one stderr line
+  # "plane z = Z: STATUS: why"; as many flag lines as flagged rows
+  check_rows() {
+    awk -F, -v w="$3" -v a="$4" -v e="$5" 'NR > 1 {
+        nw = split(w, W, " "); na = split(a, A, " "); ne = split(e, E, " ")
+        if ($NF == "ok") {
+          for (i = 1; i <= ne; i++) if (($E[i] "") == "nan" || ($E[i] "") ~ /inf/ || $E[i] + 0 <= 0) { print "ok row with stderr " $E[i] ": " $0; bad = 1 }
+          if ($(NF - 1) + 0 > $(NF - 2) + 0) { print "ok row worse than the moment kernel: " $0; bad = 1 }
+          for (i = 1; i <= nw; i++) if ($W[i] + 0 >= 100 * $1 * (1 - 1e-6)) { print "ok row on the width bound: " $0; bad = 1 }
+          for (i = 1; i <= na; i++) if ($A[i] + 0 == 0) { print "ok row with a zero amplitude: " $0; bad = 1 }
+        } else if ($NF ~ /^(bound|noconv|illcond|worse)$/) {
+          for (i = 1; i <= ne; i++) if (($E[i] "") != "nan") { print "flagged row with a stderr: " $0; bad = 1 }
+          print $1, $NF > "/dev/stderr"
+        } else { print "unknown status: " $0; bad = 1 }
+      } END { exit bad }' "$1" 2>"$tmp/flagged" || return 1
+    while read -r z st; do grep -q "plane z = $z: $st: " "$2" || { echo "no flag line for z = $z ($st)"; return 1; }; done <"$tmp/flagged"
+    [ "$(grep -c ': plane z = [^:]*: [a-z]*: ' "$2")" -eq "$(wc -l <"$tmp/flagged")" ] || { echo "flag lines != flagged rows"; return 1; }
+  }
+  # the user's case (the README's psi.csv, 2e5 photons): z = 10 runs to beta = infinity (it used to
+  # print beta = 6.9e7 +- 0), z = 6 ends above the moment kernel's RMS
+  U="--albedo 0.9 --sigma-t 1 --B 0.0685"
+  "$NBT_FIT" mc $U --photons 200000 --seed 1 -o "$tmp/u.csv" >/dev/null 2>&1 || bad "mc: the user's case"
+  "$NBT_FIT" kernel "$tmp/u.csv" $U -o "$tmp/ufit.csv" 2>"$tmp/uerr" && ok || bad "user's case: flags are not errors: $(cat "$tmp/uerr")"
+  awk -F, '$1 == 10 { exit !($NF == "bound" && $3 == 1000 && ($5 "") == "nan") }' "$tmp/ufit.csv" && ok ||
+    bad "z = 10: beta on its bound, no standard error: $(grep '^10,' "$tmp/ufit.csv")"
+  awk -F, '$1 == 6 { exit !($NF == "worse" && $7 > $6 && ($4 "") == "nan") }' "$tmp/ufit.csv" && ok ||
+    bad "z = 6: worse than the moment kernel: $(grep '^6,' "$tmp/ufit.csv")"
+  grep -q "u.csv: plane z = 10: bound: beta = 1000 is on its upper bound 1000" "$tmp/uerr" && ok || bad "flag line for z = 10: $(cat "$tmp/uerr")"
+  grep -q "^RMS .*(2 of 10 planes flagged)" "$tmp/uerr" && ok || bad "summary counts the flagged planes: $(cat "$tmp/uerr")"
+  msg=$(check_rows "$tmp/ufit.csv" "$tmp/uerr" "3" "2" "4 5") && ok || bad "erfc rows: $msg"
+  # the two-part shapes on the same counts: degenerate splits (a part collapsed to zero or to 1/r) are flagged
+  "$NBT_FIT" kernel "$tmp/u.csv" $U --shape erfc2 -o "$tmp/u2.csv" 2>"$tmp/u2err" && ok || bad "erfc2 on the user's case"
+  msg=$(check_rows "$tmp/u2.csv" "$tmp/u2err" "3 7" "2 6" "4 5 8 9") && ok || bad "erfc2 rows: $msg"
+  grep -q "bound\|illcond" "$tmp/u2err" && ok || bad "erfc2: degenerate planes flagged: $(cat "$tmp/u2err")"
+  "$NBT_FIT" kernel "$tmp/u.csv" $U --shape erfc+gauss -o "$tmp/ug.csv" 2>"$tmp/ugerr" && ok || bad "erfc+gauss on the user's case"
+  msg=$(check_rows "$tmp/ug.csv" "$tmp/ugerr" "3 7" "2 6" "4 5 8 9") && ok || bad "erfc+gauss rows: $msg"
+  # --strict: any flag is an error, one line, nothing written
+  expect_usage "--strict with flagged planes" "strict: 2 of 10 fits flagged, nothing written; the first: .*plane z = 6: worse" \
+    "$NBT_FIT" kernel "$tmp/u.csv" $U --strict -o "$tmp/us.csv"
+  [ ! -e "$tmp/us.csv" ] && [ ! -s "$tmp/out" ] && ok || bad "--strict left output"
+  expect_usage "--strict with a correction" "strict" "$NBT_FIT" kernel "$tmp/u.csv" $U --strict --correction "$tmp/uc.txt" -o "$tmp/us.csv"
+  [ ! -e "$tmp/us.csv" ] && [ ! -e "$tmp/uc.txt" ] && ok || bad "--strict left a correction"
+  # a good fit: ok, and its standard errors against the spread over 20 independent photon-counting runs
+  # (seeds): the reported error may be conservative (scaled by chi^2/dof where the shape misfits), by at
+  # most 3x, and optimistic by at most 1.5x (20 runs: the spread itself is known to ~16%)
+  : >"$tmp/boot"
+  for s in 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20; do
+    "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 40000 --z-planes 1:2:2 --r-bins 12 --seed $s -o "$tmp/b.csv" >/dev/null 2>&1 &&
+      "$NBT_FIT" kernel "$tmp/b.csv" --albedo 0.5 --sigma-t 1 --B 0.0685 --strict 2>>"$tmp/booterr" | tail -n +2 >>"$tmp/boot"
+  done
+  [ "$(grep -c ',ok$' "$tmp/boot")" -eq 40 ] && ok || bad "good fits: 40 of 40 ok under --strict: $(cat "$tmp/booterr")"
+  awk -F, '{ n[$1]++; for (c = 2; c <= 3; c++) { s[$1, c] += $c; s2[$1, c] += $c * $c; e[$1, c] += $(c + 2) } }
+    END { for (z in n) for (c = 2; c <= 3; c++) { m = s[z, c] / n[z]; sd = sqrt((s2[z, c] - n[z] * m * m) / (n[z] - 1));
+            r = sd / (e[z, c] / n[z]); printf "z %s %s: spread %.3g, mean stderr %.3g, ratio %.2f\n", z, c == 2 ? "alpha" : "beta", sd, e[z, c] / n[z], r
+            if (r < 1 / 3 || r > 1.5) bad = 1 }
+          exit bad }' "$tmp/boot" >"$tmp/bootr" && ok || bad "standard errors vs the spread over seeds: $(cat "$tmp/bootr")"
+  # phase: redundant lobes and lobes on their bounds are flagged; a good fit passes --strict
+  "$NBT_FIT" phase --target hg:g=0.8 --terms 4 --strict -o "$tmp/hgs.sog" >"$tmp/p4" 2>&1 && [ "$(grep -c 'status ok$' "$tmp/p4")" -eq 4 ] &&
+    grep -q "^# fit status: ok" "$tmp/hgs.sog" && ok || bad "HG 0.8, K = 1..4: all ok: $(cat "$tmp/p4")"
+  "$NBT_FIT" phase --target gauss:B=0.05 --terms 3 >"$tmp/p5" 2>"$tmp/p5err"
+  grep -q "^K 1 .* status ok" "$tmp/p5" && ! grep -q "^K [23] .* status ok" "$tmp/p5" &&
+    [ "$(grep -c '^nbt-fit: phase K = [23]: \(illcond\|bound\|worse\): ' "$tmp/p5err")" -eq 2 ] && ok ||
+    bad "one Gaussian with 2, 3 lobes: redundant, flagged: $(cat "$tmp/p5" "$tmp/p5err")"
+  "$NBT_FIT" phase --target rayleigh --terms 4 -o "$tmp/ray.sog" >"$tmp/p6" 2>"$tmp/p6err"
+  [ "$(grep -c 'status ok$' "$tmp/p6")" -eq 1 ] && [ "$(grep -c '^nbt-fit: phase K = ' "$tmp/p6err")" -eq 3 ] &&
+    grep -q "^# fit status: bound: " "$tmp/ray.sog" && ok || bad "Rayleigh: K >= 2 flagged: $(cat "$tmp/p6" "$tmp/p6err")"
+  expect_usage "phase --strict" "strict: 3 of 4 fits flagged" "$NBT_FIT" phase --target rayleigh --terms 4 --strict -o "$tmp/rs.sog"
+  [ ! -e "$tmp/rs.sog" ] && [ ! -s "$tmp/out" ] && ok || bad "phase --strict left output"
+
   # degenerate data
   printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,0,0\n1,0.5,1,0,0\n1,1,1.5,0,0\n1,1.5,2,0,0\n1,2,2.5,0,0\n1,2.5,3,0,0\n' >"$tmp/zero.csv"
   expect_usage "all-zero histogram" "all-zero" "$NBT_FIT" kernel "$tmp/zero.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"

@@ -1,10 +1,14 @@
 /* tests/test_kernelfit.c: the fitted shapes' annulus means (against direct
  * quadrature of the shape), their analytic derivatives (against central
- * differences), and exact recovery of known parameters through the shim. */
+ * differences), exact recovery of known parameters through the shim, and
+ * the judgement of fits (fit_status): a good fit is ok with standard errors
+ * that match the scatter of a parametric bootstrap; an unidentifiable width
+ * or an empty plane is flagged; the statuses' precedence. */
 #include <math.h>
 #include <string.h>
 #include <nbt/nbt.h>
 #include "../fit/ceres_shim.h"
+#include "../fit/fit_status.h"
 #include "../fit/kernel_model.h"
 #include "testutil.h"
 
@@ -42,8 +46,148 @@ static int res(const double *p, double *r, double *jac, void *vp)
     return 0;
 }
 
+/* one plane as nbt-fit kernel fits it: erfc annulus means, residuals (m - y)/sigma */
+#define NP 20
+typedef struct {
+    double lo[NP], hi[NP], y[NP], sig[NP];
+} plane;
+static int plane_res(const double *p, double *r, double *jac, void *vp)
+{
+    const plane *d = vp;
+    for (int k = 0; k < NP; k++) {
+        double da, db;
+        r[k] = (kernel_annulus(p[0], p[1], d->lo[k], d->hi[k], &da, &db) - d->y[k]) / d->sig[k];
+        if (jac) {
+            jac[2 * k] = da / d->sig[k];
+            jac[2 * k + 1] = db / d->sig[k];
+        }
+    }
+    return 0;
+}
+
+static double t_normal(void)
+{
+    double u1 = t_uniform(), u2 = t_uniform();
+    return sqrt(-2 * log(1 - u1)) * cos(2 * M_PI * u2);
+}
+
+/* fit one plane with cmd_kernel's bounds (widths <= 100 x the largest radius) and
+ * standard errors (scaled by chi^2/dof when above 1); the status from fit_judge */
+static fit_status fit_plane(const plane *d, double a0, double b0, double *p, double *se, char *why)
+{
+    static const char *const names[2] = {"alpha", "beta"};
+    double lo[2] = {0, 1e-9}, hi[2] = {HUGE_VAL, 100 * d->hi[NP - 1]};
+    nbt_fit_options o;
+    nbt_fit_options_default(&o);
+    o.analytic_jacobian = 1;
+    o.covariance = 1;
+    nbt_fit_summary s;
+    p[0] = a0;
+    p[1] = b0;
+    if (nbt_fit_solve(2, p, lo, hi, NP, plane_res, (void *)d, &o, &s) != 0)
+        return FIT_NOCONV;
+    double sc = fmax(1.0, 2 * s.final_cost / (NP - 2));
+    for (int e = 0; e < 2; e++)
+        se[e] = s.covariance_ok ? sqrt(s.covariance[3 * e] * sc) : NAN;
+    return fit_judge(&s, 2, names, p, lo, hi, se, NULL, NAN, NAN, "the start", why, 512);
+}
+
+static void judge_checks(void)
+{
+    /* a good plane: alpha/r G(r/beta) within r < 2, 3% Gaussian noise per annulus (known sigma) */
+    const double A = 0.37, Bt = 0.61;
+    plane d;
+    double truth[NP];
+    for (int k = 0; k < NP; k++) {
+        d.lo[k] = 0.1 * k;
+        d.hi[k] = 0.1 * (k + 1);
+        truth[k] = kernel_annulus(A, Bt, d.lo[k], d.hi[k], NULL, NULL);
+        d.sig[k] = 0.03 * truth[k];
+    }
+    /* parametric bootstrap: 400 noisy copies; the spread of the fitted values
+     * against the mean reported standard error (sampling error of an SD from
+     * 400 draws: 3.5%; the chi^2/dof >= 1 scaling adds a few % upwards) */
+    enum { R = 400 };
+    double sa = 0, sa2 = 0, sb = 0, sb2 = 0, ea = 0, eb = 0;
+    int nok = 0;
+    char why[512];
+    for (int rep = 0; rep < R; rep++) {
+        for (int k = 0; k < NP; k++)
+            d.y[k] = truth[k] + d.sig[k] * t_normal();
+        double p[2], se[2];
+        fit_status st = fit_plane(&d, 0.5 * A, 2 * Bt, p, se, why);
+        if (st != FIT_OK || !isfinite(se[0]) || !isfinite(se[1]))
+            continue;
+        nok++;
+        sa += p[0];
+        sa2 += p[0] * p[0];
+        sb += p[1];
+        sb2 += p[1] * p[1];
+        ea += se[0];
+        eb += se[1];
+    }
+    t_true(nok == R, "a good plane: all %d bootstrap fits ok with finite standard errors (%d)", R, nok);
+    double sda = sqrt((sa2 - sa * sa / nok) / (nok - 1)), sdb = sqrt((sb2 - sb * sb / nok) / (nok - 1));
+    t_rel(sda / (ea / nok), 1, 0.15, "alpha: bootstrap spread %.4g vs mean standard error %.4g", sda, ea / nok);
+    t_rel(sdb / (eb / nok), 1, 0.15, "beta: bootstrap spread %.4g vs mean standard error %.4g", sdb, eb / nok);
+    t_rel(sa / nok, A, 3 * sda / sqrt(nok) / A, "alpha unbiased");
+    t_rel(sb / nok, Bt, 3 * sdb / sqrt(nok) / Bt + 0.002, "beta unbiased within 0.2%%");
+
+    /* beta not identifiable: the data are alpha/(2r) (beta = infinity), the fit runs to the width bound */
+    for (int k = 0; k < NP; k++) {
+        d.y[k] = kernel_annulus(A, 1e12, d.lo[k], d.hi[k], NULL, NULL);
+        d.sig[k] = 0.03 * d.y[k];
+        d.y[k] += d.sig[k] * t_normal();
+    }
+    double p[2], se[2];
+    fit_status st = fit_plane(&d, A, Bt, p, se, why);
+    t_true(st == FIT_BOUND && strstr(why, "beta") && strstr(why, "upper"), "Psi ~ 1/r: flagged bound (%s: %s)",
+           fit_status_word(st), why);
+    /* an almost empty plane: a handful of counts in one annulus, the rest zero with the floor error */
+    for (int k = 0; k < NP; k++) {
+        d.y[k] = k == 13 ? 0.02 : 0;
+        d.sig[k] = 0.02;
+    }
+    st = fit_plane(&d, A, Bt, p, se, why);
+    t_true(st != FIT_OK, "an almost empty plane: flagged (%s: %s)", fit_status_word(st), why);
+
+    /* precedence: noconv > bound > illcond > worse > ok */
+    static const char *const nm[2] = {"a", "b"};
+    double lo[2] = {0, 0}, hi[2] = {1, 1}, q[2] = {0.5, 1}, ok_se[2] = {0.1, 0.1}, nan_se[2] = {0.1, NAN};
+    nbt_fit_summary s;
+    memset(&s, 0, sizeof s);
+    s.converged = 1;
+    s.rcond = 0.3;
+    s.rank = 2;
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.2, 0.1, "x", why, sizeof why) == FIT_OK, "judge: ok");
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, NAN, 0.1, "x", why, sizeof why) == FIT_OK, "judge: no start error: ok");
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_WORSE, "judge: worse");
+    double se_max[2] = {1, 0.05};
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, se_max, 0.2, 0.1, "x", why, sizeof why) == FIT_ILLCOND,
+           "judge: a standard error above its limit: illcond (%s)", why);
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, nan_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_ILLCOND,
+           "judge: NaN standard error beats worse: illcond");
+    s.rcond = 1e-12;
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_ILLCOND,
+           "judge: rcond 1e-12: illcond");
+    s.rcond = 0.3;
+    s.rank = 1;
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_ILLCOND, "judge: rank 1: illcond");
+    s.at_bound[1] = 1;
+    s.nbound = 1;
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, nan_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_BOUND && strstr(why, "b = 1"),
+           "judge: bound beats illcond and worse (%s)", why);
+    s.converged = 0;
+    t_true(fit_judge(&s, 2, nm, q, lo, hi, nan_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_NOCONV, "judge: noconv first");
+    t_true(!strcmp(fit_status_word(FIT_OK), "ok") && !strcmp(fit_status_word(FIT_BOUND), "bound") &&
+               !strcmp(fit_status_word(FIT_NOCONV), "noconv") && !strcmp(fit_status_word(FIT_ILLCOND), "illcond") &&
+               !strcmp(fit_status_word(FIT_WORSE), "worse"),
+           "status words");
+}
+
 int main(void)
 {
+    judge_checks();
     nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 500);
     shp c = {0.37, 1.3, 0.21, 0.9};
     double lo = 0.3, hi = 0.55, v, e;
