@@ -15,7 +15,7 @@ static void help(void)
 {
     puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv|OUT.exr\n"
          "                  [--seed S] [--threads T] [--z-planes FROM:TO:COUNT] [--r-bins N]\n"
-         "                  [--r-max-scale F] [--density FILE] [--z-cut Z]\n"
+         "                  [--r-max-scale F] [--density FILE] [--z-cut Z] [--infinite] [--order-max N]\n"
          "       nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N --slab TAU [-o OUT.csv]\n\n"
          "A pencil beam enters at the origin along +z; every forward crossing of a plane z by a\n"
          "scattered photon is counted, per unit area per launched photon, in radial bins over\n"
@@ -27,6 +27,10 @@ static void help(void)
          "iso, rayleigh, hg:g=G, gauss:B=B, table:FILE. --density FILE: lines 'z rho'.\n"
          "--slab TAU: a slab of optical thickness TAU (at density 1); stdout gets\n"
          "'R value stderr' and 'T value stderr' (T includes unscattered light).\n"
+         "--infinite: the medium fills all space (a source inside fog): photons going to z < 0\n"
+         "keep scattering (at the density of z = 0+) and may come back; they are dropped below\n"
+         "-z_cut. The default is a beam entering a half-space from vacuum. Not with --slab.\n"
+         "--order-max N: count only photons scattered at most N times (1: single scattering).\n"
          "Results are identical for any --threads; standard errors from 64 batches.");
 }
 
@@ -81,8 +85,12 @@ static int write_exr(const char *out, const nbt_mc_config *c, const nbt_mc_resul
     else
         snprintf(ph, sizeof ph, "gauss:B=%g", B);
     char run[512];
-    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s", c->albedo, c->sigma_t, ph,
-             (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "");
+    char ord[32] = "";
+    if (c->order_max)
+        snprintf(ord, sizeof ord, " order_max=%u", c->order_max);
+    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s%s%s", c->albedo, c->sigma_t,
+             ph, (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "",
+             c->infinite ? " infinite" : "", ord);
     size_t n = strlen(run) < sizeof t->phase ? strlen(run) : sizeof t->phase - 1; /* a long table path is cut */
     memcpy(t->phase, run, n);
     t->phase[n] = '\0';
@@ -113,6 +121,7 @@ int cmd_mc(int argc, char **argv)
         {"r-bins", required_argument, 0, 'r'},  {"r-max-scale", required_argument, 0, 'F'},
         {"slab", required_argument, 0, 'L'},    {"density", required_argument, 0, 'd'},
         {"z-cut", required_argument, 0, 'c'},   {"output", required_argument, 0, 'o'},
+        {"infinite", no_argument, 0, 'I'},      {"order-max", required_argument, 0, 'O'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     nbt_mc_config c;
     memset(&c, 0, sizeof c);
@@ -139,6 +148,8 @@ int cmd_mc(int argc, char **argv)
         case 'L': tau = opt_double("--slab", optarg, 0, 1, 1e6, 0); break;
         case 'd': density = optarg; break;
         case 'c': c.z_cut = opt_double("--z-cut", optarg, 0, 1, 1e15, 0); break;
+        case 'I': c.infinite = 1; break;
+        case 'O': c.order_max = (unsigned)opt_long("--order-max", optarg, 1, 1000000); break;
         case 'o': out = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit mc --help'");
@@ -152,6 +163,8 @@ int cmd_mc(int argc, char **argv)
         die_usage("mc: give the phase function with exactly one of --B B and --phase SPEC");
     if (tau > 0 && density)
         die_usage("--slab and --density exclude each other");
+    if (tau > 0 && c.infinite)
+        die_usage("--infinite and --slab exclude each other: a slab has vacuum on both sides");
     if (!out && tau == 0)
         die_usage("mc: -o OUT.csv is required (except for a --slab run)");
     int exr = 0;

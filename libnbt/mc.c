@@ -57,7 +57,7 @@ static double rng_cb(void *r)
 
 typedef struct {
     const nbt_mc_config *cfg;
-    size_t nlay;        /* regions [b[i], b[i+1]) with density rho[i]; b[nlay] = top */
+    size_t nlay;        /* regions [b[i], b[i+1]) with density rho[i]; b[nlay] = top; b[0] = 0 (infinite: -z_cut) */
     double *b, *rho;
     double top;         /* slab: thickness (escape above); else z_cut (photon dropped) */
     int slab;
@@ -106,7 +106,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
         rng_seed(&rs, cf->seed, ph);
         double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
         size_t li = 0;
-        int scattered = 0;
+        unsigned scattered = 0; /* scatterings so far */
         for (;;) {
             int alive = 1;
             if (cf->rho_fn) {
@@ -115,7 +115,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                 for (;;) {
                     double d = -log1p(-rng_u(&rs)) / (cf->sigma_t * cf->rho_max);
                     double z1 = z + d * uz;
-                    if (z1 < 0 || z1 > c->top) { /* leaves through z = 0, or dropped below z_cut */
+                    if (z1 < c->b[0] || z1 > c->top) { /* leaves through z = 0 (infinite: below -z_cut), or dropped below z_cut */
                         if (scattered && uz > 0 && cf->nplanes)
                             tally(c, a, x, y, z, fmin(z1, c->top), ux, uy, uz);
                         alive = 0;
@@ -126,7 +126,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     x += d * ux;
                     y += d * uy;
                     z = z1;
-                    double rho = cf->rho_fn(z, cf->rho_data);
+                    double rho = cf->rho_fn(z > 0 ? z : 0.0, cf->rho_data); /* infinite: rho(0) continues behind */
                     if (rho > cf->rho_max)
                         atomic_store(&c->over, 1);
                     if (rng_u(&rs) * cf->rho_max < rho)
@@ -168,7 +168,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                             alive = 0;
                         }
                     } else {
-                        if (li-- == 0) { /* out through z = 0 */
+                        if (li-- == 0) { /* out through z = 0 (infinite: dropped below -z_cut) */
                             if (c->slab)
                                 a[tail] += 1.0;
                             alive = 0;
@@ -181,7 +181,9 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
             events++;
             if (rng_u(&rs) >= cf->albedo)
                 break; /* absorbed */
-            scattered = 1;
+            if (cf->order_max && scattered == cf->order_max)
+                break; /* would scatter an (order_max+1)-th time */
+            scattered++;
             double mu = nbt__phase_sample_mu(cf->phase, rng_cb, &rs);
             double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * NBT_PI * rng_u(&rs);
             double cp = cos(phi), sp = sin(phi);
@@ -230,6 +232,8 @@ static nbt_status check(const nbt_mc_config *c)
         NBT_FAIL(NBT_EINVAL, "mc: nothing to tally (no planes, no slab)");
     if (c->rho_fn && !(c->rho_max > 0 && isfinite(c->rho_max)))
         NBT_FAIL(NBT_EDOM, "mc: a density callback needs a finite bound rho_max > 0");
+    if (c->infinite && c->slab > 0)
+        NBT_FAIL(NBT_EINVAL, "mc: a slab cannot be infinite (infinite and slab exclude each other)");
     if (c->rho_fn && c->slab > 0)
         NBT_FAIL(NBT_EINVAL, "mc: a density callback and a slab exclude each other");
     if (c->nlayers > 0 && c->slab == 0 && !c->rho_fn) {
@@ -325,6 +329,8 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
         if (zc <= c.b[nl - 1])
             zc = c.b[nl - 1] + 20.0 / cf->sigma_t;
         c.b[nl] = zc;
+        if (cf->infinite)
+            c.b[0] = -zc; /* the first layer (or rho_fn(0)) continues behind the source */
     }
     c.top = c.b[nl];
     st = nbt__parallel_for(NBATCH, cf->threads, run_batch, &c);

@@ -36,6 +36,15 @@ awk -v a="$got" -v b="$want" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 
 # layered: a density file
 printf '# a vacuum gap\n0 1\n1 0\n2 1\n' >"$tmp/d.txt"
 "$NBT_FIT" mc $M --density "$tmp/d.txt" -o "$tmp/d.csv" >/dev/null 2>&1 && [ -s "$tmp/d.csv" ] && ok || bad "--density run"
+# --infinite: the medium also fills z < 0; same seed, so every plane's M0 and M2 is >= the half-space's
+"$NBT_FIT" mc $M --infinite -o "$tmp/inf.csv" >"$tmp/minf" 2>/dev/null && [ -s "$tmp/inf.csv" ] && ok || bad "--infinite run"
+paste "$tmp/m1" "$tmp/minf" | awk '{ if ($9 < $3 || $11 < $5) bad = 1; s += $9 - $3 } END { exit bad || !(s > 0) }' && ok ||
+  bad "--infinite gives at least the half-space's light at every plane: $(paste "$tmp/m1" "$tmp/minf")"
+"$NBT_FIT" mc $M --infinite --order-max 1 -o "$tmp/i1.csv" >"$tmp/mi1" 2>/dev/null &&
+  "$NBT_FIT" mc $M --order-max 1 -o "$tmp/h1.csv" >"$tmp/mh1" 2>/dev/null && cmp -s "$tmp/i1.csv" "$tmp/h1.csv" &&
+  cmp -s "$tmp/mi1" "$tmp/mh1" && ok || bad "--order-max 1: single scattering identical in both geometries"
+"$NBT_FIT" mc $M --infinite -o "$tmp/inf.exr" >/dev/null 2>&1 && "$NBT_GEN" info "$tmp/inf.exr" 2>&1 | grep -q "infinite" && ok ||
+  bad "an infinite run says so in its EXR metadata"
 
 # ---- fits (Ceres) ----
 if ! "$NBT_FIT" kernel --help >/dev/null 2>"$tmp/err"; then
@@ -179,6 +188,8 @@ printf '0 1\n0.5 -2\n' >"$tmp/neg.txt"
 expect_usage "negative density" "line 2" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/neg.txt" -o "$tmp/x.csv"
 expect_usage "not csv or exr" "\.exr" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.png"
 expect_usage "EXR with one plane" "2 planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --z-planes 1:1:1 -o "$tmp/x.exr"
+expect_usage "infinite slab" "--infinite" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --slab 2 --infinite
+expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --order-max 0 -o "$tmp/x.csv"
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"

@@ -2,6 +2,9 @@
  * single-scattering theory; determinism; bad configurations. */
 #include <math.h>
 #include <string.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_integration.h>
+#include <gsl/gsl_sf_expint.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
 
@@ -19,6 +22,195 @@ static int ann_f(double r, void *vp, unsigned fdim, double *f)
     return 0;
 }
 
+/* Isotropic scattering, sigma_t = 1, a unit plane source entering along +z
+ * (a pencil beam integrated over x, y). J1(z): photons scattered exactly
+ * once crossing plane z forward, 1/2 int_0^z e^-y E2(z - y) dy (per unit
+ * albedo). D2(z): the second-order photons that only an infinite medium
+ * has: first collision at y > 0 (density e^-y), second at y' < 0 (the
+ * plane-projected isotropic kernel 1/2 E1|y - y'|, integrated over y > 0 in
+ * closed form: 1/2 [E1(w) - e^w E1(2w)], w = -y'), then uncollided to z,
+ * 1/2 E2(z - y'):  D2(z) = 1/4 int_0^inf E2(z + w) [E1(w) - e^w E1(2w)] dw.
+ * Orders >= 3 do not enter with order_max = 2. */
+static double j1_f(double y, void *p)
+{
+    double z = *(double *)p;
+    return 0.5 * exp(-y) * gsl_sf_expint_En(2, z - y);
+}
+static double d2_f(double w, void *p)
+{
+    double z = *(double *)p;
+    if (w == 0)
+        return 0.25 * gsl_sf_expint_En(2, z) * M_LN2;
+    return 0.25 * gsl_sf_expint_En(2, z + w) * (gsl_sf_expint_E1(w) - exp(-w) * gsl_sf_expint_E1_scaled(2 * w));
+}
+static double quad_ref(double (*f)(double, void *), double z, int semi)
+{
+    gsl_integration_workspace *w = gsl_integration_workspace_alloc(1000);
+    gsl_function F = {f, &z};
+    double v = NAN, e;
+    if (semi)
+        gsl_integration_qagiu(&F, 0, 0, 1e-10, 1000, w, &v, &e);
+    else
+        gsl_integration_qags(&F, 0, z, 0, 1e-10, 1000, w, &v, &e);
+    gsl_integration_workspace_free(w);
+    return v;
+}
+
+static int same_tallies(const nbt_mc_result *a, const nbt_mc_result *b)
+{
+    size_t nv = a->nplanes * a->r_bins, np = a->nplanes;
+    return a->nplanes == b->nplanes && a->r_bins == b->r_bins && !memcmp(a->psi, b->psi, nv * sizeof(double)) &&
+           !memcmp(a->psi_se, b->psi_se, nv * sizeof(double)) && !memcmp(a->M0, b->M0, np * sizeof(double)) &&
+           !memcmp(a->M0_se, b->M0_se, np * sizeof(double)) && !memcmp(a->M2, b->M2, np * sizeof(double)) &&
+           !memcmp(a->M2_se, b->M2_se, np * sizeof(double));
+}
+
+/* infinite medium (a source inside fog) against the half-space beam */
+static void test_infinite(void)
+{
+    nbt_mc_config c;
+    nbt_mc_result *h, *f;
+    memset(&c, 0, sizeof c);
+    double planes[10];
+    for (int j = 0; j < 10; j++)
+        planes[j] = 1.0 + j;
+    c.sigma_t = 1;
+    c.nplanes = 10;
+    c.z_planes = planes;
+    c.r_bins = 10;
+    c.r_max_scale = 1;
+    c.photons = 200000;
+    c.seed = 2385;
+
+    /* (a) zero albedo: nothing scatters, both geometries tally nothing */
+    nbt_phase *g60 = nbt_phase_gauss(0.274), *g30 = nbt_phase_gauss(0.0685), *iso = nbt_phase_iso();
+    c.phase = g60;
+    c.albedo = 0;
+    nbt_mc_run(&c, &h);
+    c.infinite = 1;
+    t_true(nbt_mc_run(&c, &f) == NBT_OK, "infinite run");
+    t_true(same_tallies(h, f) && f->M0[0] == 0 && f->M0[9] == 0 && h->interactions == f->interactions,
+           "albedo 0: half-space and infinite medium identical (no scattering)");
+    nbt_mc_result_free(h);
+    nbt_mc_result_free(f);
+
+    /* (b) more light everywhere in the infinite medium; the excess grows with
+     * albedo and phase width. Photon streams are shared until a photon first
+     * goes behind the source (where the half-space drops it), so with one
+     * seed every bin of the infinite run is >= the half-space's exactly. */
+    double rel[4];
+    const double alb[2] = {0.5, 0.9};
+    nbt_phase *ph[2] = {g30, g60};
+    for (int w = 0; w < 2; w++)
+        for (int a = 0; a < 2; a++) {
+            c.phase = ph[w];
+            c.albedo = alb[a];
+            c.infinite = 0;
+            nbt_mc_run(&c, &h);
+            c.infinite = 1;
+            nbt_mc_run(&c, &f);
+            int ge = 1, gt = 1;
+            double sf = 0, sh = 0;
+            for (size_t j = 0; j < 10; j++) {
+                gt &= f->M0[j] > h->M0[j];
+                ge &= f->M0[j] >= h->M0[j] && f->M2[j] >= h->M2[j];
+                for (size_t k = 0; k < 10; k++)
+                    ge &= f->psi[j * 10 + k] >= h->psi[j * 10 + k];
+                sf += f->M0[j];
+                sh += h->M0[j];
+            }
+            /* at albedo 0.5 the excess is ~1e-5 (30 deg): deep planes may see none of it */
+            t_true(ge && sf > sh && (a == 0 || gt),
+                   "dtheta %d deg, albedo %g: infinite >= half-space in every bin%s", w ? 60 : 30, alb[a],
+                   a ? ", > at every plane" : ", > summed over planes");
+            rel[2 * w + a] = sf / sh - 1;
+            nbt_mc_result_free(h);
+            nbt_mc_result_free(f);
+        }
+    t_true(rel[0] < rel[1] && rel[2] < rel[3] && rel[0] < rel[2] && rel[1] < rel[3],
+           "M0 excess over z = 1..10 grows with albedo and width: 30 deg %.2g, %.2g; 60 deg %.2g, %.2g", rel[0], rel[1],
+           rel[2], rel[3]);
+
+    /* (c1) photons that never reach z < 0 tally identically: a forward phase
+     * (B = 1e-3 deflects by at most 0.38 rad per scattering) over a short depth */
+    double p3[3] = {0.5, 1.0, 2.0};
+    nbt_phase *fw = nbt_phase_gauss(0.001);
+    c.phase = fw;
+    c.albedo = 0.3;
+    c.nplanes = 3;
+    c.z_planes = p3;
+    c.r_max_scale = 0.1;
+    c.z_cut = 3;
+    c.infinite = 0;
+    nbt_mc_run(&c, &h);
+    c.infinite = 1;
+    nbt_mc_run(&c, &f);
+    t_true(same_tallies(h, f) && h->M0[2] > 0 && h->interactions == f->interactions,
+           "forward phase, short depth: identical tallies in both geometries");
+    nbt_mc_result_free(h);
+    nbt_mc_result_free(f);
+
+    /* (c2) single scattering is the same in both geometries, bin for bin,
+     * whatever the phase and albedo */
+    c.phase = g60;
+    c.albedo = 0.9;
+    c.z_cut = 0;
+    c.order_max = 1;
+    c.infinite = 0;
+    nbt_mc_run(&c, &h);
+    c.infinite = 1;
+    nbt_mc_run(&c, &f);
+    t_true(same_tallies(h, f) && h->M0[0] > 0, "order_max 1: single scattering identical in both geometries");
+    nbt_mc_result_free(h);
+    nbt_mc_result_free(f);
+
+    /* (c3) isotropic, albedo 0.8: order 1 against J1, and the second-order
+     * excess of the infinite medium against D2 (independent quadratures).
+     * The excess has a paired standard error: 16 seeds, same seed per pair. */
+    const double om = 0.8;
+    c.phase = iso;
+    c.albedo = om;
+    c.r_bins = 1;
+    c.r_max_scale = 1;
+    c.order_max = 1;
+    c.infinite = 0;
+    c.photons = 400000;
+    nbt_mc_run(&c, &h);
+    for (int j = 0; j < 3; j++) {
+        double want = om * quad_ref(j1_f, p3[j], 0);
+        t_abs(h->M0[j], want, 4 * h->M0_se[j], "order 1, z = %g: M0 %.6f vs omega J1 %.6f (se %.1e)", p3[j], h->M0[j],
+              want, h->M0_se[j]);
+    }
+    nbt_mc_result_free(h);
+    c.order_max = 2;
+    c.photons = 100000;
+    double s1[3] = {0}, s2[3] = {0};
+    const int ns = 16;
+    for (int s = 0; s < ns; s++) {
+        c.seed = 11 + 7 * (uint64_t)s;
+        c.infinite = 0;
+        nbt_mc_run(&c, &h);
+        c.infinite = 1;
+        nbt_mc_run(&c, &f);
+        for (int j = 0; j < 3; j++) {
+            double d = f->M0[j] - h->M0[j];
+            s1[j] += d;
+            s2[j] += d * d;
+        }
+        nbt_mc_result_free(h);
+        nbt_mc_result_free(f);
+    }
+    for (int j = 0; j < 3; j++) {
+        double m = s1[j] / ns, se = sqrt((s2[j] / ns - m * m) / (ns - 1)), want = om * om * quad_ref(d2_f, p3[j], 1);
+        t_abs(m, want, 4 * se, "order 2, z = %g: infinite - half-space %.6f vs omega^2 D2 %.6f (se %.1e)", p3[j], m,
+              want, se);
+    }
+    nbt_phase_free(fw);
+    nbt_phase_free(g30);
+    nbt_phase_free(g60);
+    nbt_phase_free(iso);
+}
+
 static double rho_smooth(double z, void *d)
 {
     (void)d;
@@ -27,6 +219,8 @@ static double rho_smooth(double z, void *d)
 
 int main(void)
 {
+    gsl_set_error_handler_off();
+    test_infinite();
     /* van de Hulst (as quoted in the MCML manual): albedo 0.9, tau 2, HG g 0.75, n = 1 */
     nbt_phase *hg = nbt_phase_hg(0.75);
     nbt_mc_config c;
@@ -188,6 +382,10 @@ int main(void)
     bad = c;
     bad.sigma_t = NAN;
     t_true(nbt_mc_run(&bad, &r1) == NBT_EDOM, "sigma_t NaN rejected");
+    bad = c;
+    bad.slab = 2;
+    bad.infinite = 1;
+    t_true(nbt_mc_run(&bad, &r1) == NBT_EINVAL && r1 == NULL, "an infinite slab rejected");
     nbt_phase_free(hg);
     nbt_phase_free(tab);
     nbt_phase_free(ga);

@@ -9,6 +9,12 @@
  * z = 0, or deeper than z_cut (default twice the last tally plane plus 20
  * mean free paths at density 1), from where its return is not counted.
  *
+ * With `infinite` set the medium fills all space (a source inside fog):
+ * for z < 0 the density is the density at z = 0+ (the first layer's, or
+ * rho_fn(0)), so photons that go back behind the source keep scattering and
+ * may return; they are dropped below -z_cut. Tallies are the same (only
+ * forward crossings of planes z_j > 0 count). A slab cannot be infinite.
+ *
  * Tallies on planes z_j: every forward crossing (mu > 0) by a photon that
  * has scattered at least once adds 1/(N * annulus area) to the radial bin
  * of its crossing radius, r in [0, F z_j) in equal bins, so Psi is per unit
@@ -52,6 +58,11 @@ typedef struct {
      * fraction done; may be NULL */
     void (*progress)(double fraction, void *data);
     void *progress_data;
+    int infinite;            /* nonzero: the medium fills all space (see above); not with a slab */
+    /* 0: every scattering order; n >= 1: a photon is dropped at the
+     * interaction that would scatter it an (n+1)-th time, so tallies hold
+     * orders 1..n only (R and T: photons scattered at most n times) */
+    unsigned order_max;
 } nbt_mc_config;
 
 typedef struct {
