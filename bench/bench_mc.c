@@ -1,10 +1,17 @@
 /* bench/bench_mc.c: photon-counting throughput on the van de Hulst slab
  * (albedo 0.9, tau 2, HG g 0.75; R = 0.09739, T = 0.66096), nbt_mc_run on
- * 1 and 2 threads side by side with a baseline in the same process: the
+ * 1 and 2 threads side by side with two baselines in the same process: the
  * MCML algorithm as its paper describes it (weighted photons, implicit
  * capture, Russian roulette below weight 1e-4 with survival 1/10,
- * drand48), one thread. Usage: bench_mc [photons] */
+ * drand48), one thread; and a lean analog loop with nbt's physics and RNG
+ * (analog absorption, HG by inversion, one xoshiro256+ stream per photon
+ * seeded by splitmix64), written for this one case, one thread: the speed
+ * a general counter can at best approach. A second case tallies planes
+ * (half-space, Gaussian phase dtheta = 60 deg, albedo 0.9, planes
+ * z = 1..10, 50 radial bins each), nbt_mc_run against a lean analog loop
+ * for that case. Usage: bench_mc [photons] */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +23,128 @@ static double now(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* the lean loops' RNG: xoshiro256+ seeded per photon as in libnbt/mc.c */
+typedef struct {
+    uint64_t s[4];
+} lrng;
+static uint64_t lsplit(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+static void lseed(lrng *r, uint64_t seed, uint64_t photon)
+{
+    uint64_t x = seed ^ (photon * 0xd1b54a32d192ed03u);
+    lsplit(&x);
+    for (int i = 0; i < 4; i++)
+        r->s[i] = lsplit(&x);
+}
+static inline double lu(lrng *r)
+{
+    uint64_t *s = r->s, res = s[0] + s[3], t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = (s[3] << 45) | (s[3] >> 19);
+    return (double)(res >> 11) * 0x1.0p-53;
+}
+
+/* new direction after scattering by polar cosine mu, azimuth from the stream */
+static inline void lturn(lrng *r, double mu, double *ux, double *uy, double *uz)
+{
+    double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * lu(r), cp = cos(phi), sp = sin(phi);
+    if (fabs(*uz) > 0.99999) {
+        *ux = st * cp;
+        *uy = st * sp;
+        *uz = *uz > 0 ? mu : -mu;
+    } else {
+        double tmp = sqrt(1.0 - *uz * *uz), a = st / tmp;
+        double nx = a * (*ux * *uz * cp - *uy * sp) + *ux * mu;
+        double ny = a * (*uy * *uz * cp + *ux * sp) + *uy * mu;
+        double nz = -st * cp * tmp + *uz * mu;
+        *ux = nx;
+        *uy = ny;
+        *uz = nz;
+    }
+}
+
+/* lean analog slab: unit extinction, slab [0, d], HG g */
+static void lean_slab(uint64_t n, double albedo, double g, double d, double *R, double *T)
+{
+    uint64_t nr = 0, nt = 0;
+    double g2 = g * g, h = 0.5 / g;
+    for (uint64_t ph = 0; ph < n; ph++) {
+        lrng r;
+        lseed(&r, 1, ph);
+        double z = 0, ux = 0, uy = 0, uz = 1;
+        for (;;) {
+            double zn = z - log1p(-lu(&r)) * uz;
+            if (zn < 0) {
+                nr++;
+                break;
+            }
+            if (zn > d) {
+                nt++;
+                break;
+            }
+            z = zn;
+            if (lu(&r) >= albedo)
+                break;
+            double f = (1 - g2) / (1 - g + 2 * g * lu(&r)), mu = (1 + g2 - f * f) * h;
+            lturn(&r, mu, &ux, &uy, &uz);
+        }
+    }
+    *R = (double)nr / (double)n;
+    *T = (double)nt / (double)n;
+}
+
+/* lean analog half-space with planes z_j = j + 1 (j < np), Gaussian phase B,
+ * nb bins over r < z_j; returns M0 at the last plane */
+static double lean_planes(uint64_t n, double albedo, double B, int np, int nb, double zcut)
+{
+    double *acc = calloc((size_t)np * (nb + 2), sizeof(double));
+    for (uint64_t ph = 0; ph < n; ph++) {
+        lrng r;
+        lseed(&r, 1, ph);
+        double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
+        int scattered = 0;
+        for (;;) {
+            double d = -log1p(-lu(&r)), zn = z + d * uz;
+            if (scattered && uz > 0) { /* planes j + 1 in (z, min(zn, zcut)] */
+                double ze = zn < zcut ? zn : zcut, iu = 1.0 / uz;
+                for (int j = (int)floor(z); j < np && j + 1 <= ze; j++) {
+                    double t = (j + 1 - z) * iu, px = x + t * ux, py = y + t * uy, r2 = px * px + py * py;
+                    double *pl = acc + (size_t)j * (nb + 2), bin = sqrt(r2) / (j + 1) * nb;
+                    if (bin < nb)
+                        pl[(int)bin] += 1;
+                    pl[nb] += 1;
+                    pl[nb + 1] += r2;
+                }
+            }
+            if (zn < 0 || zn > zcut)
+                break;
+            x += d * ux;
+            y += d * uy;
+            z = zn;
+            if (lu(&r) >= albedo)
+                break;
+            scattered = 1;
+            double th;
+            do
+                th = sqrt(-4.0 * B * log1p(-lu(&r)));
+            while (th >= M_PI);
+            lturn(&r, cos(th), &ux, &uy, &uz);
+        }
+    }
+    double m0 = acc[(size_t)(np - 1) * (nb + 2) + nb] / (double)n;
+    free(acc);
+    return m0;
 }
 
 /* MCML-style weighted transport in a matched slab [0, d], HG phase. */
@@ -81,6 +210,10 @@ int main(int argc, char **argv)
     mcml_like(n, 0.1, 0.9, 0.75, 2.0, &R, &T, &Rse);
     double tb = now() - t0;
     printf("%-34s %8d %10.5f %10.1e %10.5f %14.3g\n", "baseline: MCML algorithm (weighted)", 1, R, Rse, T, n / tb);
+    t0 = now();
+    lean_slab((uint64_t)n, 0.9, 0.75, 2.0, &R, &T);
+    tb = now() - t0;
+    printf("%-34s %8d %10.5f %10s %10.5f %14.3g\n", "baseline: lean analog loop", 1, R, "", T, n / tb);
     for (unsigned th = 1; th <= 2; th++) {
         nbt_mc_config c;
         memset(&c, 0, sizeof c);
@@ -98,5 +231,38 @@ int main(int argc, char **argv)
         nbt_mc_result_free(r);
     }
     nbt_phase_free(hg);
+
+    long np = n / 4;
+    printf("\n# half-space, Gaussian dtheta = 60 deg (B = 0.274), albedo 0.9, planes z = 1..10 x 50 bins; %ld photons\n",
+           np);
+    printf("%-34s %8s %10s %10s %14s\n", "method", "threads", "M0(z=10)", "se", "photons/s");
+    double pl[10];
+    for (int j = 0; j < 10; j++)
+        pl[j] = j + 1;
+    t0 = now();
+    double m0 = lean_planes((uint64_t)np, 0.9, 0.274, 10, 50, 2.0 * 10 + 20);
+    tb = now() - t0;
+    printf("%-34s %8d %10.5f %10s %14.3g\n", "baseline: lean analog loop", 1, m0, "", np / tb);
+    nbt_phase *ga = nbt_phase_gauss(0.274);
+    for (unsigned th = 1; th <= 2; th++) {
+        nbt_mc_config c;
+        memset(&c, 0, sizeof c);
+        c.sigma_t = 1;
+        c.albedo = 0.9;
+        c.phase = ga;
+        c.nplanes = 10;
+        c.z_planes = pl;
+        c.r_bins = 50;
+        c.r_max_scale = 1;
+        c.photons = (uint64_t)np;
+        c.seed = 1;
+        c.threads = th;
+        nbt_mc_result *r;
+        nbt_mc_run(&c, &r);
+        printf("%-34s %8u %10.5f %10.1e %14.3g\n", "nbt_mc_run (analog, exact counts)", th, r->M0[9], r->M0_se[9],
+               np / r->seconds);
+        nbt_mc_result_free(r);
+    }
+    nbt_phase_free(ga);
     return 0;
 }
