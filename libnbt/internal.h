@@ -36,6 +36,12 @@ double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn);
 /* A cosine of the scattering angle distributed as p, from uniforms in [0, 1). */
 double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void *rs);
 
+/* The one parameter of a phase function whose sampler a caller may inline
+ * (same arithmetic and uniforms as nbt__phase_sample_mu): g for HG, B for a
+ * single Gaussian lobe (GAUSS, or SOG with one term); returns 0 for every
+ * other phase function. */
+int nbt__phase_sample_param(const nbt_phase *p, nbt_phase_kind *kind, double *param);
+
 /* sum_{k=0}^{kmax} (2k+1) b_k P_k(x) by Clenshaw's recurrence. */
 double nbt__legendre_series(const double *b, size_t kmax, double x);
 

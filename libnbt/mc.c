@@ -59,39 +59,67 @@ typedef struct {
     const nbt_mc_config *cfg;
     size_t nlay;        /* regions [b[i], b[i+1]) with density rho[i]; b[nlay] = top; b[0] = 0 (infinite: -z_cut) */
     double *b, *rho;
+    double *kinv;       /* 1/(sigma_t rho[i]), +inf in vacuum */
+    double *binscale;   /* per plane: r_bins/(F z_j) */
     double top;         /* slab: thickness (escape above); else z_cut (photon dropped) */
     int slab;
+    nbt_phase_kind skind; /* HG or GAUSS: sampled inline (sparam = g or B); else ISO marks the general sampler */
+    double sparam, sinv;
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
     double *acc;        /* NBATCH * stride */
     atomic_uint done;
     atomic_int over;    /* rho_fn exceeded rho_max somewhere */
 } mc_ctx;
 
-/* Tally forward crossings of planes in (z0, z1] along a move. */
-static void tally(const mc_ctx *c, double *a, double x, double y, double z0, double z1, double ux, double uy,
-                  double uz)
+/* Tally forward crossings of planes in (z0, z1] along a move; *jp is the
+ * first plane above z0 and comes back as the first plane above z1. */
+static inline void tally(const mc_ctx *c, double *a, size_t *jp, double x, double y, double z0, double z1, double ux,
+                         double uy, double uz)
 {
     const nbt_mc_config *cf = c->cfg;
-    size_t np = cf->nplanes, nb = cf->r_bins;
-    /* first plane above z0 */
-    size_t lo = 0, hi = np;
-    while (lo < hi) {
-        size_t m = (lo + hi) / 2;
-        if (cf->z_planes[m] <= z0)
-            lo = m + 1;
-        else
-            hi = m;
-    }
-    for (size_t j = lo; j < np && cf->z_planes[j] <= z1; j++) {
+    size_t np = cf->nplanes, nb = cf->r_bins, j = *jp;
+    for (; j < np && cf->z_planes[j] <= z1; j++) {
         double t = (cf->z_planes[j] - z0) / uz, px = x + t * ux, py = y + t * uy;
-        double r2 = px * px + py * py, r = sqrt(r2);
+        double r2 = px * px + py * py;
         double *pl = a + j * (nb + 2);
-        double bin = r / (cf->r_max_scale * cf->z_planes[j]) * (double)nb;
+        double bin = sqrt(r2) * c->binscale[j];
         if (bin < (double)nb)
             pl[(size_t)bin] += 1.0;
         pl[nb] += 1.0;
         pl[nb + 1] += r2;
     }
+    *jp = j;
+}
+
+/* keep *jp the first plane above z after a move that tallied nothing */
+static inline void plane_index(const nbt_mc_config *cf, size_t *jp, double z)
+{
+    size_t j = *jp;
+    while (j > 0 && cf->z_planes[j - 1] > z)
+        j--;
+    while (j < cf->nplanes && cf->z_planes[j] <= z)
+        j++;
+    *jp = j;
+}
+
+static inline double sample_mu(const mc_ctx *c, rng_t *rs)
+{
+    if (c->skind == NBT_PHASE_HG) { /* as nbt__phase_sample_mu, inline */
+        double g = c->sparam, u = rng_u(rs);
+        if (fabs(g) < 1e-6)
+            return 2.0 * u - 1.0;
+        double f = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+        double mu = (1.0 + g * g - f * f) * c->sinv; /* sinv = 1/(2g) */
+        return mu > 1.0 ? 1.0 : (mu < -1.0 ? -1.0 : mu);
+    }
+    if (c->skind == NBT_PHASE_GAUSS) {
+        for (;;) {
+            double th = sqrt(-4.0 * c->sparam * log1p(-rng_u(rs)));
+            if (th < NBT_PI)
+                return cos(th);
+        }
+    }
+    return nbt__phase_sample_mu(c->cfg->phase, rng_cb, rs);
 }
 
 static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
@@ -100,12 +128,15 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
     const nbt_mc_config *cf = c->cfg;
     double *a = c->acc + batch * c->stride;
     uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH, events = 0;
+    uint64_t nrefl = 0, ntrans = 0; /* counted here, not in the shared array (no false sharing) */
     size_t tail = c->stride - 3; /* R, T, events */
+    const int planes = cf->nplanes > 0;
+    const double albedo = cf->albedo, bottom = c->b[0], top = c->top;
     for (uint64_t ph = p0; ph < p1; ph++) {
         rng_t rs;
         rng_seed(&rs, cf->seed, ph);
         double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
-        size_t li = 0;
+        size_t li = 0, jp = 0; /* layer; first tally plane above z */
         unsigned scattered = 0; /* scatterings so far */
         for (;;) {
             int alive = 1;
@@ -115,14 +146,16 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                 for (;;) {
                     double d = -log1p(-rng_u(&rs)) / (cf->sigma_t * cf->rho_max);
                     double z1 = z + d * uz;
-                    if (z1 < c->b[0] || z1 > c->top) { /* leaves through z = 0 (infinite: below -z_cut), or dropped below z_cut */
-                        if (scattered && uz > 0 && cf->nplanes)
-                            tally(c, a, x, y, z, fmin(z1, c->top), ux, uy, uz);
+                    if (z1 < bottom || z1 > top) { /* leaves through z = 0 (infinite: below -z_cut), or dropped below z_cut */
+                        if (planes && scattered && uz > 0)
+                            tally(c, a, &jp, x, y, z, fmin(z1, top), ux, uy, uz);
                         alive = 0;
                         break;
                     }
-                    if (scattered && uz > 0 && cf->nplanes)
-                        tally(c, a, x, y, z, z1, ux, uy, uz);
+                    if (planes && scattered && uz > 0)
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                    else if (planes)
+                        plane_index(cf, &jp, z1);
                     x += d * ux;
                     y += d * uy;
                     z = z1;
@@ -134,6 +167,18 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                 }
             } else {
                 double tau = -log1p(-rng_u(&rs)); /* optical depth to the next interaction */
+                /* the common case: the interaction lies inside the current layer */
+                double dn = tau * c->kinv[li], z1 = z + dn * uz;
+                if (z1 > c->b[li] && z1 < c->b[li + 1]) { /* both tests, not a branch on the sign of uz */
+                    if (planes && scattered && uz > 0)
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                    else if (planes)
+                        plane_index(cf, &jp, z1);
+                    x += dn * ux;
+                    y += dn * uy;
+                    z = z1;
+                    tau = 0;
+                }
                 while (alive && tau > 0) {
                     double rho = c->rho[li], zb;
                     int up = uz > 0;
@@ -144,15 +189,17 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     else
                         zb = NAN;
                     double db = uz != 0 ? (zb - z) / uz : INFINITY;
-                    double dn = rho > 0 ? tau / (cf->sigma_t * rho) : INFINITY;
+                    dn = rho > 0 ? tau / (cf->sigma_t * rho) : INFINITY;
                     double d = dn < db ? dn : db;
                     if (isinf(d)) { /* horizontal flight in vacuum: never returns */
                         alive = 0;
                         break;
                     }
-                    double z1 = dn < db ? z + d * uz : zb;
-                    if (scattered && uz > 0 && cf->nplanes)
-                        tally(c, a, x, y, z, z1, ux, uy, uz);
+                    z1 = dn < db ? z + d * uz : zb;
+                    if (planes && scattered && uz > 0)
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                    else if (planes)
+                        plane_index(cf, &jp, z1);
                     x += d * ux;
                     y += d * uy;
                     z = z1;
@@ -163,14 +210,12 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     tau -= cf->sigma_t * rho * db;
                     if (up) {
                         if (++li == c->nlay) { /* through the top */
-                            if (c->slab)
-                                a[tail + 1] += 1.0;
+                            ntrans += c->slab;
                             alive = 0;
                         }
                     } else {
                         if (li-- == 0) { /* out through z = 0 (infinite: dropped below -z_cut) */
-                            if (c->slab)
-                                a[tail] += 1.0;
+                            nrefl += c->slab;
                             alive = 0;
                         }
                     }
@@ -179,30 +224,33 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
             if (!alive)
                 break;
             events++;
-            if (rng_u(&rs) >= cf->albedo)
+            if (rng_u(&rs) >= albedo)
                 break; /* absorbed */
             if (cf->order_max && scattered == cf->order_max)
                 break; /* would scatter an (order_max+1)-th time */
             scattered++;
-            double mu = nbt__phase_sample_mu(cf->phase, rng_cb, &rs);
-            double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * NBT_PI * rng_u(&rs);
+            double mu = sample_mu(c, &rs);
+            double s2 = 1.0 - mu * mu, st = sqrt(s2 > 0 ? s2 : 0.0), phi = 2.0 * NBT_PI * rng_u(&rs);
             double cp = cos(phi), sp = sin(phi);
             if (fabs(uz) > 0.99999) {
                 ux = st * cp;
                 uy = st * sp;
                 uz = uz > 0 ? mu : -mu; /* mu times the sign of uz */
             } else {
-                double tmp = sqrt(1.0 - uz * uz);
-                double nx = st * (ux * uz * cp - uy * sp) / tmp + ux * mu;
-                double ny = st * (uy * uz * cp + ux * sp) / tmp + uy * mu;
+                double tmp = sqrt(1.0 - uz * uz), q = st / tmp;
+                double nx = q * (ux * uz * cp - uy * sp) + ux * mu;
+                double ny = q * (uy * uz * cp + ux * sp) + uy * mu;
                 double nz = -st * cp * tmp + uz * mu;
-                double n = sqrt(nx * nx + ny * ny + nz * nz);
-                ux = nx / n;
-                uy = ny / n;
-                uz = nz / n;
+                /* renormalise: |n|^2 = 1 + e with e ~ 1e-16, and 1/sqrt(1 + e) = 1 - e/2 + O(e^2) */
+                double n = 1.5 - 0.5 * (nx * nx + ny * ny + nz * nz);
+                ux = nx * n;
+                uy = ny * n;
+                uz = nz * n;
             }
         }
     }
+    a[tail] = (double)nrefl;
+    a[tail + 1] = (double)ntrans;
     a[tail + 2] = (double)events;
     unsigned d = atomic_fetch_add(&c->done, 1) + 1;
     if (thread == 0 && cf->progress)
@@ -295,6 +343,11 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
     c.slab = cf->slab > 0;
     c.b = malloc((nl + 1) * sizeof(double));
     c.rho = malloc(nl * sizeof(double));
+    c.kinv = malloc(nl * sizeof(double));
+    c.binscale = malloc((cf->nplanes + 1) * sizeof(double));
+    if (!nbt__phase_sample_param(cf->phase, &c.skind, &c.sparam))
+        c.skind = NBT_PHASE_ISO;
+    c.sinv = c.skind == NBT_PHASE_HG ? 0.5 / c.sparam : 0.0;
     c.stride = cf->nplanes * (cf->r_bins + 2) + 3;
     c.acc = calloc(NBATCH * c.stride, sizeof(double));
     nbt_mc_result *r = calloc(1, sizeof *r);
@@ -307,9 +360,12 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
         r->M2 = malloc((cf->nplanes + 1) * sizeof(double));
         r->M2_se = malloc((cf->nplanes + 1) * sizeof(double));
     }
-    if (!c.b || !c.rho || !c.acc || !r || !r->psi || !r->psi_se || !r->M0 || !r->M0_se || !r->M2 || !r->M2_se) {
+    if (!c.b || !c.rho || !c.kinv || !c.binscale || !c.acc || !r || !r->psi || !r->psi_se || !r->M0 || !r->M0_se ||
+        !r->M2 || !r->M2_se) {
         free(c.b);
         free(c.rho);
+        free(c.kinv);
+        free(c.binscale);
         free(c.acc);
         nbt_mc_result_free(r);
         NBT_FAIL(NBT_ENOMEM, "mc: out of memory");
@@ -333,6 +389,10 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
             c.b[0] = -zc; /* the first layer (or rho_fn(0)) continues behind the source */
     }
     c.top = c.b[nl];
+    for (size_t i = 0; i < nl; i++)
+        c.kinv[i] = c.rho[i] > 0 ? 1.0 / (cf->sigma_t * c.rho[i]) : INFINITY;
+    for (size_t j = 0; j < cf->nplanes; j++)
+        c.binscale[j] = (double)cf->r_bins / (cf->r_max_scale * cf->z_planes[j]);
     st = nbt__parallel_for(NBATCH, cf->threads, run_batch, &c);
     if (st == NBT_OK && atomic_load(&c.over))
         st = nbt__fail(NBT_EDOM, "mc: the density callback exceeded rho_max");
@@ -361,6 +421,8 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
     r->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     free(c.b);
     free(c.rho);
+    free(c.kinv);
+    free(c.binscale);
     free(c.acc);
     if (st != NBT_OK) {
         nbt_mc_result_free(r);

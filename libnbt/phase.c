@@ -414,6 +414,21 @@ double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void 
     return 1.0;
 }
 
+int nbt__phase_sample_param(const nbt_phase *p, nbt_phase_kind *kind, double *param)
+{
+    if (p->kind == NBT_PHASE_HG) {
+        *kind = NBT_PHASE_HG;
+        *param = p->g;
+        return 1;
+    }
+    if ((p->kind == NBT_PHASE_GAUSS || p->kind == NBT_PHASE_SOG) && p->n == 1) {
+        *kind = NBT_PHASE_GAUSS;
+        *param = p->B[0];
+        return 1;
+    }
+    return 0;
+}
+
 /* ---- SPEC parsing ---- */
 
 static int parse_double(const char *s, double *out)
