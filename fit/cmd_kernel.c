@@ -3,6 +3,7 @@
  * standard errors, from the moment solution), and a smooth correction of the
  * moment kernel over depth, albedo and phase width fitted to several runs. */
 #include <config.h>
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -256,6 +257,10 @@ int cmd_kernel(int argc, char **argv)
         if (d->nbins < (size_t)(shape_params(ncomp) + 1))
             die_usage("%s: %zu bins per plane: this shape needs at least %d", d->name, d->nbins, shape_params(ncomp) + 1);
     }
+    if (out)
+        check_writable("-o", out);
+    if (corr_out)
+        check_writable("--correction", corr_out);
     if (apply) {
         nbt_kernel_correction kc;
         if (nbt_kernel_correction_read(apply, &kc, err, sizeof err) != NBT_OK)
@@ -458,14 +463,14 @@ int cmd_kernel(int argc, char **argv)
             if (f)
                 fit_text_write(&rows, f);
             if (!f || out_close(f, tmp, out, 1)) {
-                fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+                fprintf(stderr, "%s: cannot write '%s': %s\n", cli_prog, out, strerror(errno));
                 rc = 1;
             }
         } else
             fit_text_write(&rows, stdout);
         fit_text_free(&rows);
         if (rc == 0 && corr_out && write_correction(corr_out, &c, corr_b, corr_a, corr_status)) {
-            fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, corr_out);
+            fprintf(stderr, "%s: cannot write '%s': %s\n", cli_prog, corr_out, strerror(errno));
             rc = 1;
         }
     }

@@ -1,6 +1,7 @@
 /* fit/cmd_mc.c: "nbt-fit mc": photon counting to CSV (z,r_lo,r_hi,psi,psi_stderr),
  * slab reflectance and transmittance to stdout. */
 #include <config.h>
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -49,7 +50,7 @@ static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_resul
     char *tmp;
     FILE *f = out_open(out, &tmp);
     if (!f) {
-        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        fprintf(stderr, "%s: cannot write '%s': %s\n", cli_prog, out, strerror(errno));
         return 1;
     }
     fprintf(f, "z,r_lo,r_hi,psi,psi_stderr\n");
@@ -60,7 +61,7 @@ static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_resul
                     r->psi[j * c->r_bins + k], r->psi_se[j * c->r_bins + k]);
     }
     if (out_close(f, tmp, out, 1)) {
-        fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+        fprintf(stderr, "%s: cannot write '%s': %s\n", cli_prog, out, strerror(errno));
         return 1;
     }
     return 0;
@@ -201,6 +202,8 @@ int cmd_mc(int argc, char **argv)
         c.nplanes = (size_t)count;
         c.z_planes = zp;
     }
+    if (out)
+        check_writable("-o", out);
     if (density) {
         if (nbt_density_read(density, &zl, &rl, &c.nlayers, err, sizeof err) != NBT_OK)
             die_usage("--density: %s", err);

@@ -1,6 +1,7 @@
 /* fit/cmd_phase.c: "nbt-fit phase": a sum of K Gaussian lobes (the phase
  * function of Shinya et al. eq. 13 on the sphere) fitted to a phase function. */
 #include <config.h>
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -213,6 +214,8 @@ int cmd_phase(int argc, char **argv)
     char err[512];
     if (nbt_phase_parse(target, &tp, err, sizeof err) != NBT_OK)
         die_usage("--target: %s", err);
+    if (out)
+        check_writable("-o", out);
     /* Gauss-Legendre panels graded towards the forward peak */
     static const double edges[NPANEL + 1] = {0, 0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, M_PI};
     nbt_gl_rule *gl = nbt_gl_rule_alloc(PNODES);
@@ -343,7 +346,7 @@ int cmd_phase(int argc, char **argv)
         char *tmp;
         FILE *f = out_open(out, &tmp);
         if (!f)
-            die("cannot write '%s'", out);
+            die("cannot write '%s': %s", out, strerror(errno));
         fprintf(f, "# sum of %d Gaussian lobes fitted to %s by nbt-fit phase; L2 error %.6g relative\n", K, target, werr);
         fprintf(f, "# fit status: %s\n", kstatus);
         if (against)
@@ -352,7 +355,7 @@ int cmd_phase(int argc, char **argv)
         for (int i = 0; i < K; i++)
             fprintf(f, "%.17g %.17g\n", w[i], B[i]);
         if (out_close(f, tmp, out, 1)) {
-            fprintf(stderr, "%s: cannot write '%s'\n", cli_prog, out);
+            fprintf(stderr, "%s: cannot write '%s': %s\n", cli_prog, out, strerror(errno));
             rc = 1;
         }
     } else

@@ -1,11 +1,13 @@
 /* gen/cli.c: argument checking and fatal errors for nbt-gen and nbt-fit. */
 #include <config.h>
 #include <errno.h>
+#include <libgen.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include "cli.h"
 
@@ -90,6 +92,39 @@ void opt_range(const char *opt, const char *arg, double lo, double hi, double *a
         die_usage("%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
 }
 
+/* 0 if DIR (the directory of PATH) exists and is writable, else errno */
+static int dir_of_writable(const char *path)
+{
+    char *dup = strdup(path);
+    if (!dup)
+        return ENOMEM;
+    struct stat sb;
+    const char *dir = dirname(dup);
+    int e = stat(dir, &sb) != 0 ? errno : !S_ISDIR(sb.st_mode) ? ENOTDIR : access(dir, W_OK | X_OK) != 0 ? errno : 0;
+    free(dup);
+    return e;
+}
+
+void check_writable(const char *opt, const char *path)
+{
+    struct stat sb;
+    int e = stat(path, &sb) == 0 && S_ISDIR(sb.st_mode) ? EISDIR : dir_of_writable(path);
+    if (e)
+        die("%s: cannot write '%s': %s", opt, path, strerror(e));
+}
+
+void check_writable_dir(const char *opt, const char *dir)
+{
+    struct stat sb;
+    int e;
+    if (stat(dir, &sb) == 0)
+        e = !S_ISDIR(sb.st_mode) ? ENOTDIR : access(dir, W_OK | X_OK) != 0 ? errno : 0;
+    else
+        e = errno == ENOENT ? dir_of_writable(dir) : errno;
+    if (e)
+        die("%s: cannot write into the directory '%s': %s", opt, dir, strerror(e));
+}
+
 FILE *out_open(const char *path, char **tmp)
 {
     size_t len = strlen(path) + 32;
@@ -108,9 +143,11 @@ FILE *out_open(const char *path, char **tmp)
 int out_close(FILE *f, char *tmp, const char *path, int ok)
 {
     int rc = fclose(f) != 0 || !ok || rename(tmp, path) != 0;
+    int e = errno; /* the reason, for the caller's message */
     if (rc)
         unlink(tmp);
     free(tmp);
+    errno = e;
     return rc;
 }
 

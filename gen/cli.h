@@ -1,5 +1,6 @@
-/* gen/cli.h: argument checking shared by nbt-gen's commands. Bad usage
- * prints one line naming the option and the accepted range, exits 2. */
+/* gen/cli.h: argument and output checking shared by nbt-gen, nbt-fit and
+ * nbt-scatter. Bad usage prints one line naming the option and the accepted
+ * range, exits 2. */
 #ifndef NBT_GEN_CLI_H
 #define NBT_GEN_CLI_H
 
@@ -20,9 +21,18 @@ long opt_long(const char *opt, const char *arg, long lo, long hi);
 /* Parse "LO:HI" or a single value (LO = HI) within [lo, hi]. */
 void opt_range(const char *opt, const char *arg, double lo, double hi, double *a, double *b);
 
+/* Output paths are checked before any work: check_writable dies (exit 1)
+ * with the OS reason unless PATH's directory exists and is writable and
+ * PATH is not a directory; check_writable_dir does the same for a directory
+ * to be written into (it may not exist yet: then its parent is checked).
+ * OPT names the option in the message ("-o"). */
+void check_writable(const char *opt, const char *path);
+void check_writable_dir(const char *opt, const char *dir);
+
 /* Output written all or nothing: out_open creates PATH.tmpPID for writing
  * (NULL on failure); out_close closes it and, if ok and the close worked,
- * renames it to PATH, else removes it. out_close returns 0 on success. */
+ * renames it to PATH, else removes it. out_close returns 0 on success;
+ * on failure both leave errno at the reason. */
 #include <stdio.h>
 FILE *out_open(const char *path, char **tmp);
 int out_close(FILE *f, char *tmp, const char *path, int ok);

@@ -83,6 +83,7 @@ int cmd_kernel(int argc, char **argv)
     char err[512];
     if (corr_path && nbt_kernel_correction_read(corr_path, &corr, err, sizeof err) != NBT_OK)
         die_usage("--correction: %s", err);
+    check_writable("-o", out);
     nbt_axis ax0 = {t0, t1, NBT_AXIS_LOG1P, 1000, W}, ax1 = {a0, a1, NBT_AXIS_LINEAR, 0, H};
     nbt_table *t = nbt_table_alloc(NBT_TABLE_KERNEL, &ax0, &ax1, 2);
     if (!t)

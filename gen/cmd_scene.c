@@ -154,6 +154,7 @@ int cmd_scene(int argc, char **argv)
     double xmax = s.kt_hi * s.d_hi;
     if (xmax > 1e6)
         die_usage("%s: kappa_t * distance = %g exceeds 1e6 (the medium is opaque long before)", argv[optind], xmax);
+    check_writable_dir("-o", dir);
     size_t nterms = 1;
     double ttol = s.tol;
     if (!ph && legendre_budget(fmax(fabs(s.g_lo), fabs(s.g_hi)), xmax, s.tol, (size_t)s.orders_max, &nterms, &ttol) != 0) {
@@ -166,11 +167,8 @@ int cmd_scene(int argc, char **argv)
             s.orders_max == NBT_SCENE_GL_ORDERS ? " (libnbt-gl's shaders take at most 16: 4 packs of 4)" : "",
             s.orders_max == NBT_SCENE_GL_ORDERS ? ", or raise orders_max (up to 512) for tables used off the GPU" : "");
     }
-    if (mkdir(dir, 0777) != 0) {
-        struct stat sb;
-        if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
-            die("cannot create the directory '%s'", dir);
-    }
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+        die("cannot create the directory '%s': %s", dir, strerror(errno));
     tableset_spec specs[18];
     size_t ns = 0;
     tableset_spec base = {NBT_TABLE_H, 0, nterms, ph, xmax, ttol, {0, 0}, s.half, threads};

@@ -1,6 +1,7 @@
 /* gen/cmd_tables.c: building and writing table sets; the "airlight",
  * "surface" and default (no arguments) commands. */
 #include <config.h>
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -498,13 +499,10 @@ int cmd_tables(int argc, char **argv)
         die_usage("--g chooses the Legendre orders itself: it excludes --kmax and --phase");
     if (!have_size && !have_tol)
         s.tol = 1e-3;
-    if (have_g) {
-        double ttol;
-        if (legendre_budget(fmax(fabs(g_lo), fabs(g_hi)), s.xmax, have_tol ? s.tol : 1e-3, 512, &s.nterms, &ttol) != 0)
-            die("--g: |g| up to %g needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G",
-                fmax(fabs(g_lo), fabs(g_hi)));
-        if (!have_size)
-            s.tol = ttol;
+    if (out) {
+        size_t n = strlen(out);
+        if (n < 5 || strcmp(out + n - 4, ".exr") || n >= 512)
+            die_usage("-o: '%s' is not accepted: the output must be a file name ending in .exr", out);
     }
     nbt_phase *ph = NULL;
     if (phase_spec) {
@@ -513,11 +511,21 @@ int cmd_tables(int argc, char **argv)
             die_usage("--phase: %s", err);
         s.phase = ph;
     }
+    if (out)
+        check_writable("-o", out);
+    else
+        check_writable_dir(cmd, ".");
+    if (have_g) {
+        double ttol;
+        if (legendre_budget(fmax(fabs(g_lo), fabs(g_hi)), s.xmax, have_tol ? s.tol : 1e-3, 512, &s.nterms, &ttol) != 0)
+            die("--g: |g| up to %g needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G",
+                fmax(fabs(g_lo), fabs(g_hi)));
+        if (!have_size)
+            s.tol = ttol;
+    }
     char stem[512];
     if (out) {
         size_t n = strlen(out);
-        if (n < 5 || strcmp(out + n - 4, ".exr") || n >= sizeof stem)
-            die_usage("-o: '%s' is not accepted: the output must be a file name ending in .exr", out);
         memcpy(stem, out, n - 4);
         stem[n - 4] = '\0';
     } else
@@ -541,11 +549,9 @@ int cmd_default(int argc, char **argv)
     (void)argc;
     (void)argv;
     const char *dir = "nbt-tables";
-    if (mkdir(dir, 0777) != 0) {
-        struct stat sb;
-        if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
-            die("cannot create the directory '%s'", dir);
-    }
+    check_writable_dir("nbt-gen", dir);
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+        die("cannot create the directory '%s': %s", dir, strerror(errno));
     /* the thesis' set: H_0..3, J_0..3^1, J_0..3^20, u and T in [0, 10],
      * theta over [0, pi]; resolution chosen for 1e-3 relative error */
     tableset_spec specs[3] = {

@@ -3,7 +3,6 @@
 #include <config.h>
 #include <errno.h>
 #include <getopt.h>
-#include <libgen.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -98,20 +97,6 @@ static void parse_size(const char *arg, size_t *w, size_t *h)
 }
 
 /* the directory of path must exist and be writable: checked before any work */
-static void check_writable(const char *opt, const char *path)
-{
-    char *dup = strdup(path);
-    if (!dup)
-        die("out of memory");
-    const char *dir = dirname(dup);
-    if (access(dir, W_OK) != 0) {
-        int e = errno;
-        free(dup);
-        die("%s: cannot write '%s': %s", opt, path, strerror(e));
-    }
-    free(dup);
-}
-
 static void parse_vec3(const char *opt, const char *arg, double v[3])
 {
     char *end;

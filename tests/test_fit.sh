@@ -193,6 +193,21 @@ expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
-"$NBT_FIT" mc $M -o /nonexistent/dir/x.csv >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
+# unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
+enoent="cannot write .*No such file or directory"
+BIG="--albedo 0.9 --sigma-t 1 --B 0.1 --photons 1e10"
+expect_fail "mc CSV to a missing directory" "-o: $enoent" "$NBT_FIT" mc $BIG -o /nonexistent/dir/x.csv
+expect_fail "mc EXR to a missing directory" "-o: $enoent" "$NBT_FIT" mc $BIG -o /nonexistent/dir/x.exr
+mkdir "$tmp/dir.csv"
+expect_fail "mc output is a directory" "-o: cannot write .*Is a directory" "$NBT_FIT" mc $BIG -o "$tmp/dir.csv"
+rmdir "$tmp/dir.csv"
+if "$NBT_FIT" kernel --help >/dev/null 2>&1; then
+  "$NBT_FIT" mc $M -o "$tmp/w.csv" >/dev/null 2>&1
+  expect_fail "kernel fit to a missing directory" "-o: $enoent" "$NBT_FIT" kernel "$tmp/w.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685 -o /nonexistent/dir/f.csv
+  expect_fail "kernel correction to a missing directory" "--correction: $enoent" \
+    "$NBT_FIT" kernel "$tmp/w.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685 --correction /nonexistent/dir/c.txt -o "$tmp/f.csv"
+  [ ! -e "$tmp/f.csv" ] && ok || bad "a refused kernel fit wrote its -o file"
+  expect_fail "phase fit to a missing directory" "-o: $enoent" "$NBT_FIT" phase --target hg:g=0.9 --terms 16 -o /nonexistent/dir/p.sog
+fi
 
 finish

@@ -127,7 +127,23 @@ expect_usage "--g out of range" "--g" "$NBT_GEN" airlight -o "$tmp/x.exr" --g 0:
 head -c 300 "$tmp/h.exr" >"$tmp/trunc.exr"
 "$NBT_GEN" info "$tmp/trunc.exr" >/dev/null 2>"$tmp/err"; rc=$?
 [ $rc -eq 1 ] && [ -s "$tmp/err" ] && ok || bad "truncated EXR: rc=$rc"
-"$NBT_GEN" airlight -o /nonexistent/dir/h.exr --size 9x9 >/dev/null 2>&1; [ $? -eq 1 ] && ok || bad "unwritable output: exit 1"
+# unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
+enoent="cannot write .*No such file or directory"
+expect_fail "airlight to a missing directory" "-o: $enoent" "$NBT_GEN" airlight -o /nonexistent/dir/h.exr --tol 1e-7
+expect_fail "surface to a missing directory" "-o: $enoent" "$NBT_GEN" surface -o /nonexistent/dir/j.exr --tol 1e-7
+expect_fail "--g tables to a missing directory" "-o: $enoent" "$NBT_GEN" airlight -o /nonexistent/dir/g.exr --g 0:0.9 --tol 1e-6
+mkdir "$tmp/d.exr"
+expect_fail "output is a directory" "-o: cannot write .*Is a directory" "$NBT_GEN" airlight -o "$tmp/d.exr" --tol 1e-7
+expect_fail "kernel to a missing directory" "-o: $enoent" "$NBT_GEN" kernel --B 0.1 --size 4096x4096 -o /nonexistent/dir/k.exr
+printf 'kappa_t = 0.1\ndistance = 10\ng = 0:0.8\ntol = 1e-5\norders_max = 512\n' >"$tmp/slow.scene"
+expect_fail "scene into a missing directory" "-o: cannot write into the directory .*No such file or directory" \
+  "$NBT_GEN" scene "$tmp/slow.scene" -o /nonexistent/dir/tables
+: >"$tmp/afile"
+expect_fail "scene into a file" "-o: cannot write into the directory .*Not a directory" "$NBT_GEN" scene "$tmp/slow.scene" -o "$tmp/afile"
+mkdir "$tmp/cwd" && : >"$tmp/cwd/nbt-tables"
+expect_fail "default scene with nbt-tables a file" "nbt-tables.*Not a directory" sh -c 'cd "$1" && exec "$2"' sh "$tmp/cwd" "$NBT_GEN"
+[ -z "$(ls "$tmp/d.exr")" ] && [ ! -s "$tmp/afile" ] && [ "$(ls "$tmp/cwd")" = nbt-tables ] && ok || bad "refused runs wrote something"
+rm -rf "$tmp/d.exr" "$tmp/afile" "$tmp/cwd" "$tmp/slow.scene"
 
 # Gaussian and sum-of-Gaussian phase tables (issue 9): they build at the
 # requested tolerance, and a lookup lies within the table's recorded error of

@@ -1,6 +1,9 @@
 # tests/testlib.sh: the harness of the command-line tests (sourced).
 # ok / bad DESCRIPTION count checks; expect_usage DESCRIPTION PATTERN CMD...
-# asserts exit status 2 and one line on stderr matching PATTERN; close A B TOL
+# asserts exit status 2 and one line on stderr matching PATTERN; expect_fail
+# DESCRIPTION PATTERN CMD... asserts exit status 1, one line on stderr matching
+# PATTERN and nothing on stdout, within 10 s (a check made before the work);
+# close A B TOL
 # DESCRIPTION compares numbers; finish prints "N passed, M failed".
 pass=0; fail=0
 ok()  { pass=$((pass + 1)); }
@@ -13,6 +16,12 @@ expect_usage() {
   "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
   if [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err"; then ok
   else bad "$d: rc=$rc, stderr: $(cat "$tmp/err")"; fi
+}
+expect_fail() {
+  d=$1; pat=$2; shift 2
+  timeout 10 "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q -- "$pat" "$tmp/err" && [ ! -s "$tmp/out" ]; then ok
+  else bad "$d: rc=$rc, stderr: $(cat "$tmp/err"), stdout: $(head -c 300 "$tmp/out")"; fi
 }
 close() {
   if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
