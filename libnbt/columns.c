@@ -1,6 +1,10 @@
-/* libnbt/columns.c: reading the two-column text files of phase tables and
- * density profiles. */
+/* libnbt/columns.c: reading the two-column text files of phase tables,
+ * sum-of-Gaussians files and density profiles. Strict: every line is blank,
+ * a comment ('#' to the end of the line) or exactly two finite numbers
+ * (optionally followed by a comment); anything else is an error naming
+ * file:line, so a mistyped line is never silently dropped. */
 #include <config.h>
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -25,17 +29,44 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
     nbt_status st = x && y ? NBT_OK : NBT_ENOMEM;
     while (st == NBT_OK && fgets(line, sizeof line, f)) {
         ln++;
-        char *h = strchr(line, '#'), extra;
+        size_t len = strlen(line);
+        if (len == sizeof line - 1 && line[len - 1] != '\n' && !feof(f)) {
+            snprintf(err, errlen, "%s:%d: %s: the line is longer than %zu characters", path, ln, what, sizeof line - 2);
+            st = NBT_EFORMAT;
+            break;
+        }
+        while (len > 0 && isspace((unsigned char)line[len - 1]))
+            line[--len] = '\0';
+        char *h = strchr(line, '#');
         if (h)
             *h = '\0';
-        double a, b;
-        int got = sscanf(line, "%lf %lf %c", &a, &b, &extra);
-        if (got <= 0)
+        const char *p = line;
+        while (isspace((unsigned char)*p))
+            p++;
+        if (*p == '\0') /* blank or a comment */
             continue;
-        const char *why = got != 2 || !isfinite(a) || !isfinite(b) ? "expected two finite numbers"
-                                                                   : (check ? check(n, a, b, n ? x[n - 1] : 0) : NULL);
+        /* data: exactly two finite numbers separated by white space, then
+         * only white space (the comment is cut off above) */
+        char *e1, *e2 = NULL;
+        double a = strtod(p, &e1), b = e1 != p && isspace((unsigned char)*e1) ? strtod(e1, &e2) : 0;
+        int ok = e1 != p && isspace((unsigned char)*e1) && e2 != e1;
+        if (ok) {
+            while (isspace((unsigned char)*e2))
+                e2++;
+            ok = *e2 == '\0' && isfinite(a) && isfinite(b);
+        }
+        if (!ok) {
+            if (h)
+                *h = '#';
+            snprintf(err, errlen, "%s:%d: %s: '%.60s%s' is not accepted: expected two finite numbers '%s', "
+                     "optionally followed by a '#' comment (blank lines and lines starting with '#' are skipped)",
+                     path, ln, what, line, strlen(line) > 60 ? "..." : "", names);
+            st = NBT_EFORMAT;
+            break;
+        }
+        const char *why = check ? check(n, a, b, n ? x[n - 1] : 0) : NULL;
         if (why) {
-            snprintf(err, errlen, "%s '%s' line %d: %s '%s'", what, path, ln, why, names);
+            snprintf(err, errlen, "%s:%d: %s: %s '%s'", path, ln, what, why, names);
             st = NBT_EFORMAT;
             break;
         }
@@ -58,7 +89,8 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
     }
     fclose(f);
     if (st == NBT_OK && n == 0) {
-        snprintf(err, errlen, "%s '%s' is empty: expected lines '%s'", what, path, names);
+        snprintf(err, errlen, "%s: the %s is empty (no data lines): expected lines '%s' (two finite numbers)", path,
+                 what, names);
         st = NBT_EFORMAT;
     }
     if (st == NBT_ENOMEM)

@@ -35,7 +35,30 @@ expect_usage "albedo > 1" "--albedo" "$NBT_GEN" eval moments --albedo 1.5 --sigm
 expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2
 : >"$tmp/empty.txt"
 expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
-rm -f "$tmp/dens.txt" "$tmp/empty.txt"
+# strict two-column files (density, phase table, sum of Gaussians): a line that is not blank, a comment or
+# exactly two finite numbers is an error naming file:line (a letter O for a zero used to drop the layer)
+printf '# z rho\n\n0 1   # first layer\n  # indented comment\n1.5 1\r\n' >"$tmp/dens.txt"
+b=$("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385 --density "$tmp/dens.txt" | cut -d' ' -f2)
+close "$b" "$a" 1e-10 "density file with comments, blank lines and CRLF"
+printf '0 1\nO5 2\n1 1\n' >"$tmp/bad.txt"
+expect_usage "density: letter O" "bad.txt:2: density file: 'O5 2' is not accepted: expected two finite numbers 'z rho'" \
+  "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf '0 1\n1 2 3\n' >"$tmp/bad.txt"
+expect_usage "density: three numbers" "bad.txt:2: .*two finite numbers" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf '0 1\n1,2\n' >"$tmp/bad.txt"
+expect_usage "density: comma" "bad.txt:2: .*two finite numbers" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf '0 1\n1 2x # note\n' >"$tmp/bad.txt"
+expect_usage "density: trailing text" "bad.txt:2: .*two finite numbers" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf 'z rho\nzero one\n' >"$tmp/bad.txt"
+expect_usage "density: no numeric line" "bad.txt:1: .*'z rho' is not accepted" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf '# only a comment\n\n' >"$tmp/bad.txt"
+expect_usage "density: comments only" "empty (no data lines)" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/bad.txt"
+printf -- '-1 1\n0 1\nl 1\n' >"$tmp/bad.txt"
+expect_usage "phase table: letter l" "bad.txt:3: phase table: 'l 1' is not accepted: expected two finite numbers 'mu p'" \
+  "$NBT_GEN" eval H --phase "table:$tmp/bad.txt" --u 1 --v 0
+printf '0.5 0.1\n0.5 O.2\n' >"$tmp/bad.txt"
+expect_usage "sog file: letter O" "bad.txt:2: sum-of-Gaussians file: .*'w B'" "$NBT_GEN" eval H --phase "sog:$tmp/bad.txt" --u 1 --v 0
+rm -f "$tmp/dens.txt" "$tmp/empty.txt" "$tmp/bad.txt"
 
 # the kernel table: nodes carry eval moments' alpha and beta (sigma_t = 1); a correction scales them
 "$NBT_GEN" kernel --B 0.0685 --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/k.exr" >/dev/null 2>&1 && ok || bad "kernel table"

@@ -92,9 +92,10 @@ nbt_status nbt_kernel_corrected(const nbt_kernel_correction *c, const nbt_beam_m
 /* Read the file nbt-fit writes ('beta' and 'alpha' lines of 7 numbers, '#' comments). */
 nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c, char *err, size_t errlen);
 
-/* Read a layered density profile: lines "z rho" ('#' comments), z
- * increasing from exactly 0, rho >= 0; layer i is [z_i, z_{i+1}), the last
- * unbounded. On success *z and *rho are malloc'd (free both) and *n >= 1;
+/* Read a layered density profile: lines "z rho" (exactly two finite
+ * numbers; '#' starts a comment, blank lines are skipped, any other line is
+ * an error), z increasing from exactly 0, rho >= 0; layer i is
+ * [z_i, z_{i+1}), the last unbounded. On success *z and *rho are malloc'd (free both) and *n >= 1;
  * on failure err holds one line naming the file, the line and what is
  * accepted. */
 nbt_status nbt_density_read(const char *path, double **z, double **rho, size_t *n, char *err, size_t errlen);

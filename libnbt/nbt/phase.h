@@ -44,8 +44,10 @@ nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B);
 nbt_phase *nbt_phase_tabulated(size_t n, const double *mu, const double *p);
 
 /* Parse a SPEC: "iso", "rayleigh", "hg:g=0.8", "gauss:B=0.0685",
- * "table:FILE" (FILE: lines "mu p", '#' comments), "sog:FILE" (lines "w B":
- * a sum of Gaussians, as nbt-fit phase writes it). On failure returns a
+ * "table:FILE" (FILE: lines "mu p"), "sog:FILE" (lines "w B": a sum of
+ * Gaussians, as nbt-fit phase writes it). In both files a data line is
+ * exactly two finite numbers, '#' starts a comment and blank lines are
+ * skipped; any other line is an error naming FILE:LINE. On failure returns a
  * status and writes a one-line reason naming the bad value and the accepted
  * range into err (of size errlen). */
 nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t errlen);
