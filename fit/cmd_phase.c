@@ -131,16 +131,20 @@ static int against_res(const double *p, double *r, double *jac, void *vp)
     return 0;
 }
 
-static int refit_against(const char *path, int K, double *w, double *B, fit_report *rep, fit_text *txt, char *status,
-                         size_t statuslen)
+/* the photon counts of --against, read (and judged) before any fit */
+static void read_against(const char *path, psi_data *d)
 {
-    psi_data d;
     char err[512];
-    if (psi_data_read(path, &d, err, sizeof err))
+    if (psi_data_read(path, d, err, sizeof err))
         die_usage("--against: %s", err);
-    if (isnan(d.albedo) || isnan(d.sigma_t))
+    if (isnan(d->albedo) || isnan(d->sigma_t))
         die_usage("--against: %s does not name its medium (use an EXR written by nbt-fit mc)", path);
-    against_ctx c = {&d, K, w, B, 1};
+}
+
+static int refit_against(const char *path, psi_data *dp, int K, double *w, double *B, fit_report *rep, fit_text *txt,
+                         char *status, size_t statuslen)
+{
+    against_ctx c = {dp, K, w, B, 1};
     double before = against_rms(&c, 1, NULL), num;
     against_rms(&c, 1, &num);
     c.scale = 1 / sqrt(num);
@@ -160,7 +164,6 @@ static int refit_against(const char *path, int K, double *w, double *B, fit_repo
     p[0] = bestf;
     if (nbt_fit_solve(1, p, lo, hi, 1, against_res, &c, &fo, &s) != 0) {
         fprintf(stderr, "%s: --against: the refit failed: %s (%s)\n", cli_prog, s.termination, s.message);
-        psi_data_free(&d);
         return 1;
     }
     double f = exp(p[0]), after = against_rms(&c, f, NULL);
@@ -182,7 +185,6 @@ static int refit_against(const char *path, int K, double *w, double *B, fit_repo
                  before, after, f, fit_status_word(st));
     for (int i = 0; i < K; i++)
         B[i] *= f;
-    psi_data_free(&d);
     return 0;
 }
 
@@ -214,6 +216,10 @@ int cmd_phase(int argc, char **argv)
     char err[512];
     if (nbt_phase_parse(target, &tp, err, sizeof err) != NBT_OK)
         die_usage("--target: %s", err);
+    psi_data ad;
+    memset(&ad, 0, sizeof ad);
+    if (against)
+        read_against(against, &ad);
     if (out)
         check_writable("-o", out);
     /* Gauss-Legendre panels graded towards the forward peak */
@@ -328,7 +334,9 @@ int cmd_phase(int argc, char **argv)
         fit_text_add(&txt, "K %d error %.6g status %s\n", k, berr, fit_status_word(st));
     }
     params_to_sog(K, best, w, B);
-    if (against && refit_against(against, K, w, B, &rep, &txt, astatus, sizeof astatus) != 0) {
+    int arc = against ? refit_against(against, &ad, K, w, B, &rep, &txt, astatus, sizeof astatus) : 0;
+    psi_data_free(&ad);
+    if (arc != 0) {
         fit_report_finish(&rep);
         fit_text_free(&txt);
         nbt_phase_free(tp);

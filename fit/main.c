@@ -13,7 +13,8 @@ static void help(void)
          "       nbt-fit phase [...]  fit a sum of Gaussian lobes to a phase function\n"
          "       nbt-fit --version\n\n"
          "'nbt-fit COMMAND --help' describes each command. Exit status: 0 success,\n"
-         "1 failure, 2 bad usage.");
+         "1 failure (including an output that cannot be written), 2 bad usage or an input\n"
+         "file that is missing, unreadable or malformed.");
 }
 
 int main(int argc, char **argv)

@@ -1,5 +1,6 @@
 /* fit/psi_data.c: reading photon-counting data for the fits. */
 #include <config.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,7 +73,7 @@ static int read_csv(const char *path, psi_data *d, char *err, size_t errlen)
 {
     FILE *f = fopen(path, "r");
     if (!f) {
-        snprintf(err, errlen, "%s: cannot open", path);
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
         return 1;
     }
     char line[512];

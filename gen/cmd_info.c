@@ -37,8 +37,8 @@ int cmd_info(int argc, char **argv)
     nbt_table *t;
     char err[512];
     nbt_status st = nbt_table_read_exr(path, &t, err, sizeof err);
-    if (st != NBT_OK)
-        die("%s", err);
+    if (st != NBT_OK) /* missing, unreadable or not a table: bad input */
+        die_usage("%s", err);
     const char *n0 = nbt_table_axis_name(t->kind, 0), *n1 = nbt_table_axis_name(t->kind, 1);
     printf("file        %s\n", path);
     printf("kind        %s\n", nbt_table_kind_name(t->kind));

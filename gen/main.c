@@ -16,7 +16,8 @@ static void help(void)
          "       nbt-gen kernel [...]    the narrow-beam kernel's alpha, beta as a table\n"
          "       nbt-gen --version\n\n"
          "'nbt-gen COMMAND --help' describes each command. Exit status: 0 success,\n"
-         "1 failure, 2 bad usage.");
+         "1 failure (including an output that cannot be written), 2 bad usage or an input\n"
+         "file that is missing, unreadable or malformed.");
 }
 
 int main(int argc, char **argv)

@@ -1,5 +1,6 @@
 /* libnbt/beam.c: narrow beam moments and kernels (Shinya et al. sec. 3). */
 #include <config.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -384,7 +385,7 @@ nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c
 {
     FILE *f = fopen(path, "r");
     if (!f) {
-        snprintf(err, errlen, "kernel correction '%s' cannot be opened", path);
+        snprintf(err, errlen, "kernel correction '%s' cannot be opened: %s", path, strerror(errno));
         return NBT_EIO;
     }
     char line[1024];
@@ -407,6 +408,10 @@ nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c
             p = end;
         }
         got |= dst == c->beta ? 1 : 2;
+    }
+    if (st == NBT_OK && ferror(f)) {
+        snprintf(err, errlen, "kernel correction '%s' cannot be read: %s", path, strerror(errno));
+        st = NBT_EIO;
     }
     fclose(f);
     if (st == NBT_OK && got != 3) {

@@ -87,6 +87,10 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
         y[n] = b;
         n++;
     }
+    if (st == NBT_OK && ferror(f)) {
+        snprintf(err, errlen, "%s '%s' cannot be read: %s", what, path, strerror(errno));
+        st = NBT_EIO;
+    }
     fclose(f);
     if (st == NBT_OK && n == 0) {
         snprintf(err, errlen, "%s: the %s is empty (no data lines): expected lines '%s' (two finite numbers)", path,

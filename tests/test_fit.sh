@@ -195,6 +195,23 @@ expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
+# a missing or unreadable input file is bad input in every command that reads one: exit 2, one line with the OS reason
+miss=/nonexistent/dir/in
+enoent="No such file or directory"
+expect_usage "mc --density missing" "$enoent" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density $miss.txt -o "$tmp/x.csv"
+expect_usage "mc --phase table missing" "$enoent" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --phase table:$miss.txt --photons 1000 -o "$tmp/x.csv"
+if "$NBT_FIT" kernel --help >/dev/null 2>&1; then
+  expect_usage "kernel CSV missing" "$enoent" "$NBT_FIT" kernel $miss.csv --albedo 0.5 --sigma-t 1 --B 0.1
+  expect_usage "kernel EXR missing" "$enoent" "$NBT_FIT" kernel $miss.exr
+  "$NBT_FIT" mc $M -o "$tmp/w.csv" >/dev/null 2>&1
+  expect_usage "kernel --apply missing" "$enoent" "$NBT_FIT" kernel "$tmp/w.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685 --apply $miss.txt
+  expect_usage "phase --target table missing" "$enoent" "$NBT_FIT" phase --target table:$miss.txt --terms 2
+  expect_usage "phase --target sog missing" "$enoent" "$NBT_FIT" phase --target sog:$miss.sog --terms 2
+  # read before the fits (16 lobes would take a while)
+  expect_usage "phase --against missing" "$enoent" timeout 10 "$NBT_FIT" phase --target hg:g=0.9 --terms 16 --against $miss.exr
+fi
+[ ! -e "$tmp/x.csv" ] && ok || bad "missing inputs left output"
+
 # unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
 enoent="cannot write .*No such file or directory"
 BIG="--albedo 0.9 --sigma-t 1 --B 0.1 --photons 1e10"

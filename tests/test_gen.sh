@@ -148,8 +148,7 @@ awk -v t="$target" '/^\// { for (i = 1; i <= NF; i++) if ($i == "(rel") { v = $(
 expect_usage "--g with --kmax" "excludes" "$NBT_GEN" airlight -o "$tmp/x.exr" --g 0.5 --kmax 3
 expect_usage "--g out of range" "--g" "$NBT_GEN" airlight -o "$tmp/x.exr" --g 0:1
 head -c 300 "$tmp/h.exr" >"$tmp/trunc.exr"
-"$NBT_GEN" info "$tmp/trunc.exr" >/dev/null 2>"$tmp/err"; rc=$?
-[ $rc -eq 1 ] && [ -s "$tmp/err" ] && ok || bad "truncated EXR: rc=$rc"
+expect_usage "truncated EXR" "trunc.exr" "$NBT_GEN" info "$tmp/trunc.exr"
 # unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
 enoent="cannot write .*No such file or directory"
 expect_fail "airlight to a missing directory" "-o: $enoent" "$NBT_GEN" airlight -o /nonexistent/dir/h.exr --tol 1e-7
@@ -243,6 +242,23 @@ expect_usage "no phase" "exactly one of g" "$NBT_GEN" scene "$tmp/bad.scene" -o 
 printf 'kappa_t = 0.1\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/fixed.scene"
 "$NBT_GEN" scene "$tmp/fixed.scene" -o "$tmp/scene3" >/dev/null 2>&1 && [ -s "$tmp/scene3/H_hg_g_0.8.exr" ] &&
   [ ! -e "$tmp/scene3/J1.exr" ] && ok || bad "fixed-phase scene builds only H: $(ls "$tmp/scene3" 2>&1)"
+
+# a missing or unreadable input file is bad input in every command that reads one: exit 2, one line with the OS reason
+miss=/nonexistent/dir/in
+enoent="No such file or directory"
+expect_usage "eval --density missing" "$enoent" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density $miss.txt
+expect_usage "eval --phase table missing" "$enoent" "$NBT_GEN" eval H --phase table:$miss.txt --u 1 --v 0
+expect_usage "eval --phase sog missing" "$enoent" "$NBT_GEN" eval H --phase sog:$miss.sog --u 1 --v 0
+expect_usage "airlight --phase table missing" "$enoent" "$NBT_GEN" airlight --phase table:$miss.txt -o "$tmp/x.exr"
+expect_usage "surface --phase table missing" "$enoent" "$NBT_GEN" surface --phase table:$miss.txt -o "$tmp/x.exr"
+expect_usage "scene file missing" "$enoent" "$NBT_GEN" scene $miss.scene -o "$tmp/x"
+expect_usage "info file missing" "$enoent" "$NBT_GEN" info $miss.exr
+expect_usage "kernel --correction missing" "$enoent" "$NBT_GEN" kernel --B 0.1 --correction $miss.txt -o "$tmp/x.exr"
+mkdir "$tmp/adir"
+expect_usage "density is a directory" "Is a directory" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/adir"
+expect_usage "correction is a directory" "Is a directory" "$NBT_GEN" kernel --B 0.1 --correction "$tmp/adir" -o "$tmp/x.exr"
+rmdir "$tmp/adir"
+[ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x" ] && ok || bad "missing inputs left output"
 
 # the default scene
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
