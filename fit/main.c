@@ -21,7 +21,7 @@ int main(int argc, char **argv)
 {
     cli_prog = "nbt-fit";
     if (argc < 2)
-        die_usage("say what to do: mc (see 'nbt-fit --help')");
+        die_usage("say what to do: mc, kernel or phase (see 'nbt-fit --help')");
     const char *c = argv[1];
     if (!strcmp(c, "--help") || !strcmp(c, "-h")) {
         help();

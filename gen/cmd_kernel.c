@@ -60,12 +60,13 @@ int cmd_kernel(int argc, char **argv)
         case 'o': out = optarg; break;
         case 'h':
             puts("Usage: nbt-gen kernel --B B [--correction CORR.txt] [--tau LO:HI] [--albedo LO:HI]\n"
-                 "                      [--size WxH] [-o K.exr]\n\n"
+                 "                      [--size WxH] [-o FILE.exr]\n\n"
                  "Tabulates the narrow-beam kernel Psi = alpha/r G(r/beta) of a homogeneous medium with the\n"
                  "Gaussian phase of spread B (dtheta^2 = 4B): channel R = alpha/sigma_t, G = beta sigma_t over\n"
                  "tau = sigma_t z (log1p axis, default 0.01:20) and albedo (default 0.01:1), from the moments\n"
                  "(eq. 25/26) or, with --correction, corrected as nbt-fit kernel --correction fitted it.\n"
-                 "Default size 129x65; the measured interpolation error is recorded and printed.");
+                 "Default size 129x65; the measured interpolation error is recorded and printed.\n"
+                 "  -o FILE.exr    output (default ./kernel.exr), with a PNG preview FILE.png beside it");
             return 0;
         default: die_usage("see 'nbt-gen kernel --help'");
         }

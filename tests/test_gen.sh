@@ -71,6 +71,11 @@ printf 'beta 0.1 0 0 0 0 0 0\nalpha -0.2 0 0 0 0 0 0\n' >"$tmp/c.txt"
 set -- $("$NBT_GEN" info "$tmp/kc.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
 close "$1" "$(awk -v a="$ma" 'BEGIN { printf "%.17g", a * exp(-0.2) }')" 1e-6 "corrected alpha = alpha e^-0.2"
 close "$2" "$(awk -v b="$mb" 'BEGIN { printf "%.17g", b * exp(0.1) }')" 1e-6 "corrected beta = beta e^0.1"
+# without -o the kernel goes where its help says
+"$NBT_GEN" kernel --help | grep -q "default ./kernel.exr" && ok || bad "kernel --help names the default output"
+mkdir "$tmp/kd" && (cd "$tmp/kd" && "$NBT_GEN" kernel --B 0.0685 --size 9x5 >/dev/null 2>&1) && [ -s "$tmp/kd/kernel.exr" ] &&
+  [ -s "$tmp/kd/kernel.png" ] && ok || bad "kernel without -o: $(ls "$tmp/kd")"
+rm -rf "$tmp/kd"
 expect_usage "kernel without B" "--B" "$NBT_GEN" kernel -o "$tmp/x.exr"
 printf 'beta 1 2\n' >"$tmp/badc.txt"
 expect_usage "bad correction file" "line 1" "$NBT_GEN" kernel --B 0.1 --correction "$tmp/badc.txt" -o "$tmp/x.exr"
