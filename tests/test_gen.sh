@@ -265,6 +265,14 @@ expect_usage "correction is a directory" "Is a directory" "$NBT_GEN" kernel --B 
 rmdir "$tmp/adir"
 [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x" ] && ok || bad "missing inputs left output"
 
+# make clean removes build products only, never a user's outputs (the quick start's nbt-tables/,
+# nbt-demo.png, nbt-scatter*.exr/png): a dry run of it names none of them
+if [ -n "${top_builddir:-}" ] && [ -f "$top_builddir/Makefile" ]; then
+  (cd "$top_builddir" && ${MAKE:-make} -n clean distclean 2>/dev/null) >"$tmp/clean" || true
+  grep -q 'rm ' "$tmp/clean" && ! grep -q 'nbt-tables\|nbt-demo\.png\|nbt-scatter[^ ]*\.\(exr\|png\)' "$tmp/clean" && ok ||
+    bad "make clean/distclean would remove a user's output: $(grep 'nbt-tables\|nbt-demo\.png\|nbt-scatter[^ ]*\.\(exr\|png\)' "$tmp/clean")"
+fi
+
 # the default scene
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
   [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
