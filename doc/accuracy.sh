@@ -2,14 +2,22 @@
 # doc/accuracy.sh [PHOTONS]: reruns the narrow-beam accuracy experiment
 # (bench/beam_accuracy) and redraws doc/figures/beam_rms.png with gnuplot
 # (Debian: gnuplot-nox). Run from the top of a configured build tree.
+# The tracked doc/beam_rms.txt and doc/figures/beam_rms.png are replaced only
+# when the whole run (experiment and figure) succeeds.
 set -eu
 photons=${1:-2000000}
+if ! command -v gnuplot >/dev/null 2>&1; then
+  echo "doc/accuracy.sh: gnuplot is needed to draw the figure (Debian: apt-get install gnuplot-nox); nothing was run or changed" >&2
+  exit 1
+fi
 make -s bench/beam_accuracy
 out=$(mktemp -d)
-./bench/beam_accuracy "$photons" "$out" | tee doc/beam_rms.txt
+trap 'rm -rf "$out"' EXIT
+./bench/beam_accuracy "$photons" "$out" >"$out/beam_rms.txt"
+cat "$out/beam_rms.txt"
 gnuplot <<GP
 set terminal pngcairo size 1000,420 font ",10"
-set output "doc/figures/beam_rms.png"
+set output "$out/beam_rms.png"
 set multiplot layout 1,2
 set logscale y
 set yrange [0.002:5]
@@ -28,5 +36,7 @@ do for [b=0:1] {
 }
 unset multiplot
 GP
-rm -rf "$out"
+[ -s "$out/beam_rms.png" ] || { echo "doc/accuracy.sh: gnuplot wrote no figure; nothing was changed" >&2; exit 1; }
+mv "$out/beam_rms.txt" doc/beam_rms.txt
+mv "$out/beam_rms.png" doc/figures/beam_rms.png
 echo "wrote doc/beam_rms.txt and doc/figures/beam_rms.png"

@@ -175,6 +175,30 @@ else
   [ ! -e "$tmp/z.csv" ] && ok || bad "rejected fits left output"
 fi
 
+# doc/accuracy.sh replaces the tracked doc/beam_rms.txt only after a whole successful run: in a scratch
+# tree with a stub experiment, without gnuplot it stops first (one message, nothing changed); with a stub
+# gnuplot that draws nothing it changes nothing; with one that draws, both files are replaced
+acc=$(abspath "${top_srcdir:-.}/doc/accuracy.sh")
+mkdir -p "$tmp/acc/doc/figures" "$tmp/acc/bench" "$tmp/acc/bin"
+for t in mktemp rm mv cat tee; do ln -s "$(command -v $t)" "$tmp/acc/bin/$t"; done
+printf '#!/bin/sh\nexit 0\n' >"$tmp/acc/bin/make"
+printf '#!/bin/sh\necho new results; : >"$2/rms.dat"\n' >"$tmp/acc/bench/beam_accuracy"
+chmod +x "$tmp/acc/bin/make" "$tmp/acc/bench/beam_accuracy"
+echo tracked >"$tmp/acc/doc/beam_rms.txt"; echo tracked >"$tmp/acc/doc/figures/beam_rms.png"
+(cd "$tmp/acc" && PATH="$tmp/acc/bin" /bin/sh "$acc" 10 >/dev/null 2>"$tmp/accerr"); rc=$?
+[ $rc -ne 0 ] && grep -q "gnuplot is needed" "$tmp/accerr" && [ "$(cat "$tmp/acc/doc/beam_rms.txt")" = tracked ] && ok ||
+  bad "accuracy.sh without gnuplot: rc=$rc, $(cat "$tmp/accerr"), beam_rms.txt: $(cat "$tmp/acc/doc/beam_rms.txt")"
+printf '#!/bin/sh\ncat >/dev/null\n' >"$tmp/acc/bin/gnuplot"; chmod +x "$tmp/acc/bin/gnuplot"
+(cd "$tmp/acc" && PATH="$tmp/acc/bin" /bin/sh "$acc" 10 >/dev/null 2>"$tmp/accerr"); rc=$?
+[ $rc -ne 0 ] && [ "$(cat "$tmp/acc/doc/beam_rms.txt")" = tracked ] && [ "$(cat "$tmp/acc/doc/figures/beam_rms.png")" = tracked ] && ok ||
+  bad "accuracy.sh with a failed plot: rc=$rc, beam_rms.txt: $(cat "$tmp/acc/doc/beam_rms.txt")"
+printf '#!/bin/sh\nf=$(sed -n "s/^set output \\"\\(.*\\)\\"/\\1/p"); echo png >"$f"\n' >"$tmp/acc/bin/gnuplot"
+ln -s "$(command -v sed)" "$tmp/acc/bin/sed"
+(cd "$tmp/acc" && PATH="$tmp/acc/bin" /bin/sh "$acc" 10 >/dev/null 2>"$tmp/accerr"); rc=$?
+[ $rc -eq 0 ] && [ "$(cat "$tmp/acc/doc/beam_rms.txt")" = "new results" ] && [ "$(cat "$tmp/acc/doc/figures/beam_rms.png")" = png ] && ok ||
+  bad "accuracy.sh success replaces both: rc=$rc, $(cat "$tmp/accerr"), $(cat "$tmp/acc/doc/beam_rms.txt")"
+rm -rf "$tmp/acc" "$tmp/accerr"
+
 # bad input
 expect_usage "albedo > 1" "--albedo" "$NBT_FIT" mc --albedo 1.2 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.csv"
 expect_usage "negative sigma_t" "--sigma-t" "$NBT_FIT" mc --albedo 0.5 --sigma-t -1 --B 0.1 --photons 1000 -o "$tmp/x.csv"
