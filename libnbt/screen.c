@@ -288,53 +288,66 @@ long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail)
 
 /* ---- per-pixel kernels ---- */
 
+/* Pixel i's kernel as atoms, and the world length px of one pixel at its depth
+ * (per-pixel kernels are in pixels already: px = 1). */
+static nbt_status input_atoms(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, nbt_screen_kern *kn,
+                              double *px)
+{
+    if (!in->pix) {
+        *px = in->D[i] * in->dtheta;
+        return nbt_screen_kernel_eval(k, in->D[i], kn);
+    }
+    kn->T = in->pix[i].T;
+    kn->n = 0;
+    add_atom(kn, NBT_ATOM_ERFC, in->pix[i].M0, in->pix[i].beta_px);
+    *px = 1.0;
+    return NBT_OK;
+}
+
+/* the truncation, mass, widest scale and Gaussian nodes of an evaluated kernel */
+static void pkern_from_atoms(const nbt_screen_kern *kn, double px, double tail, long clip, nbt__pkern *pk)
+{
+    pk->T = kn->T;
+    pk->n = 0;
+    pk->R = 0;
+    pk->mass = 0;
+    pk->radius = 0;
+    if (kn->n == 0)
+        return;
+    for (size_t a = 0; a < kn->n; a++) {
+        long r = nbt_screen_atom_radius(kn->shape[a], kn->scale[a] / px, tail);
+        if (r > pk->R)
+            pk->R = r;
+        pk->mass += kn->mass[a];
+        if (kn->scale[a] / px > pk->radius)
+            pk->radius = kn->scale[a] / px;
+    }
+    if (pk->R > clip)
+        pk->R = clip;
+    pk->n = nbt__kern_nodes(kn, px, pk->sig, pk->wt, SCREEN_MAX_NODES);
+}
+
 nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, long clip,
                              nbt__pkern *pk)
 {
     nbt_screen_kern kn;
     nbt_status st = nbt_screen_kernel_eval(k, D, &kn);
-    pk->T = kn.T;
-    pk->n = 0;
-    pk->R = 0;
-    pk->mass = 0;
-    pk->radius = 0;
-    if (st != NBT_OK || kn.n == 0)
-        return st;
-    double px = D * dtheta;
-    for (size_t a = 0; a < kn.n; a++) {
-        long r = nbt_screen_atom_radius(kn.shape[a], kn.scale[a] / px, tail);
-        if (r > pk->R)
-            pk->R = r;
-        pk->mass += kn.mass[a];
-        if (kn.scale[a] / px > pk->radius)
-            pk->radius = kn.scale[a] / px;
-    }
-    if (pk->R > clip)
-        pk->R = clip;
-    pk->n = nbt__kern_nodes(&kn, px, pk->sig, pk->wt, SCREEN_MAX_NODES);
-    return NBT_OK;
+    if (st != NBT_OK)
+        kn.n = 0;
+    pkern_from_atoms(&kn, D * dtheta, tail, clip, pk);
+    return st;
 }
 
 nbt_status nbt__input_kernel(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, double tail,
                              nbt__pkern *pk)
 {
-    if (!in->pix)
-        return nbt__pixel_kernel(k, in->D[i], in->dtheta, tail, nbt__clip(in), pk);
-    const nbt_screen_pixkern *p = &in->pix[i];
-    nbt_screen_kern kn = {.T = p->T, .n = 0};
-    add_atom(&kn, NBT_ATOM_ERFC, p->M0, p->beta_px);
-    pk->T = p->T;
-    pk->n = 0;
-    pk->R = 0;
-    pk->mass = kn.n ? p->M0 : 0;
-    pk->radius = kn.n ? p->beta_px : 0;
-    if (kn.n == 0)
-        return NBT_OK;
-    pk->R = nbt_screen_atom_radius(NBT_ATOM_ERFC, p->beta_px, tail);
-    if (pk->R > nbt__clip(in))
-        pk->R = nbt__clip(in);
-    pk->n = nbt__kern_nodes(&kn, 1.0, pk->sig, pk->wt, SCREEN_MAX_NODES);
-    return NBT_OK;
+    nbt_screen_kern kn;
+    double px;
+    nbt_status st = input_atoms(k, in, i, &kn, &px);
+    if (st != NBT_OK)
+        kn.n = 0;
+    pkern_from_atoms(&kn, px, tail, nbt__clip(in), pk);
+    return st;
 }
 
 /* Quadrant weights wq[j*(R+1) + i] for offsets (i, j) >= 0. */
@@ -546,10 +559,13 @@ nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kerne
         NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
     }
     nbt_status st = NBT_OK;
-    for (size_t i = 0; i < np && st == NBT_OK; i++) {
-        nbt__pkern pk;
-        st = nbt__input_kernel(k, in, i, 1e-3, &pk);
-        rad[i] = pk.radius;
+    for (size_t i = 0; i < np && st == NBT_OK; i++) { /* the widest atom's scale in pixels; no nodes needed */
+        nbt_screen_kern kn;
+        double px;
+        st = input_atoms(k, in, i, &kn, &px);
+        rad[i] = 0;
+        for (size_t a = 0; st == NBT_OK && a < kn.n; a++)
+            rad[i] = fmax(rad[i], kn.scale[a] / px);
     }
     /* mark the band: a disc of 2 radii around each discontinuity edge */
     for (size_t y = 0; y < h && st == NBT_OK; y++)
