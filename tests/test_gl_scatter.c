@@ -186,18 +186,10 @@ static nbt_gls_input gls_input(const scene *s, int elek_sigma, double dtheta)
     return in;
 }
 
-static double maxabs(const double *a, size_t n)
-{
-    double m = 0;
-    for (size_t i = 0; i < n; i++)
-        m = fmax(m, fabs(a[i]));
-    return m;
-}
-
 /* max |S_gl - S_emul| / max |S_emul| */
 static double gl_vs_emul(const float *Sg, const double *Se, size_t n)
 {
-    double d = 0, m = maxabs(Se, n);
+    double d = 0, m = t_maxabs(Se, n);
     for (size_t i = 0; i < n; i++)
         d = fmax(d, isfinite(Sg[i]) ? fabs(Sg[i] - Se[i]) : INFINITY);
     return m > 0 ? d / m : d;

@@ -204,14 +204,6 @@ static nbt_screen_input as_input(const scene *s, double dtheta)
     return in;
 }
 
-static double maxabs(const double *a, size_t n)
-{
-    double m = 0;
-    for (size_t i = 0; i < n; i++)
-        m = fmax(m, fabs(a[i]));
-    return m;
-}
-
 static void test_operators(void)
 {
     nbt_beam_medium m = nbt_beam_homogeneous(0.2385, 0.93, 0.0085); /* dtheta = 10.6 deg */
@@ -296,9 +288,9 @@ static void test_operators(void)
         double d = 0;
         for (size_t i = 0; i < N * 3; i++)
             d = fmax(d, fabs(S[i] - S2[i]));
-        t_true(st == NBT_OK && d <= 1e-10 * maxabs(S, N * 3),
+        t_true(st == NBT_OK && d <= 1e-10 * t_maxabs(S, N * 3),
                "%s, dtheta %g: brute force = layered FFT (max diff %.2g of max S)", rule % 2 ? "B" : "A", in.dtheta,
-               d / maxabs(S, N * 3));
+               d / t_maxabs(S, N * 3));
     }
     in.dtheta = dth;
     t_true(nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, tail, 3, 2, S2, T) == NBT_EDOM,
@@ -318,7 +310,7 @@ static void test_operators(void)
     double d = 0;
     for (size_t i = 0; i < N * 3; i++)
         d = fmax(d, fabs(S3[i] - 2 * S[i] - 3 * S2[i]));
-    t_true(d <= 1e-12 * maxabs(S3, N * 3), "operator A is linear in the image (%.2g)", d / maxabs(S3, N * 3));
+    t_true(d <= 1e-12 * t_maxabs(S3, N * 3), "operator A is linear in the image (%.2g)", d / t_maxabs(S3, N * 3));
 
     /* continuous depth (a slanted floor): quantised layers converge to brute force as 1/L */
     {
@@ -362,7 +354,7 @@ static void test_operators(void)
     t_rel(mt.edge, 0.01, 1e-9, "metrics: edge band of a 1%% scale");
     t_true(mt.edge_pixels > 0 && mt.edge_pixels < N, "metrics: a band around the depth edges (%zu px)", mt.edge_pixels);
     memcpy(S2, S, N * 3 * sizeof *S);
-    S2[3 * (20 * W + 31)] += 0.5 * maxabs(S, N * 3); /* next to the 9.1 | 5.2 edge */
+    S2[3 * (20 * W + 31)] += 0.5 * t_maxabs(S, N * 3); /* next to the 9.1 | 5.2 edge */
     nbt_screen_compare(&in, k, S2, S, &mt);
     t_rel(mt.max, 0.5, 1e-12, "metrics: max error");
     t_true(mt.edge > mt.rel_rms, "metrics: an error at an edge weighs more in the band");
@@ -380,7 +372,7 @@ static void test_operators(void)
     for (size_t i = 0; i < N; i++)
         s.D[i] = 0.0f;
     nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 2, S, T);
-    t_true(maxabs(S, N * 3) == 0 && T[7] == 1, "D = 0 everywhere: S = 0, T = 1");
+    t_true(t_maxabs(S, N * 3) == 0 && T[7] == 1, "D = 0 everywhere: S = 0, T = 1");
     t_rel(nbt_screen_ray_distance(2.0, 100, 80, 0.01, 0, 0), 2.0 * sqrt(1 + 0.495 * 0.495 + 0.395 * 0.395), 1e-14,
           "planar depth to ray distance at a corner pixel");
     free(orig);

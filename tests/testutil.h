@@ -66,6 +66,15 @@ static int t_done(void)
     return t_fail ? 1 : 0;
 }
 
+/* max |a[i]|, the scale of an image's error */
+__attribute__((unused)) static double t_maxabs(const double *a, size_t n)
+{
+    double m = 0;
+    for (size_t i = 0; i < n; i++)
+        m = fmax(m, fabs(a[i]));
+    return m;
+}
+
 /* Deterministic uniform numbers in [0, 1) (splitmix64): the same inputs on every run. */
 static uint64_t t_rng_state = 0x2385u;
 __attribute__((unused)) static double t_uniform(void)
