@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 mode=${1:-run}
 case $mode in run|check) ;; *) echo "usage: ./quickstart.sh [check]" >&2; exit 2 ;; esac
 
-PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libfftw3-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libopenvdb-dev libboost-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools"
+PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libfftw3-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libopenvdb-dev libboost-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools libopenmpi-dev openmpi-bin"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -25,7 +25,7 @@ fi
 jobs=$(nproc 2>/dev/null || echo 2)
 [ -x configure ] || autoreconf -fi
 flags=""
-[ "$mode" = check ] && flags="--enable-werror --with-ceres --with-gl --with-openvdb"
+[ "$mode" = check ] && flags="--enable-werror --with-ceres --with-gl --with-openvdb --with-mpi"
 ./configure -q $flags ${NBT_CONFIGURE_FLAGS:-}
 make -j"$jobs"
 

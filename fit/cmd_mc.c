@@ -11,12 +11,35 @@
 #include <nbt/nbt.h>
 #include "../gen/cli.h"
 #include "commands.h"
+#ifdef HAVE_MPI
+#include "mc_mpi.h"
+#endif
+
+/* Launched by mpirun (or srun)? Rank and size from the launcher's
+ * environment, read before MPI starts, so that usage errors need no MPI. */
+static int launcher_env(int *rank, int *size)
+{
+    static const char *sizes[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"};
+    static const char *ranks[] = {"OMPI_COMM_WORLD_RANK", "PMI_RANK"};
+    *rank = 0;
+    *size = 1;
+    for (int i = 0; i < 2; i++) {
+        const char *s = getenv(sizes[i]), *r = getenv(ranks[i]);
+        if (s && r && atoi(s) >= 1 && atoi(r) >= 0) {
+            *size = atoi(s);
+            *rank = atoi(r);
+            return 1;
+        }
+    }
+    return 0;
+}
 
 static void help(void)
 {
     puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv|OUT.exr\n"
          "                  [--seed S] [--threads T] [--z-planes FROM:TO:COUNT] [--r-bins N]\n"
          "                  [--r-max-scale F] [--density FILE] [--z-cut Z] [--infinite] [--order-max N]\n"
+         "                  [--estimator analog|weighted]\n"
          "       nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N --slab TAU [-o OUT.csv]\n\n"
          "A pencil beam enters at the origin along +z; every forward crossing of a plane z by a\n"
          "scattered photon is counted, per unit area per launched photon, in radial bins over\n"
@@ -32,7 +55,14 @@ static void help(void)
          "keep scattering (at the density of z = 0+) and may come back; they are dropped below\n"
          "-z_cut. The default is a beam entering a half-space from vacuum. Not with --slab.\n"
          "--order-max N: count only photons scattered at most N times (1: single scattering).\n"
-         "Results are identical for any --threads; standard errors from 64 batches.");
+         "--estimator weighted: survival biasing with Russian roulette (MCML's rule): photons are\n"
+         "never absorbed but lose weight; the same expectations, other variances and costs (see\n"
+         "doc/fit.md). The default, analog, counts photons.\n"
+         "Results are identical for any --threads; standard errors from 64 batches.\n\n"
+         "mpirun -np N nbt-fit mc ... splits the 64 photon batches over N processes (on one or\n"
+         "many machines; --threads counts per process) and writes, from rank 0, output identical\n"
+         "byte for byte to a one-process run with the same seed (ranks beyond 64 get no photons).\n"
+         "This needs a build configured --with-mpi.");
 }
 
 static void bar(double f, void *data)
@@ -89,9 +119,9 @@ static int write_exr(const char *out, const nbt_mc_config *c, const nbt_mc_resul
     char ord[32] = "";
     if (c->order_max)
         snprintf(ord, sizeof ord, " order_max=%u", c->order_max);
-    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s%s%s", c->albedo, c->sigma_t,
-             ph, (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "",
-             c->infinite ? " infinite" : "", ord);
+    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s%s%s%s", c->albedo,
+             c->sigma_t, ph, (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "",
+             c->infinite ? " infinite" : "", ord, c->estimator == NBT_MC_WEIGHTED ? " weighted" : "");
     size_t n = strlen(run) < sizeof t->phase ? strlen(run) : sizeof t->phase - 1; /* a long table path is cut */
     memcpy(t->phase, run, n);
     t->phase[n] = '\0';
@@ -123,7 +153,16 @@ int cmd_mc(int argc, char **argv)
         {"slab", required_argument, 0, 'L'},    {"density", required_argument, 0, 'd'},
         {"z-cut", required_argument, 0, 'c'},   {"output", required_argument, 0, 'o'},
         {"infinite", no_argument, 0, 'I'},      {"order-max", required_argument, 0, 'O'},
+        {"estimator", required_argument, 0, 'E'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
+    int rank, size, launched = launcher_env(&rank, &size);
+    if (rank != 0 && !freopen("/dev/null", "w", stderr)) /* one message per run: rank 0 speaks */
+        return 1;
+#ifndef HAVE_MPI
+    if (launched && size > 1)
+        die_usage("mc: started as %d MPI ranks, but this nbt-fit was built without MPI (install libopenmpi-dev "
+                  "openmpi-bin and configure --with-mpi); every rank would run the whole job", size);
+#endif
     nbt_mc_config c;
     memset(&c, 0, sizeof c);
     c.r_bins = 50;
@@ -151,6 +190,14 @@ int cmd_mc(int argc, char **argv)
         case 'c': c.z_cut = opt_double("--z-cut", optarg, 0, 1, 1e15, 0); break;
         case 'I': c.infinite = 1; break;
         case 'O': c.order_max = (unsigned)opt_long("--order-max", optarg, 1, 1000000); break;
+        case 'E':
+            if (!strcmp(optarg, "analog"))
+                c.estimator = NBT_MC_ANALOG;
+            else if (!strcmp(optarg, "weighted"))
+                c.estimator = NBT_MC_WEIGHTED;
+            else
+                die_usage("--estimator: '%s' is not accepted: analog or weighted", optarg);
+            break;
         case 'o': out = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit mc --help'");
@@ -202,7 +249,7 @@ int cmd_mc(int argc, char **argv)
         c.nplanes = (size_t)count;
         c.z_planes = zp;
     }
-    if (out)
+    if (out && rank == 0)
         check_writable("-o", out);
     if (density) {
         if (nbt_density_read(density, &zl, &rl, &c.nlayers, err, sizeof err) != NBT_OK)
@@ -212,13 +259,34 @@ int cmd_mc(int argc, char **argv)
     }
     if (tau > 0)
         c.slab = tau / c.sigma_t;
-    if (isatty(fileno(stderr))) {
+    if (rank == 0 && isatty(fileno(stderr))) {
         c.progress = bar;
     }
-    nbt_mc_result *r;
-    nbt_status st = nbt_mc_run(&c, &r);
-    if (st != NBT_OK)
-        die("photon counting failed: %s", nbt_strerror(st));
+    nbt_mc_result *r = NULL;
+    nbt_status st;
+#ifdef HAVE_MPI
+    if (launched) {
+        char merr[256];
+        if (mc_mpi_start(&rank, &size))
+            die("mc: MPI_Init failed");
+        st = mc_mpi_run(&c, rank, size, &r, merr, sizeof merr);
+        mc_mpi_stop();
+        if (st != NBT_OK)
+            die("photon counting failed: %s", merr);
+        if (rank != 0) { /* rank 0 writes */
+            nbt_phase_free(ph);
+            free(zp);
+            free(zl);
+            free(rl);
+            return 0;
+        }
+    } else
+#endif
+    {
+        st = nbt_mc_run(&c, &r);
+        if (st != NBT_OK)
+            die("photon counting failed: %s", nbt_strerror(st));
+    }
     int rc = 0;
     if (out && exr)
         rc = write_exr(out, &c, r, phase ? phase : NULL, B, tau);
@@ -230,8 +298,8 @@ int cmd_mc(int argc, char **argv)
         printf("R %.17g %.17g\n", r->R, r->R_se);
         printf("T %.17g %.17g\n", r->T, r->T_se);
     }
-    fprintf(stderr, "%s: %llu photons in %.3f s (%.3g photons/s)\n", cli_prog, (unsigned long long)c.photons,
-            r->seconds, (double)c.photons / r->seconds);
+    fprintf(stderr, "%s: %llu photons in %.3f s (%.3g photons/s%s)\n", cli_prog, (unsigned long long)c.photons,
+            r->seconds, (double)c.photons / r->seconds, size > 1 ? ", all ranks" : "");
     nbt_mc_result_free(r);
     nbt_phase_free(ph);
     free(zp);

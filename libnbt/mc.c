@@ -8,7 +8,10 @@
 #include <nbt/mc.h>
 #include "internal.h"
 
-#define NBATCH 64
+#define NBATCH NBT_MC_BATCHES
+/* weighted estimator: roulette below this weight (default), survival probability (MCML's values) */
+#define MC_WROUL 1e-4
+#define MC_WROUL_P 0.1
 
 /* xoshiro256+ seeded from (seed, photon index) by splitmix64: each photon's
  * stream depends on nothing else, whichever thread runs it. */
@@ -67,6 +70,7 @@ typedef struct {
     double sparam, sinv;
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
     double *acc;        /* NBATCH * stride */
+    size_t b0, nbatch;  /* this part runs batches [b0, b0 + nbatch) */
     atomic_uint done;
     atomic_int over;    /* rho_fn exceeded rho_max somewhere */
 } mc_ctx;
@@ -74,7 +78,7 @@ typedef struct {
 /* Tally forward crossings of planes in (z0, z1] along a move; *jp is the
  * first plane above z0 and comes back as the first plane above z1. */
 static inline void tally(const mc_ctx *c, double *a, size_t *jp, double x, double y, double z0, double z1, double ux,
-                         double uy, double uz)
+                         double uy, double uz, double w)
 {
     const nbt_mc_config *cf = c->cfg;
     size_t np = cf->nplanes, nb = cf->r_bins, j = *jp;
@@ -84,9 +88,9 @@ static inline void tally(const mc_ctx *c, double *a, size_t *jp, double x, doubl
         double *pl = a + j * (nb + 2);
         double bin = sqrt(r2) * c->binscale[j];
         if (bin < (double)nb)
-            pl[(size_t)bin] += 1.0;
-        pl[nb] += 1.0;
-        pl[nb + 1] += r2;
+            pl[(size_t)bin] += w;
+        pl[nb] += w;
+        pl[nb + 1] += w * r2; /* analog: w = 1, the same bits as r2 */
     }
     *jp = j;
 }
@@ -122,22 +126,26 @@ static inline double sample_mu(const mc_ctx *c, rng_t *rs)
     return nbt__phase_sample_mu(c->cfg->phase, rng_cb, rs);
 }
 
-static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
+static nbt_status run_batch(size_t i, unsigned thread, void *vp)
 {
     mc_ctx *c = vp;
+    size_t batch = c->b0 + i;
     const nbt_mc_config *cf = c->cfg;
     double *a = c->acc + batch * c->stride;
     uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH, events = 0;
-    uint64_t nrefl = 0, ntrans = 0; /* counted here, not in the shared array (no false sharing) */
+    double srefl = 0, strans = 0; /* summed here, not in the shared array (no false sharing) */
     size_t tail = c->stride - 3; /* R, T, events */
     const int planes = cf->nplanes > 0;
-    const double albedo = cf->albedo, bottom = c->b[0], top = c->top;
+    const double albedo = cf->albedo, bottom = c->b[0], top = c->top, slabw = c->slab ? 1.0 : 0.0;
+    const int weighted = cf->estimator == NBT_MC_WEIGHTED;
+    const double wroul = cf->roulette_weight > 0 ? cf->roulette_weight : MC_WROUL;
     for (uint64_t ph = p0; ph < p1; ph++) {
         rng_t rs;
         rng_seed(&rs, cf->seed, ph);
         double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
         size_t li = 0, jp = 0; /* layer; first tally plane above z */
         unsigned scattered = 0; /* scatterings so far */
+        double w = 1.0;         /* the photon's weight (analog: always 1) */
         for (;;) {
             int alive = 1;
             if (cf->rho_fn) {
@@ -148,12 +156,12 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     double z1 = z + d * uz;
                     if (z1 < bottom || z1 > top) { /* leaves through z = 0 (infinite: below -z_cut), or dropped below z_cut */
                         if (planes && scattered && uz > 0)
-                            tally(c, a, &jp, x, y, z, fmin(z1, top), ux, uy, uz);
+                            tally(c, a, &jp, x, y, z, fmin(z1, top), ux, uy, uz, w);
                         alive = 0;
                         break;
                     }
                     if (planes && scattered && uz > 0)
-                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz, w);
                     else if (planes)
                         plane_index(cf, &jp, z1);
                     x += d * ux;
@@ -171,7 +179,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                 double dn = tau * c->kinv[li], z1 = z + dn * uz;
                 if (z1 > c->b[li] && z1 < c->b[li + 1]) { /* both tests, not a branch on the sign of uz */
                     if (planes && scattered && uz > 0)
-                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz, w);
                     else if (planes)
                         plane_index(cf, &jp, z1);
                     x += dn * ux;
@@ -197,7 +205,7 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     }
                     z1 = dn < db ? z + d * uz : zb;
                     if (planes && scattered && uz > 0)
-                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz);
+                        tally(c, a, &jp, x, y, z, z1, ux, uy, uz, w);
                     else if (planes)
                         plane_index(cf, &jp, z1);
                     x += d * ux;
@@ -210,12 +218,12 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
                     tau -= cf->sigma_t * rho * db;
                     if (up) {
                         if (++li == c->nlay) { /* through the top */
-                            ntrans += c->slab;
+                            strans += slabw * w;
                             alive = 0;
                         }
                     } else {
                         if (li-- == 0) { /* out through z = 0 (infinite: dropped below -z_cut) */
-                            nrefl += c->slab;
+                            srefl += slabw * w;
                             alive = 0;
                         }
                     }
@@ -224,8 +232,17 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
             if (!alive)
                 break;
             events++;
-            if (rng_u(&rs) >= albedo)
-                break; /* absorbed */
+            if (!weighted) {
+                if (rng_u(&rs) >= albedo)
+                    break; /* absorbed */
+            } else {
+                w *= albedo; /* implicit capture: the absorbed fraction leaves the weight */
+                if (w < wroul) { /* Russian roulette keeps E[w] */
+                    if (!(w > 0) || rng_u(&rs) >= MC_WROUL_P)
+                        break;
+                    w *= 1.0 / MC_WROUL_P;
+                }
+            }
             if (cf->order_max && scattered == cf->order_max)
                 break; /* would scatter an (order_max+1)-th time */
             scattered++;
@@ -249,12 +266,12 @@ static nbt_status run_batch(size_t batch, unsigned thread, void *vp)
             }
         }
     }
-    a[tail] = (double)nrefl;
-    a[tail + 1] = (double)ntrans;
+    a[tail] = srefl;
+    a[tail + 1] = strans;
     a[tail + 2] = (double)events;
     unsigned d = atomic_fetch_add(&c->done, 1) + 1;
     if (thread == 0 && cf->progress)
-        cf->progress((double)d / NBATCH, cf->progress_data);
+        cf->progress((double)d / (double)c->nbatch, cf->progress_data);
     return NBT_OK;
 }
 
@@ -280,6 +297,10 @@ static nbt_status check(const nbt_mc_config *c)
         NBT_FAIL(NBT_EINVAL, "mc: nothing to tally (no planes, no slab)");
     if (c->rho_fn && !(c->rho_max > 0 && isfinite(c->rho_max)))
         NBT_FAIL(NBT_EDOM, "mc: a density callback needs a finite bound rho_max > 0");
+    if (c->estimator != NBT_MC_ANALOG && c->estimator != NBT_MC_WEIGHTED)
+        NBT_FAIL(NBT_EINVAL, "mc: estimator must be NBT_MC_ANALOG or NBT_MC_WEIGHTED");
+    if (!(c->roulette_weight >= 0 && c->roulette_weight < 1))
+        NBT_FAIL(NBT_EDOM, "mc: roulette_weight must lie in [0, 1)");
     if (c->infinite && c->slab > 0)
         NBT_FAIL(NBT_EINVAL, "mc: a slab cannot be infinite (infinite and slab exclude each other)");
     if (c->rho_fn && c->slab > 0)
@@ -311,31 +332,47 @@ void nbt_mc_result_free(nbt_mc_result *r)
 
 /* mean of per-photon values from batch sums, and its standard error from the
  * spread of the batch means (sizes differ by at most one photon) */
-static void batch_stats(const mc_ctx *c, size_t off, double scale, double *mean, double *se)
+static void batch_stats(const nbt_mc_config *cf, const double *acc, size_t stride, size_t off, double scale,
+                        double *mean, double *se)
 {
-    const nbt_mc_config *cf = c->cfg;
     double N = (double)cf->photons, tot = 0;
     for (size_t b = 0; b < NBATCH; b++)
-        tot += c->acc[b * c->stride + off];
+        tot += acc[b * stride + off];
     double m = tot / N, v = 0;
     for (size_t b = 0; b < NBATCH; b++) {
         double nb = (double)(cf->photons * (b + 1) / NBATCH - cf->photons * b / NBATCH);
-        double d = c->acc[b * c->stride + off] / nb - m;
+        double d = acc[b * stride + off] / nb - m;
         v += nb * d * d;
     }
     *mean = m * scale;
     *se = sqrt(v / ((NBATCH - 1) * N)) * scale;
 }
 
-nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
+size_t nbt_mc_tally_len(const nbt_mc_config *cfg)
 {
-    *out = NULL;
+    return NBT_MC_BATCHES * (cfg->nplanes * (cfg->r_bins + 2) + 3);
+}
+
+void nbt_mc_part_range(size_t part, size_t nparts, size_t *b0, size_t *b1)
+{
+    if (nparts == 0 || part >= nparts) {
+        *b0 = *b1 = NBT_MC_BATCHES;
+        return;
+    }
+    *b0 = NBT_MC_BATCHES * part / nparts;
+    *b1 = NBT_MC_BATCHES * (part + 1) / nparts;
+}
+
+nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double *tally)
+{
     nbt_status st = check(cf);
     if (st != NBT_OK)
         return st;
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    mc_ctx c = {.cfg = cf};
+    if (!tally || b0 > b1 || b1 > NBATCH)
+        NBT_FAIL(NBT_EINVAL, "mc: a part needs a tally array and batches b0 <= b1 <= 64");
+    if (b0 == b1)
+        return NBT_OK; /* a part with no photons adds nothing */
+    mc_ctx c = {.cfg = cf, .acc = tally, .b0 = b0, .nbatch = b1 - b0};
     atomic_init(&c.done, 0);
     atomic_init(&c.over, 0);
     size_t nl = cf->slab > 0 || cf->rho_fn ? 1 : (cf->nlayers ? cf->nlayers : 1);
@@ -349,25 +386,11 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
         c.skind = NBT_PHASE_ISO;
     c.sinv = c.skind == NBT_PHASE_HG ? 0.5 / c.sparam : 0.0;
     c.stride = cf->nplanes * (cf->r_bins + 2) + 3;
-    c.acc = calloc(NBATCH * c.stride, sizeof(double));
-    nbt_mc_result *r = calloc(1, sizeof *r);
-    size_t nv = cf->nplanes * cf->r_bins;
-    if (r) {
-        r->psi = malloc((nv ? nv : 1) * sizeof(double));
-        r->psi_se = malloc((nv ? nv : 1) * sizeof(double));
-        r->M0 = malloc((cf->nplanes + 1) * sizeof(double));
-        r->M0_se = malloc((cf->nplanes + 1) * sizeof(double));
-        r->M2 = malloc((cf->nplanes + 1) * sizeof(double));
-        r->M2_se = malloc((cf->nplanes + 1) * sizeof(double));
-    }
-    if (!c.b || !c.rho || !c.kinv || !c.binscale || !c.acc || !r || !r->psi || !r->psi_se || !r->M0 || !r->M0_se ||
-        !r->M2 || !r->M2_se) {
+    if (!c.b || !c.rho || !c.kinv || !c.binscale) {
         free(c.b);
         free(c.rho);
         free(c.kinv);
         free(c.binscale);
-        free(c.acc);
-        nbt_mc_result_free(r);
         NBT_FAIL(NBT_ENOMEM, "mc: out of memory");
     }
     if (c.slab) {
@@ -393,41 +416,83 @@ nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
         c.kinv[i] = c.rho[i] > 0 ? 1.0 / (cf->sigma_t * c.rho[i]) : INFINITY;
     for (size_t j = 0; j < cf->nplanes; j++)
         c.binscale[j] = (double)cf->r_bins / (cf->r_max_scale * cf->z_planes[j]);
-    st = nbt__parallel_for(NBATCH, cf->threads, run_batch, &c);
+    /* a batch's slice starts from zero and is filled by one thread in photon
+     * order: the same bits whoever runs it */
+    memset(tally + b0 * c.stride, 0, (b1 - b0) * c.stride * sizeof(double));
+    st = nbt__parallel_for(c.nbatch, cf->threads, run_batch, &c);
     if (st == NBT_OK && atomic_load(&c.over))
         st = nbt__fail(NBT_EDOM, "mc: the density callback exceeded rho_max");
-    if (st == NBT_OK) {
-        r->nplanes = cf->nplanes;
-        r->r_bins = cf->r_bins;
-        size_t nb = cf->r_bins;
-        for (size_t j = 0; j < cf->nplanes; j++) {
-            double zj = cf->z_planes[j], dr = cf->r_max_scale * zj / (double)nb;
-            for (size_t k = 0; k < nb; k++) {
-                double area = NBT_PI * dr * dr * (double)(2 * k + 1); /* annulus [k dr, (k+1) dr) */
-                batch_stats(&c, j * (nb + 2) + k, 1.0 / area, &r->psi[j * nb + k], &r->psi_se[j * nb + k]);
-            }
-            batch_stats(&c, j * (nb + 2) + nb, 1.0, &r->M0[j], &r->M0_se[j]);
-            batch_stats(&c, j * (nb + 2) + nb + 1, 1.0, &r->M2[j], &r->M2_se[j]);
-        }
-        size_t tail = c.stride - 3;
-        batch_stats(&c, tail, 1.0, &r->R, &r->R_se);
-        batch_stats(&c, tail + 1, 1.0, &r->T, &r->T_se);
-        double ev = 0;
-        for (size_t b = 0; b < NBATCH; b++)
-            ev += c.acc[b * c.stride + tail + 2];
-        r->interactions = (uint64_t)ev;
-    }
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    r->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     free(c.b);
     free(c.rho);
     free(c.kinv);
     free(c.binscale);
-    free(c.acc);
-    if (st != NBT_OK) {
-        nbt_mc_result_free(r);
+    return st;
+}
+
+nbt_status nbt_mc_finish(const nbt_mc_config *cf, const double *tally, nbt_mc_result **out)
+{
+    *out = NULL;
+    nbt_status st = check(cf);
+    if (st != NBT_OK)
         return st;
+    if (!tally)
+        NBT_FAIL(NBT_EINVAL, "mc: no tally array");
+    size_t stride = cf->nplanes * (cf->r_bins + 2) + 3;
+    nbt_mc_result *r = calloc(1, sizeof *r);
+    size_t nv = cf->nplanes * cf->r_bins;
+    if (r) {
+        r->psi = malloc((nv ? nv : 1) * sizeof(double));
+        r->psi_se = malloc((nv ? nv : 1) * sizeof(double));
+        r->M0 = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M0_se = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M2 = malloc((cf->nplanes + 1) * sizeof(double));
+        r->M2_se = malloc((cf->nplanes + 1) * sizeof(double));
     }
+    if (!r || !r->psi || !r->psi_se || !r->M0 || !r->M0_se || !r->M2 || !r->M2_se) {
+        nbt_mc_result_free(r);
+        NBT_FAIL(NBT_ENOMEM, "mc: out of memory");
+    }
+    r->nplanes = cf->nplanes;
+    r->r_bins = cf->r_bins;
+    size_t nb = cf->r_bins;
+    for (size_t j = 0; j < cf->nplanes; j++) {
+        double zj = cf->z_planes[j], dr = cf->r_max_scale * zj / (double)nb;
+        for (size_t k = 0; k < nb; k++) {
+            double area = NBT_PI * dr * dr * (double)(2 * k + 1); /* annulus [k dr, (k+1) dr) */
+            batch_stats(cf, tally, stride, j * (nb + 2) + k, 1.0 / area, &r->psi[j * nb + k], &r->psi_se[j * nb + k]);
+        }
+        batch_stats(cf, tally, stride, j * (nb + 2) + nb, 1.0, &r->M0[j], &r->M0_se[j]);
+        batch_stats(cf, tally, stride, j * (nb + 2) + nb + 1, 1.0, &r->M2[j], &r->M2_se[j]);
+    }
+    size_t tail = stride - 3;
+    batch_stats(cf, tally, stride, tail, 1.0, &r->R, &r->R_se);
+    batch_stats(cf, tally, stride, tail + 1, 1.0, &r->T, &r->T_se);
+    double ev = 0;
+    for (size_t b = 0; b < NBATCH; b++)
+        ev += tally[b * stride + tail + 2];
+    r->interactions = (uint64_t)ev;
     *out = r;
+    return NBT_OK;
+}
+
+nbt_status nbt_mc_run(const nbt_mc_config *cf, nbt_mc_result **out)
+{
+    *out = NULL;
+    nbt_status st = check(cf);
+    if (st != NBT_OK)
+        return st;
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    double *tally = malloc(nbt_mc_tally_len(cf) * sizeof(double));
+    if (!tally)
+        NBT_FAIL(NBT_ENOMEM, "mc: out of memory");
+    st = nbt_mc_run_part(cf, 0, NBATCH, tally);
+    if (st == NBT_OK)
+        st = nbt_mc_finish(cf, tally, out);
+    free(tally);
+    if (st != NBT_OK)
+        return st;
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    (*out)->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     return NBT_OK;
 }

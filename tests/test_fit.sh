@@ -12,6 +12,12 @@ NBT_FIT=$(abspath "${NBT_FIT:-./nbt-fit}")
 awk '$1 == "R" { r = ($2 - 0.09739) / $3 } $1 == "T" { t = ($2 - 0.66096) / $3 }
      END { exit !(r * r < 16 && t * t < 16 && NR == 2) }' "$tmp/slab" && ok || bad "slab R/T: $(cat "$tmp/slab")"
 
+# the weighted estimator: the same slab within 4 standard errors, and it says so in an EXR
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --phase hg:g=0.75 --photons 400000 --slab 2 --estimator weighted >"$tmp/wslab" 2>/dev/null
+awk '$1 == "R" { r = ($2 - 0.09739) / $3 } $1 == "T" { t = ($2 - 0.66096) / $3 }
+     END { exit !(r * r < 16 && t * t < 16 && NR == 2) }' "$tmp/wslab" && ok || bad "weighted slab R/T: $(cat "$tmp/wslab")"
+cmp -s "$tmp/slab" "$tmp/wslab" && bad "--estimator weighted changed nothing" || ok
+
 # planes: CSV format and size; the same for 1 and 2 threads
 M="--albedo 0.7 --sigma-t 1.3 --B 0.0685 --photons 20000 --z-planes 1:4:4 --r-bins 7 --seed 11"
 "$NBT_FIT" mc $M --threads 1 -o "$tmp/a.csv" >"$tmp/m1" 2>/dev/null &&
@@ -215,6 +221,7 @@ expect_usage "density: letter O" "letter.txt:2: density file: 'O.5 2' is not acc
 expect_usage "not csv or exr" "\.exr" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.png"
 expect_usage "EXR with one plane" "2 planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --z-planes 1:1:1 -o "$tmp/x.exr"
 expect_usage "infinite slab" "--infinite" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --slab 2 --infinite
+expect_usage "unknown estimator" "--estimator" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --slab 2 --estimator mcml
 expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --order-max 0 -o "$tmp/x.csv"
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob

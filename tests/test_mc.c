@@ -211,6 +211,161 @@ static void test_infinite(void)
     nbt_phase_free(iso);
 }
 
+/* A run split into parts (as nbt-fit mc splits it over MPI ranks) equals the
+ * one-process run bit for bit: parts computed into zeroed arrays and summed
+ * element-wise (what MPI_Reduce does), or run one after another into one
+ * reused array, for any number of parts, more parts than batches included. */
+static void test_parts(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.6);
+    double planes[3] = {0.5, 1.0, 2.0};
+    nbt_mc_config c;
+    for (int slab = 0; slab < 2; slab++) {
+        memset(&c, 0, sizeof c);
+        c.sigma_t = 1.3;
+        c.albedo = 0.95;
+        c.phase = hg;
+        c.photons = 20011; /* batches of 312 and 313 photons */
+        c.seed = 99;
+        c.threads = 2;
+        if (slab)
+            c.slab = 1.7;
+        else {
+            c.nplanes = 3;
+            c.z_planes = planes;
+            c.r_bins = 7;
+            c.r_max_scale = 0.8;
+        }
+        nbt_mc_result *ref, *r;
+        t_true(nbt_mc_run(&c, &ref) == NBT_OK, "reference run (slab %d)", slab);
+        size_t len = nbt_mc_tally_len(&c), stride = len / NBT_MC_BATCHES;
+        double *sum = malloc(len * sizeof(double)), *part = malloc(len * sizeof(double)),
+               *seq = malloc(len * sizeof(double));
+        const size_t nparts[] = {1, 2, 3, 7, 64, 65, 100};
+        for (size_t t = 0; t < sizeof nparts / sizeof nparts[0]; t++) {
+            size_t n = nparts[t], cover[NBT_MC_BATCHES] = {0}, b0, b1;
+            int ok = 1;
+            memset(sum, 0, len * sizeof(double));
+            for (size_t i = 0; i < len; i++)
+                seq[i] = -1.0; /* every slice must be overwritten */
+            for (size_t p = 0; p < n; p++) {
+                nbt_mc_part_range(p, n, &b0, &b1);
+                for (size_t b = b0; b < b1; b++)
+                    cover[b]++;
+                memset(part, 0, len * sizeof(double));
+                ok &= nbt_mc_run_part(&c, b0, b1, part) == NBT_OK && nbt_mc_run_part(&c, b0, b1, seq) == NBT_OK;
+                for (size_t i = 0; i < len; i++)
+                    sum[i] += part[i];
+                for (size_t i = 0; i < b0 * stride; i++) /* slices of other parts untouched */
+                    ok &= part[i] == 0;
+            }
+            for (size_t b = 0; b < NBT_MC_BATCHES; b++)
+                ok &= cover[b] == 1;
+            t_true(ok, "%zu parts: every batch run exactly once (slab %d)", n, slab);
+            for (int k = 0; k < 2; k++) {
+                r = NULL;
+                t_true(nbt_mc_finish(&c, k ? seq : sum, &r) == NBT_OK && same_tallies(ref, r) && r->R == ref->R &&
+                           r->T == ref->T && r->R_se == ref->R_se && r->T_se == ref->T_se &&
+                           r->interactions == ref->interactions,
+                       "%zu parts, %s: identical to one run (slab %d)", n, k ? "one array" : "summed", slab);
+                nbt_mc_result_free(r);
+            }
+        }
+        t_true(nbt_mc_run_part(&c, 5, 4, part) == NBT_EINVAL && nbt_mc_run_part(&c, 0, 65, part) == NBT_EINVAL,
+               "a part with b0 > b1 or beyond batch 64 is rejected");
+        free(sum);
+        free(part);
+        free(seq);
+        nbt_mc_result_free(ref);
+    }
+    nbt_phase_free(hg);
+}
+
+/* the weighted estimator (survival biasing + roulette) against van de Hulst,
+ * single-scattering theory and the analog counter; reproducible per seed */
+static void test_weighted(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.75);
+    nbt_mc_config c;
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 0.9;
+    c.phase = hg;
+    c.slab = 2;
+    c.photons = 2000000;
+    c.seed = 4711;
+    c.estimator = NBT_MC_WEIGHTED;
+    nbt_mc_result *r1, *r2;
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "weighted slab run");
+    /* 4 standard errors, plus the reference's last digit */
+    t_abs(r1->R, 0.09739, 4 * r1->R_se + 1e-5, "weighted slab R = 0.09739: %.5f (se %.1e)", r1->R, r1->R_se);
+    t_abs(r1->T, 0.66096, 4 * r1->T_se + 1e-5, "weighted slab T = 0.66096: %.5f (se %.1e)", r1->T, r1->T_se);
+    nbt_mc_result_free(r1);
+    /* roulette at weight 0.5: every photon past its first interaction plays
+     * it, so the survivors' weight 10 w must carry the others' expectation */
+    c.roulette_weight = 0.5;
+    c.photons = 1000000;
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "weighted slab run, roulette below 0.5");
+    t_abs(r1->R, 0.09739, 4 * r1->R_se + 1e-5, "roulette at 0.5: slab R = 0.09739: %.5f (se %.1e)", r1->R, r1->R_se);
+    t_abs(r1->T, 0.66096, 4 * r1->T_se + 1e-5, "roulette at 0.5: slab T = 0.66096: %.5f (se %.1e)", r1->T, r1->T_se);
+    nbt_mc_result_free(r1);
+    c.roulette_weight = 1;
+    t_true(nbt_mc_run(&c, &r1) == NBT_EDOM && r1 == NULL, "roulette weight 1 rejected");
+    c.roulette_weight = 0;
+    /* albedo 0: nothing is scattered, T is the unscattered e^-tau exactly in expectation, R = 0 */
+    c.albedo = 0;
+    c.photons = 200000;
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK && r1->R == 0, "weighted, albedo 0: R = 0");
+    t_abs(r1->T, exp(-2.0), 4 * r1->T_se + 1e-12, "weighted, albedo 0: T = e^-2 (se %.1e)", r1->T_se);
+    nbt_mc_result_free(r1);
+
+    /* planes, half-space, Gaussian phase 40 deg: weighted against analog in
+     * every bin and moment, within 4 combined standard errors (about 80
+     * deterministic comparisons: a false alarm has probability ~0.5%) */
+    nbt_phase *ga = nbt_phase_gauss(0.12);
+    double planes[3] = {0.7, 1.9, 3.1};
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1.1;
+    c.albedo = 0.8;
+    c.phase = ga;
+    c.nplanes = 3;
+    c.z_planes = planes;
+    c.r_bins = 24;
+    c.r_max_scale = 1.2;
+    c.photons = 400000;
+    c.seed = 321;
+    c.threads = 1;
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "analog plane run");
+    c.estimator = NBT_MC_WEIGHTED;
+    c.threads = 2;
+    t_true(nbt_mc_run(&c, &r2) == NBT_OK, "weighted plane run");
+    int ok = 1, nbad = 0;
+    for (size_t j = 0; j < 3; j++) {
+        double m0s = hypot(r1->M0_se[j], r2->M0_se[j]), m2s = hypot(r1->M2_se[j], r2->M2_se[j]);
+        ok &= fabs(r1->M0[j] - r2->M0[j]) <= 4 * m0s && fabs(r1->M2[j] - r2->M2[j]) <= 4 * m2s;
+        for (size_t k = 0; k < 24; k++) {
+            double a = r1->psi[j * 24 + k], b = r2->psi[j * 24 + k];
+            double se = hypot(r1->psi_se[j * 24 + k], r2->psi_se[j * 24 + k]);
+            if (!(fabs(a - b) <= 4 * se) && nbad++ < 5)
+                printf("  z=%g bin %zu: analog %.5g, weighted %.5g, se %.2g\n", planes[j], k, a, b, se);
+        }
+    }
+    t_true(ok && nbad == 0, "weighted = analog within 4 se: M0, M2 and all 72 bins (%d bins off)", nbad);
+    /* survival biasing lowers the variance per photon of every plane tally here */
+    t_true(r2->M0_se[2] < r1->M0_se[2], "weighted M0 se %.2e < analog %.2e at z = 3.1", r2->M0_se[2], r1->M0_se[2]);
+    c.threads = 1;
+    nbt_mc_result *r3;
+    t_true(nbt_mc_run(&c, &r3) == NBT_OK && same_tallies(r2, r3) && r2->interactions == r3->interactions,
+           "weighted results identical with 1 and 2 threads");
+    nbt_mc_result_free(r3);
+    nbt_mc_result_free(r1);
+    nbt_mc_result_free(r2);
+    c.estimator = (nbt_mc_estimator)7;
+    t_true(nbt_mc_run(&c, &r1) == NBT_EINVAL && r1 == NULL, "an unknown estimator rejected");
+    nbt_phase_free(ga);
+    nbt_phase_free(hg);
+}
+
 static double rho_smooth(double z, void *d)
 {
     (void)d;
@@ -221,6 +376,8 @@ int main(void)
 {
     gsl_set_error_handler_off();
     test_infinite();
+    test_parts();
+    test_weighted();
     /* van de Hulst (as quoted in the MCML manual): albedo 0.9, tau 2, HG g 0.75, n = 1 */
     nbt_phase *hg = nbt_phase_hg(0.75);
     nbt_mc_config c;

@@ -20,7 +20,7 @@
  * of its crossing radius, r in [0, F z_j) in equal bins, so Psi is per unit
  * area per launched photon; M0 and M2 count all radii. Standard errors come
  * from 64 fixed batches (by photon index), so results are identical for
- * any thread count. */
+ * any thread count (and any split over processes, see nbt_mc_run_part). */
 #ifndef NBT_MC_H
 #define NBT_MC_H
 
@@ -32,6 +32,15 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* How a photon's absorption is counted. */
+typedef enum {
+    NBT_MC_ANALOG = 0,  /* absorbed by chance (1 - albedo per interaction); every tally a count */
+    NBT_MC_WEIGHTED = 1 /* survival biasing: never absorbed, its weight w (from 1) is multiplied by
+                         * the albedo at every interaction and tallies add w; below w = 1e-4 (or
+                         * roulette_weight) Russian roulette keeps it with probability 1/10 at
+                         * weight 10 w (MCML's rule), so every tally keeps its expectation */
+} nbt_mc_estimator;
 
 typedef struct {
     double sigma_t;          /* extinction at unit density, > 0 */
@@ -63,6 +72,8 @@ typedef struct {
      * interaction that would scatter it an (n+1)-th time, so tallies hold
      * orders 1..n only (R and T: photons scattered at most n times) */
     unsigned order_max;
+    nbt_mc_estimator estimator; /* default (0): analog; either is deterministic per seed */
+    double roulette_weight;     /* weighted: roulette below this weight; 0: 1e-4 (MCML's); must be < 1 */
 } nbt_mc_config;
 
 typedef struct {
@@ -76,6 +87,26 @@ typedef struct {
 
 nbt_status nbt_mc_run(const nbt_mc_config *cfg, nbt_mc_result **out);
 void nbt_mc_result_free(nbt_mc_result *r);
+
+/* One run split over processes or machines (nbt-fit mc does this over MPI
+ * ranks; libnbt itself knows nothing of MPI). A run is NBT_MC_BATCHES fixed
+ * batches of photon indices, batch b holding photons
+ * [N b / 64, N (b + 1) / 64). Its raw tally is nbt_mc_tally_len(cfg)
+ * doubles, one slice per batch (counts, and sums of r^2 for M2), each slice
+ * filled in photon order by one thread. nbt_mc_run_part(cfg, b0, b1, tally)
+ * overwrites the slices of batches [b0, b1) and leaves the others alone
+ * (b0 == b1: nothing to do, NBT_OK). Parts run anywhere and combined slice by
+ * slice (copied, or summed element-wise where every other part holds zeros:
+ * x + 0 = x exactly) give the very array one process computes, and
+ * nbt_mc_finish turns it into a result equal bit for bit to nbt_mc_run's
+ * (seconds = 0: the caller times). nbt_mc_part_range gives part p of n
+ * parts (p < n) its batches; parts beyond the 64th are empty. The progress
+ * callback of a part reports the fraction of that part's batches. */
+#define NBT_MC_BATCHES 64
+size_t nbt_mc_tally_len(const nbt_mc_config *cfg);
+void nbt_mc_part_range(size_t part, size_t nparts, size_t *b0, size_t *b1);
+nbt_status nbt_mc_run_part(const nbt_mc_config *cfg, size_t b0, size_t b1, double *tally);
+nbt_status nbt_mc_finish(const nbt_mc_config *cfg, const double *tally, nbt_mc_result **out);
 
 #ifdef __cplusplus
 }
