@@ -9,7 +9,9 @@
  * a general counter can at best approach. A second case tallies planes
  * (half-space, Gaussian phase dtheta = 60 deg, albedo 0.9, planes
  * z = 1..10, 50 radial bins each), nbt_mc_run against a lean analog loop
- * for that case. Usage: bench_mc [photons] */
+ * for that case. Last, the figure of merit 1/(se^2 t) of nbt's weighted
+ * estimator (--estimator weighted) against its analog one on both cases.
+ * Usage: bench_mc [photons] */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -200,6 +202,23 @@ static void mcml_like(long n, double mua, double mus, double g, double d, double
     *Rse = sqrt((rs2 / n - *R * *R) / n);
 }
 
+/* the machine may be shared: the fastest of three identical runs (same
+ * seed, same tallies) is the time the estimator needs */
+static nbt_mc_result *best_of_3(const nbt_mc_config *c)
+{
+    nbt_mc_result *best = NULL, *r;
+    for (int i = 0; i < 3; i++) {
+        if (nbt_mc_run(c, &r) != NBT_OK)
+            return best;
+        if (!best || r->seconds < best->seconds) {
+            nbt_mc_result_free(best);
+            best = r;
+        } else
+            nbt_mc_result_free(r);
+    }
+    return best;
+}
+
 int main(int argc, char **argv)
 {
     long n = argc > 1 ? atol(argv[1]) : 4000000;
@@ -264,5 +283,88 @@ int main(int argc, char **argv)
         nbt_mc_result_free(r);
     }
     nbt_phase_free(ga);
+
+    /* figure of merit 1/(se^2 t) of the two estimators, one thread each, same
+     * photons: what a fixed time buys. Slab R and T for three albedos; plane
+     * tallies for the 60-degree case (M0 and two Psi bins at z = 5 and 10). */
+    printf("\n# figure of merit 1/(se^2 t), one thread, analog vs weighted (survival biasing + roulette);\n"
+           "# t: fastest of 3 runs\n");
+    printf("%-30s %-8s %10s %10s %10s %10s %12s\n", "case", "tally", "analog", "se", "weighted", "se",
+           "FOM w/a");
+    const double alb[3] = {0.5, 0.9, 0.99};
+    for (int k = 0; k < 3; k++) {
+        nbt_mc_result *res[2];
+        nbt_phase *h = nbt_phase_hg(0.75);
+        for (int e = 0; e < 2; e++) {
+            nbt_mc_config c;
+            memset(&c, 0, sizeof c);
+            c.sigma_t = 1;
+            c.albedo = alb[k];
+            c.phase = h;
+            c.slab = 2;
+            c.photons = (uint64_t)n;
+            c.seed = 1;
+            c.threads = 1;
+            c.estimator = e ? NBT_MC_WEIGHTED : NBT_MC_ANALOG;
+            res[e] = best_of_3(&c);
+        }
+        char name[64];
+        snprintf(name, sizeof name, "slab tau 2, g .75, albedo %.2f", alb[k]);
+        const char *tn[2] = {"R", "T"};
+        for (int q = 0; q < 2; q++) {
+            double va[2], sa[2];
+            for (int e = 0; e < 2; e++) {
+                va[e] = q ? res[e]->T : res[e]->R;
+                sa[e] = q ? res[e]->T_se : res[e]->R_se;
+            }
+            double f0 = 1 / (sa[0] * sa[0] * res[0]->seconds), f1 = 1 / (sa[1] * sa[1] * res[1]->seconds);
+            printf("%-30s %-8s %10.5f %10.1e %10.5f %10.1e %12.2f\n", name, tn[q], va[0], sa[0], va[1], sa[1], f1 / f0);
+        }
+        printf("%-30s %-8s %10.3g %10s %10.3g %10s %12.2f\n", name, "time s", res[0]->seconds, "", res[1]->seconds, "",
+               res[1]->seconds / res[0]->seconds);
+        nbt_mc_result_free(res[0]);
+        nbt_mc_result_free(res[1]);
+        nbt_phase_free(h);
+    }
+    {
+        nbt_mc_result *res[2];
+        ga = nbt_phase_gauss(0.274);
+        for (int e = 0; e < 2; e++) {
+            nbt_mc_config c;
+            memset(&c, 0, sizeof c);
+            c.sigma_t = 1;
+            c.albedo = 0.9;
+            c.phase = ga;
+            c.nplanes = 10;
+            c.z_planes = pl;
+            c.r_bins = 50;
+            c.r_max_scale = 1;
+            c.photons = (uint64_t)np;
+            c.seed = 1;
+            c.threads = 1;
+            c.estimator = e ? NBT_MC_WEIGHTED : NBT_MC_ANALOG;
+            res[e] = best_of_3(&c);
+        }
+        struct {
+            const char *name;
+            int plane, bin; /* bin < 0: M0 */
+        } tl[4] = {{"M0 z=5", 4, -1}, {"M0 z=10", 9, -1}, {"psi z=5 r<z/50", 4, 0}, {"psi z=10 r~z/2", 9, 25}};
+        for (int q = 0; q < 4; q++) {
+            double va[2], sa[2];
+            for (int e = 0; e < 2; e++) {
+                int j = tl[q].plane, b = tl[q].bin;
+                va[e] = b < 0 ? res[e]->M0[j] : res[e]->psi[j * 50 + b];
+                sa[e] = b < 0 ? res[e]->M0_se[j] : res[e]->psi_se[j * 50 + b];
+            }
+            double f0 = 1 / (sa[0] * sa[0] * res[0]->seconds), f1 = 1 / (sa[1] * sa[1] * res[1]->seconds);
+            printf("%-30s %-8s %10.4g %10.1e %10.4g %10.1e %12.2f\n", "planes 60 deg, albedo 0.9", tl[q].name, va[0],
+                   sa[0], va[1], sa[1], f1 / f0);
+        }
+        printf("%-30s %-8s %10.3g %10s %10.3g %10s %12.2f\n", "planes 60 deg, albedo 0.9", "time s", res[0]->seconds,
+               "", res[1]->seconds, "", res[1]->seconds / res[0]->seconds);
+        nbt_mc_result_free(res[0]);
+        nbt_mc_result_free(res[1]);
+        nbt_phase_free(ga);
+    }
     return 0;
 }

@@ -57,7 +57,7 @@ static void help(void)
          "--order-max N: count only photons scattered at most N times (1: single scattering).\n"
          "--estimator weighted: survival biasing with Russian roulette (MCML's rule): photons are\n"
          "never absorbed but lose weight; the same expectations, other variances and costs (see\n"
-         "doc/fit.md). The default, analog, counts photons.\n"
+         "doc/beam.md). The default, analog, counts photons.\n"
          "Results are identical for any --threads; standard errors from 64 batches.\n\n"
          "mpirun -np N nbt-fit mc ... splits the 64 photon batches over N processes (on one or\n"
          "many machines; --threads counts per process) and writes, from rank 0, output identical\n"

@@ -4,7 +4,8 @@
  * density rho(z) (layers as in nbt/beam.h; for a slab, rho = 1 on [0, d] and
  * vacuum elsewhere); z < 0 is vacuum. Photons scatter with the given phase
  * function and are absorbed with probability 1 - albedo per interaction
- * (analog: every tally is a count, so results are exactly reproducible).
+ * (analog: every tally is a count, so results are exactly reproducible;
+ * the weighted estimator below keeps photons and lowers their weight).
  * Without a slab, a photon is followed until absorbed, escaped through
  * z = 0, or deeper than z_cut (default twice the last tally plane plus 20
  * mean free paths at density 1), from where its return is not counted.
