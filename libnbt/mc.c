@@ -27,7 +27,7 @@ static uint64_t splitmix(uint64_t *x)
     return z ^ (z >> 31);
 }
 
-static void rng_seed(rng_t *r, uint64_t seed, uint64_t photon)
+static inline void rng_seed(rng_t *r, uint64_t seed, uint64_t photon)
 {
     uint64_t x = seed ^ (photon * 0xd1b54a32d192ed03u);
     splitmix(&x);
@@ -66,6 +66,7 @@ typedef struct {
     double *binscale;   /* per plane: r_bins/(F z_j) */
     double top;         /* slab: thickness (escape above); else z_cut (photon dropped) */
     int slab;
+    int single;         /* one layer, density > 0: leaving it ends the photon */
     nbt_phase_kind skind; /* HG or GAUSS: sampled inline (sparam = g or B); else ISO marks the general sampler */
     double sparam, sinv;
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
@@ -123,21 +124,25 @@ static inline double sample_mu(const mc_ctx *c, rng_t *rs)
                 return cos(th);
         }
     }
-    return nbt__phase_sample_mu(c->cfg->phase, rng_cb, rs);
+    /* a copy goes to the general sampler, so that the photon's own state
+     * never has its address taken and can stay in registers */
+    rng_t t = *rs;
+    double mu = nbt__phase_sample_mu(c->cfg->phase, rng_cb, &t);
+    *rs = t;
+    return mu;
 }
 
-static nbt_status run_batch(size_t i, unsigned thread, void *vp)
+/* Photons [p0, p1) into the batch slice a; R, T sums and the event count
+ * come back in out[3]. Always inlined with planes and weighted as
+ * constants (see run_batch), so that each case compiles without the
+ * branches, and without the x, y tracking, it does not need. */
+static inline __attribute__((always_inline)) void photons(const mc_ctx *c, double *a, uint64_t p0, uint64_t p1,
+                                                          const int planes, const int weighted, double out[3])
 {
-    mc_ctx *c = vp;
-    size_t batch = c->b0 + i;
     const nbt_mc_config *cf = c->cfg;
-    double *a = c->acc + batch * c->stride;
-    uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH, events = 0;
+    uint64_t events = 0;
     double srefl = 0, strans = 0; /* summed here, not in the shared array (no false sharing) */
-    size_t tail = c->stride - 3; /* R, T, events */
-    const int planes = cf->nplanes > 0;
     const double albedo = cf->albedo, bottom = c->b[0], top = c->top, slabw = c->slab ? 1.0 : 0.0;
-    const int weighted = cf->estimator == NBT_MC_WEIGHTED;
     const double wroul = cf->roulette_weight > 0 ? cf->roulette_weight : MC_WROUL;
     for (uint64_t ph = p0; ph < p1; ph++) {
         rng_t rs;
@@ -185,6 +190,16 @@ static nbt_status run_batch(size_t i, unsigned thread, void *vp)
                     x += dn * ux;
                     y += dn * uy;
                     z = z1;
+                    tau = 0;
+                } else if (c->single) { /* one layer with medium: the photon leaves it */
+                    int up = z1 >= c->b[1];
+                    if (planes && scattered && uz > 0)
+                        tally(c, a, &jp, x, y, z, c->b[1], ux, uy, uz, w);
+                    if (up)
+                        strans += slabw * w; /* through the top (else: dropped below z_cut) */
+                    else
+                        srefl += slabw * w;  /* out through z = 0 (infinite: dropped below -z_cut) */
+                    alive = 0;
                     tau = 0;
                 }
                 while (alive && tau > 0) {
@@ -248,6 +263,15 @@ static nbt_status run_batch(size_t i, unsigned thread, void *vp)
             scattered++;
             double mu = sample_mu(c, &rs);
             double s2 = 1.0 - mu * mu, st = sqrt(s2 > 0 ? s2 : 0.0), phi = 2.0 * NBT_PI * rng_u(&rs);
+            if (!planes) {
+                /* no tally planes (a slab): nothing observes x, y, ux or uy, so
+                 * only uz turns, and the azimuth enters through cos(phi) alone
+                 * (|uz| <= 1 up to rounding, by Cauchy-Schwarz; near the pole
+                 * the branch below takes over) */
+                double cq = cos(phi);
+                uz = fabs(uz) > 0.99999 ? (uz > 0 ? mu : -mu) : -st * cq * sqrt(1.0 - uz * uz) + uz * mu;
+                continue;
+            }
             double cp = cos(phi), sp = sin(phi);
             if (fabs(uz) > 0.99999) {
                 ux = st * cp;
@@ -266,9 +290,27 @@ static nbt_status run_batch(size_t i, unsigned thread, void *vp)
             }
         }
     }
-    a[tail] = srefl;
-    a[tail + 1] = strans;
-    a[tail + 2] = (double)events;
+    out[0] = srefl;
+    out[1] = strans;
+    out[2] = (double)events;
+}
+
+static nbt_status run_batch(size_t i, unsigned thread, void *vp)
+{
+    mc_ctx *c = vp;
+    size_t batch = c->b0 + i;
+    const nbt_mc_config *cf = c->cfg;
+    double *a = c->acc + batch * c->stride, out[3];
+    uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH;
+    size_t tail = c->stride - 3; /* R, T, events */
+    const int planes = cf->nplanes > 0, weighted = cf->estimator == NBT_MC_WEIGHTED;
+    if (planes)
+        weighted ? photons(c, a, p0, p1, 1, 1, out) : photons(c, a, p0, p1, 1, 0, out);
+    else
+        weighted ? photons(c, a, p0, p1, 0, 1, out) : photons(c, a, p0, p1, 0, 0, out);
+    a[tail] = out[0];
+    a[tail + 1] = out[1];
+    a[tail + 2] = out[2];
     unsigned d = atomic_fetch_add(&c->done, 1) + 1;
     if (thread == 0 && cf->progress)
         cf->progress((double)d / (double)c->nbatch, cf->progress_data);
@@ -412,6 +454,7 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
             c.b[0] = -zc; /* the first layer (or rho_fn(0)) continues behind the source */
     }
     c.top = c.b[nl];
+    c.single = nl == 1 && c.rho[0] > 0;
     for (size_t i = 0; i < nl; i++)
         c.kinv[i] = c.rho[i] > 0 ? 1.0 / (cf->sigma_t * c.rho[i]) : INFINITY;
     for (size_t j = 0; j < cf->nplanes; j++)
