@@ -1,0 +1,156 @@
+// shaders/nbt_mc.glsl: the GLSL compute photon counter (nbt/gl_mc.h), the
+// analog loop of libnbt/mc.c in single precision: a pencil beam at the origin
+// along +z into a homogeneous medium (a slab [0, top], or a half-space whose
+// photons are dropped beyond z_cut; infinite: the medium also fills z < 0),
+// HG or Gaussian phase. One invocation is one photon; its random numbers
+// are Philox4x32-10 keyed by the seed, counter (photon index, draw), so a
+// photon's path depends on nothing else. Tallies are 64-bit integers held
+// as (lo, hi) uint pairs (no 64-bit atomics needed): counts add 1, r^2 adds
+// round(r^2 2^20); integer sums do not depend on the order of the atomics,
+// hence not on the work-group size or how photons are split over dispatches.
+// The host prepends "#version 430" and "#define NBT_MC_WG n".
+layout(local_size_x = NBT_MC_WG) in;
+
+layout(std430, binding = 0) buffer Tally { uint t[]; };       // [(batch stride + k) 2 + {lo, hi}]
+layout(std430, binding = 1) readonly buffer Planes { float zp[]; };
+
+uniform uvec2 u_seed;       // 64-bit seed as (lo, hi)
+uniform uvec2 u_first;      // first photon index of this dispatch (lo, hi)
+uniform uint u_count;       // photons in this dispatch
+uniform uint u_base;        // tally offset of the batch: batch * stride
+uniform float u_sigma_t, u_albedo, u_bottom, u_top, u_param, u_rscale;
+uniform int u_phase;        // 0: HG (u_param = g), 1: Gaussian (u_param = B)
+uniform int u_slab, u_nplanes, u_nbins;
+uniform uint u_order_max;   // 0: all orders
+
+uvec4 philox(uvec4 c, uvec2 k)
+{
+    for (int i = 0; i < 10; i++) {
+        uint hi0, lo0, hi1, lo1;
+        umulExtended(0xD2511F53u, c.x, hi0, lo0);
+        umulExtended(0xCD9E8D57u, c.z, hi1, lo1);
+        c = uvec4(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
+        k += uvec2(0x9E3779B9u, 0xBB67AE85u);
+    }
+    return c;
+}
+
+uvec2 g_ph;     // this photon's index
+uint g_draw;    // blocks of 4 drawn so far
+uvec4 g_buf;
+int g_left = 0;
+
+// uniform in [0, 1) on a 2^-24 grid
+float rnd()
+{
+    if (g_left == 0) {
+        g_buf = philox(uvec4(g_ph, g_draw++, 0u), u_seed);
+        g_left = 4;
+    }
+    g_left--;
+    uint v = g_left == 3 ? g_buf.x : g_left == 2 ? g_buf.y : g_left == 1 ? g_buf.z : g_buf.w;
+    return float(v >> 8) * (1.0 / 16777216.0);
+}
+
+void add64(uint i, uint v)
+{
+    uint old = atomicAdd(t[2u * i], v);
+    if (old > 0xFFFFFFFFu - v)
+        atomicAdd(t[2u * i + 1u], 1u);
+}
+
+void addfix(uint i, float x) // x >= 0 in units of 2^-20, as a 64-bit integer
+{
+    float v = x * 1048576.0;
+    uint hi = uint(v * (1.0 / 4294967296.0));
+    uint lo = uint(v - float(hi) * 4294967296.0 + 0.5);
+    add64(i, lo);
+    if (hi > 0u)
+        atomicAdd(t[2u * i + 1u], hi);
+}
+
+void main()
+{
+    uint id = gl_GlobalInvocationID.x;
+    if (id >= u_count)
+        return;
+    uint lo = u_first.x + id;
+    g_ph = uvec2(lo, u_first.y + (lo < id ? 1u : 0u));
+    g_draw = 0u;
+    vec3 p = vec3(0.0), u = vec3(0.0, 0.0, 1.0);
+    uint scattered = 0u, events = 0u, stride = uint(u_nplanes * (u_nbins + 2) + 3);
+    int jp = 0; // first plane above z
+    uint refl = 0u, trans = 0u;
+    for (;;) {
+        float d = -log(1.0 - rnd()) / u_sigma_t;
+        float z1 = p.z + d * u.z;
+        bool leaves = !(z1 > u_bottom && z1 < u_top);
+        float zend = leaves ? (u.z > 0.0 ? u_top : u_bottom) : z1;
+        if (scattered > 0u && u.z > 0.0) { // forward crossings of planes in (z, zend]
+            for (; jp < u_nplanes && zp[jp] <= zend; jp++) {
+                float s = (zp[jp] - p.z) / u.z;
+                vec2 q = p.xy + s * u.xy;
+                float r2 = dot(q, q);
+                uint pl = u_base + uint(jp * (u_nbins + 2));
+                float bin = sqrt(r2) * float(u_nbins) / (u_rscale * zp[jp]);
+                if (bin < float(u_nbins))
+                    add64(pl + uint(bin), 1u);
+                add64(pl + uint(u_nbins), 1u);
+                addfix(pl + uint(u_nbins) + 1u, r2);
+            }
+        } else {
+            while (jp > 0 && zp[jp - 1] > zend)
+                jp--;
+            while (jp < u_nplanes && zp[jp] <= zend)
+                jp++;
+        }
+        if (leaves) {
+            if (u_slab != 0) {
+                if (u.z > 0.0)
+                    trans++;
+                else
+                    refl++;
+            }
+            break;
+        }
+        p += d * u;
+        p.z = z1;
+        events++;
+        if (rnd() >= u_albedo)
+            break;
+        if (u_order_max > 0u && scattered == u_order_max)
+            break;
+        scattered++;
+        float mu;
+        if (u_phase == 0) {
+            float g = u_param, r = rnd();
+            if (abs(g) < 1e-4) {
+                mu = 2.0 * r - 1.0;
+            } else {
+                float f = (1.0 - g * g) / (1.0 - g + 2.0 * g * r);
+                mu = clamp((1.0 + g * g - f * f) / (2.0 * g), -1.0, 1.0);
+            }
+        } else {
+            float th;
+            do
+                th = sqrt(-4.0 * u_param * log(1.0 - rnd()));
+            while (th >= 3.14159265);
+            mu = cos(th);
+        }
+        float st = sqrt(max(0.0, 1.0 - mu * mu)), phi = 6.2831853 * rnd(), cp = cos(phi), sp = sin(phi);
+        if (abs(u.z) > 0.99999) {
+            u = vec3(st * cp, st * sp, u.z > 0.0 ? mu : -mu);
+        } else {
+            float tmp = sqrt(1.0 - u.z * u.z), q = st / tmp;
+            u = normalize(vec3(q * (u.x * u.z * cp - u.y * sp) + u.x * mu, q * (u.y * u.z * cp + u.x * sp) + u.y * mu,
+                               -st * cp * tmp + u.z * mu));
+        }
+    }
+    uint tail = u_base + stride - 3u;
+    if (refl > 0u)
+        add64(tail, refl);
+    if (trans > 0u)
+        add64(tail + 1u, trans);
+    if (events > 0u)
+        add64(tail + 2u, events);
+}
