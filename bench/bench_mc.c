@@ -12,6 +12,7 @@
  * for that case. Last, the figure of merit 1/(se^2 t) of nbt's weighted
  * estimator (--estimator weighted) against its analog one on both cases.
  * Usage: bench_mc [photons] */
+#include <config.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -19,6 +20,10 @@
 #include <string.h>
 #include <time.h>
 #include <nbt/nbt.h>
+#ifdef HAVE_GL
+#include <nbt/gl_mc.h>
+#include "../examples/egl_headless.h"
+#endif
 
 static double now(void)
 {
@@ -264,6 +269,37 @@ int main(int argc, char **argv)
                r->T, n / r->seconds, n / cb);
         nbt_mc_result_free(r);
     }
+#ifdef HAVE_GL
+    {
+        /* the GLSL compute counter on whatever GL this is (llvmpipe: the
+         * CPU, all cores; its CPU time is this process's) */
+        char err[256];
+        if (egl_headless_open(err, sizeof err))
+            printf("%-34s %s\n", "GLSL compute (nbt_gl_mc_run)", err);
+        else {
+            nbt_mc_config c;
+            memset(&c, 0, sizeof c);
+            c.sigma_t = 1;
+            c.albedo = 0.9;
+            c.phase = hg;
+            c.slab = 2;
+            c.photons = 100000;
+            c.seed = 1;
+            nbt_mc_result *r;
+            if (nbt_gl_mc_run(&c, 0, 0, &r) == NBT_OK) /* compiles the shader */
+                nbt_mc_result_free(r);
+            c.photons = (uint64_t)n;
+            c0 = cpu();
+            if (nbt_gl_mc_run(&c, 0, 0, &r) == NBT_OK) {
+                cb = cpu() - c0;
+                printf("%-34s %8s %10.5f %10.1e %10.5f %14.3g %14.3g\n", "GLSL compute (nbt_gl_mc_run)", "GL", r->R,
+                       r->R_se, r->T, n / r->seconds, n / cb);
+                nbt_mc_result_free(r);
+            }
+            egl_headless_close();
+        }
+    }
+#endif
     nbt_phase_free(hg);
 
     long np = n / 4;

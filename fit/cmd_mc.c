@@ -14,6 +14,10 @@
 #ifdef HAVE_MPI
 #include "mc_mpi.h"
 #endif
+#ifdef HAVE_GL
+#include <nbt/gl_mc.h>
+#include "../examples/egl_headless.h"
+#endif
 
 /* Launched by mpirun (or srun)? Rank and size from the launcher's
  * environment, read before MPI starts, so that usage errors need no MPI. */
@@ -39,7 +43,7 @@ static void help(void)
     puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv|OUT.exr\n"
          "                  [--seed S] [--threads T] [--z-planes FROM:TO:COUNT] [--r-bins N]\n"
          "                  [--r-max-scale F] [--density FILE] [--z-cut Z] [--infinite] [--order-max N]\n"
-         "                  [--estimator analog|weighted]\n"
+         "                  [--estimator analog|weighted] [--gpu]\n"
          "       nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N --slab TAU [-o OUT.csv]\n\n"
          "A pencil beam enters at the origin along +z; every forward crossing of a plane z by a\n"
          "scattered photon is counted, per unit area per launched photon, in radial bins over\n"
@@ -58,12 +62,25 @@ static void help(void)
          "--estimator weighted: survival biasing with Russian roulette (MCML's rule): photons are\n"
          "never absorbed but lose weight; the same expectations, other variances and costs (see\n"
          "doc/beam.md). The default, analog, counts photons.\n"
+         "--gpu: the GLSL compute counter (OpenGL 4.3 through EGL; Mesa's llvmpipe on a machine\n"
+         "without a GPU): a homogeneous slab or half-space, HG/iso/Gaussian phase, analog; its own\n"
+         "random numbers (Philox), identical on every run; one process.\n"
          "Results are identical for any --threads; standard errors from 64 batches.\n\n"
          "mpirun -np N nbt-fit mc ... splits the 64 photon batches over N processes (on one or\n"
          "many machines; --threads counts per process) and writes, from rank 0, output identical\n"
          "byte for byte to a one-process run with the same seed (ranks beyond 64 get no photons).\n"
          "This needs a build configured --with-mpi.");
 }
+
+#ifdef HAVE_GL
+/* the reason libnbt-gl gives for a refusal, for the message */
+static char gpu_reason[256];
+static void on_gpu_error(const char *reason, nbt_status st)
+{
+    (void)st;
+    snprintf(gpu_reason, sizeof gpu_reason, "%s", reason);
+}
+#endif
 
 static void bar(double f, void *data)
 {
@@ -153,7 +170,7 @@ int cmd_mc(int argc, char **argv)
         {"slab", required_argument, 0, 'L'},    {"density", required_argument, 0, 'd'},
         {"z-cut", required_argument, 0, 'c'},   {"output", required_argument, 0, 'o'},
         {"infinite", no_argument, 0, 'I'},      {"order-max", required_argument, 0, 'O'},
-        {"estimator", required_argument, 0, 'E'},
+        {"estimator", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'G'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     int rank, size, launched = launcher_env(&rank, &size);
     if (rank != 0 && !freopen("/dev/null", "w", stderr)) /* one message per run: rank 0 speaks */
@@ -170,7 +187,7 @@ int cmd_mc(int argc, char **argv)
     c.seed = 1;
     const char *out = NULL, *phase = NULL, *density = NULL, *planes = "1:10:10";
     double B = 0, tau = 0;
-    int have[4] = {0};
+    int have[4] = {0}, gpu = 0;
     int o;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
@@ -198,6 +215,7 @@ int cmd_mc(int argc, char **argv)
             else
                 die_usage("--estimator: '%s' is not accepted: analog or weighted", optarg);
             break;
+        case 'G': gpu = 1; break;
         case 'o': out = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit mc --help'");
@@ -215,6 +233,13 @@ int cmd_mc(int argc, char **argv)
         die_usage("--infinite and --slab exclude each other: a slab has vacuum on both sides");
     if (!out && tau == 0)
         die_usage("mc: -o OUT.csv is required (except for a --slab run)");
+    if (gpu && launched && size > 1)
+        die_usage("--gpu runs in one process: start it without mpirun");
+#ifndef HAVE_GL
+    if (gpu)
+        die_usage("--gpu: this nbt-fit was built without OpenGL (install libegl-dev libopengl-dev libegl-mesa0 "
+                  "libgl1-mesa-dri and configure --with-gl)");
+#endif
     int exr = 0;
     if (out) {
         size_t n = strlen(out);
@@ -264,6 +289,21 @@ int cmd_mc(int argc, char **argv)
     }
     nbt_mc_result *r = NULL;
     nbt_status st;
+#ifdef HAVE_GL
+    if (gpu) {
+        char gerr[256];
+        if (egl_headless_open(gerr, sizeof gerr))
+            die_usage("--gpu: no OpenGL context: %s", gerr);
+        nbt_error_handler *prev = nbt_set_error_handler(on_gpu_error);
+        st = nbt_gl_mc_run(&c, 0, 0, &r);
+        nbt_set_error_handler(prev);
+        egl_headless_close();
+        if (st == NBT_EINVAL)
+            die_usage("--gpu: %s", gpu_reason);
+        if (st != NBT_OK)
+            die("photon counting on the GPU failed: %s", gpu_reason[0] ? gpu_reason : nbt_strerror(st));
+    } else
+#endif
 #ifdef HAVE_MPI
     if (launched) {
         char merr[256];
