@@ -5,7 +5,9 @@
  * Fails with a clear message when no GL context can be created. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <nbt/nbt.h>
 #include <nbt/gl_mc.h>
 #include "../examples/egl_headless.h"
@@ -16,6 +18,25 @@ const char *__asan_default_options(void);
 const char *__asan_default_options(void)
 {
     return "detect_leaks=0";
+}
+
+extern const char nbt_glsl_nbt_mc[]; /* the module's text in libnbt-gl */
+
+/* the module as nbt_gl_mc_run assembles it passes the reference compiler */
+static void validate(void)
+{
+    char path[] = "/tmp/nbt-test-glmc-XXXXXX";
+    int fd = mkstemp(path);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (f) {
+        fprintf(f, "#version 430\n#define NBT_MC_WG 64\n%s", nbt_glsl_nbt_mc);
+        fclose(f);
+    }
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "glslangValidator -S comp %s >/dev/null 2>&1", path);
+    int rc = f ? system(cmd) : -1;
+    t_true(rc == 0, "glslangValidator accepts nbt_mc.glsl%s", rc == 0 ? "" : " (is glslang-tools installed?)");
+    unlink(path);
 }
 
 static int same(const nbt_mc_result *a, const nbt_mc_result *b)
@@ -29,6 +50,7 @@ static int same(const nbt_mc_result *a, const nbt_mc_result *b)
 int main(void)
 {
     char err[256];
+    validate();
     if (egl_headless_open(err, sizeof err)) {
         t_true(0, "a GL context for the compute counter: %s", err);
         return t_done();
