@@ -117,7 +117,7 @@ static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_resul
 /* A PSI table: axis 0 = r/z at the bin centres, axis 1 = z at the planes
  * (evenly spaced), channels R = psi, G = its standard error. */
 static int write_exr(const char *out, const nbt_mc_config *c, const nbt_mc_result *r, const char *phase, double B,
-                     double tau)
+                     double tau, int gpu)
 {
     size_t nb = c->r_bins, np = c->nplanes;
     double h = c->r_max_scale / (double)nb;
@@ -136,9 +136,10 @@ static int write_exr(const char *out, const nbt_mc_config *c, const nbt_mc_resul
     char ord[32] = "";
     if (c->order_max)
         snprintf(ord, sizeof ord, " order_max=%u", c->order_max);
-    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s%s%s%s", c->albedo,
+    snprintf(run, sizeof run, "mc albedo=%g sigma_t=%g phase=%s photons=%llu seed=%llu%s%s%s%s%s", c->albedo,
              c->sigma_t, ph, (unsigned long long)c->photons, (unsigned long long)c->seed, tau > 0 ? " slab" : "",
-             c->infinite ? " infinite" : "", ord, c->estimator == NBT_MC_WEIGHTED ? " weighted" : "");
+             c->infinite ? " infinite" : "", ord, c->estimator == NBT_MC_WEIGHTED ? " weighted" : "",
+             gpu ? " gpu" : "");
     size_t n = strlen(run) < sizeof t->phase ? strlen(run) : sizeof t->phase - 1; /* a long table path is cut */
     memcpy(t->phase, run, n);
     t->phase[n] = '\0';
@@ -329,7 +330,7 @@ int cmd_mc(int argc, char **argv)
     }
     int rc = 0;
     if (out && exr)
-        rc = write_exr(out, &c, r, phase ? phase : NULL, B, tau);
+        rc = write_exr(out, &c, r, phase ? phase : NULL, B, tau, gpu);
     else if (out)
         rc = write_csv(out, &c, r);
     for (size_t j = 0; j < c.nplanes && out && rc == 0; j++)
