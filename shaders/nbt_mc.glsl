@@ -69,19 +69,38 @@ void addfix(uint i, float x) // x >= 0 in units of 2^-20, as a 64-bit integer
         atomicAdd(t[2u * i + 1u], hi);
 }
 
+uniform uint u_threads;      // invocations in this dispatch (a multiple of the work-group size)
+
+vec3 p, u;
+uint scattered;
+int jp; // first plane above z
+
+// photon k of this dispatch: index u_first + k, at the origin along +z
+void start(uint k)
+{
+    uint lo = u_first.x + k;
+    g_ph = uvec2(lo, u_first.y + (lo < k ? 1u : 0u));
+    g_draw = 0u;
+    g_left = 0;
+    p = vec3(0.0);
+    u = vec3(0.0, 0.0, 1.0);
+    scattered = 0u;
+    jp = 0;
+}
+
+// Each invocation runs photons k = id, id + u_threads, ... one step at a
+// time, starting the next photon as soon as one ends, so that the lanes of
+// a SIMD group stay busy instead of waiting for the longest photon.
 void main()
 {
-    uint id = gl_GlobalInvocationID.x;
-    if (id >= u_count)
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= u_count)
         return;
-    uint lo = u_first.x + id;
-    g_ph = uvec2(lo, u_first.y + (lo < id ? 1u : 0u));
-    g_draw = 0u;
-    vec3 p = vec3(0.0), u = vec3(0.0, 0.0, 1.0);
-    uint scattered = 0u, events = 0u, stride = uint(u_nplanes * (u_nbins + 2) + 3);
-    int jp = 0; // first plane above z
+    start(k);
+    uint events = 0u, stride = uint(u_nplanes * (u_nbins + 2) + 3);
     uint refl = 0u, trans = 0u;
     for (;;) {
+        bool done = false;
         float d = -log(1.0 - rnd()) / u_sigma_t;
         float z1 = p.z + d * u.z;
         bool leaves = !(z1 > u_bottom && z1 < u_top);
@@ -111,39 +130,46 @@ void main()
                 else
                     refl++;
             }
-            break;
-        }
-        p += d * u;
-        p.z = z1;
-        events++;
-        if (rnd() >= u_albedo)
-            break;
-        if (u_order_max > 0u && scattered == u_order_max)
-            break;
-        scattered++;
-        float mu;
-        if (u_phase == 0) {
-            float g = u_param, r = rnd();
-            if (abs(g) < 1e-4) {
-                mu = 2.0 * r - 1.0;
+            done = true;
+        } else {
+            p += d * u;
+            p.z = z1;
+            events++;
+            if (rnd() >= u_albedo || (u_order_max > 0u && scattered == u_order_max)) {
+                done = true;
             } else {
-                float f = (1.0 - g * g) / (1.0 - g + 2.0 * g * r);
-                mu = clamp((1.0 + g * g - f * f) / (2.0 * g), -1.0, 1.0);
+                scattered++;
+                float mu;
+                if (u_phase == 0) {
+                    float g = u_param, r = rnd();
+                    if (abs(g) < 1e-4) {
+                        mu = 2.0 * r - 1.0;
+                    } else {
+                        float f = (1.0 - g * g) / (1.0 - g + 2.0 * g * r);
+                        mu = clamp((1.0 + g * g - f * f) / (2.0 * g), -1.0, 1.0);
+                    }
+                } else {
+                    float th;
+                    do
+                        th = sqrt(-4.0 * u_param * log(1.0 - rnd()));
+                    while (th >= 3.14159265);
+                    mu = cos(th);
+                }
+                float st = sqrt(max(0.0, 1.0 - mu * mu)), phi = 6.2831853 * rnd(), cp = cos(phi), sp = sin(phi);
+                if (abs(u.z) > 0.99999) {
+                    u = vec3(st * cp, st * sp, u.z > 0.0 ? mu : -mu);
+                } else {
+                    float tmp = sqrt(1.0 - u.z * u.z), q = st / tmp;
+                    u = normalize(vec3(q * (u.x * u.z * cp - u.y * sp) + u.x * mu,
+                                       q * (u.y * u.z * cp + u.x * sp) + u.y * mu, -st * cp * tmp + u.z * mu));
+                }
             }
-        } else {
-            float th;
-            do
-                th = sqrt(-4.0 * u_param * log(1.0 - rnd()));
-            while (th >= 3.14159265);
-            mu = cos(th);
         }
-        float st = sqrt(max(0.0, 1.0 - mu * mu)), phi = 6.2831853 * rnd(), cp = cos(phi), sp = sin(phi);
-        if (abs(u.z) > 0.99999) {
-            u = vec3(st * cp, st * sp, u.z > 0.0 ? mu : -mu);
-        } else {
-            float tmp = sqrt(1.0 - u.z * u.z), q = st / tmp;
-            u = normalize(vec3(q * (u.x * u.z * cp - u.y * sp) + u.x * mu, q * (u.y * u.z * cp + u.x * sp) + u.y * mu,
-                               -st * cp * tmp + u.z * mu));
+        if (done) {
+            k += u_threads;
+            if (k >= u_count)
+                break;
+            start(k);
         }
     }
     uint tail = u_base + stride - 3u;
