@@ -9,7 +9,10 @@
  * a general counter can at best approach. A second case tallies planes
  * (half-space, Gaussian phase dtheta = 60 deg, albedo 0.9, planes
  * z = 1..10, 50 radial bins each), nbt_mc_run against a lean analog loop
- * for that case. Last, the figure of merit 1/(se^2 t) of nbt's weighted
+ * for that case. With GL, the GLSL compute counter (nbt_gl_mc_run; on
+ * llvmpipe its CPU time is this process's) on the slab. Rates are given
+ * per wall second and per CPU-second of the process (the fair measure on
+ * a shared machine). Last, the figure of merit 1/(se^2 t) of nbt's weighted
  * estimator (--estimator weighted) against its analog one on both cases.
  * Usage: bench_mc [photons] */
 #include <config.h>
