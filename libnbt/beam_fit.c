@@ -1,0 +1,167 @@
+/* libnbt/beam_fit.c: the fitted narrow-beam kernel model (core + diffuse
+ * part, parameters as smooth functions of depth, albedo and phase width),
+ * its coefficient file and the compiled-in default (beam_fit_data.h,
+ * written by doc/kernelmodel.sh from nbt-fit model's output). */
+#include <config.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <nbt/beam.h>
+#include "internal.h"
+
+static const nbt_beam_fit default_fit = {
+#include "beam_fit_data.h"
+};
+
+const nbt_beam_fit *nbt_beam_fit_default(void)
+{
+    return &default_fit;
+}
+
+void nbt_beam_fit_terms(double tau, double albedo, double B, double *t)
+{
+    double x = log(tau) - 1.15, w = albedo - 0.5, v = log(B / 0.05);
+    double m[NBT_BEAM_FIT_TERMS] = {1, x, w, v, x * x, x * w, x * v, w * w, w * v, v * v,
+                                    x * x * x, x * x * w, x * x * v, x * w * w, x * w * v, x * v * v};
+    memcpy(t, m, sizeof m);
+}
+
+nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, double albedo, double B, double *p)
+{
+    int g = infinite ? 1 : 0;
+    if (!f || !f->have[g])
+        NBT_FAIL(NBT_EDOM, "beam fit: the model holds no coefficients for this geometry");
+    if (!(tau > 0) || !isfinite(tau) || !(albedo >= 0 && albedo <= 1) || !(B > 0) || !isfinite(B))
+        NBT_FAIL(NBT_EDOM, "beam fit: needs tau > 0 finite, albedo in [0, 1], B > 0 finite");
+    double t[NBT_BEAM_FIT_TERMS], P[NBT_BEAM_FIT_PARTS] = {0};
+    nbt_beam_fit_terms(tau, albedo, B, t);
+    for (int i = 0; i < NBT_BEAM_FIT_PARTS; i++)
+        for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++)
+            P[i] += f->c[g][i][k] * t[k];
+    /* T: the scattered light that goes on forward in small-angle theory;
+     * L: the single-scattering width */
+    double T = exp(-(1 - albedo) * tau) * -expm1(-albedo * tau), L = tau * sqrt(2 * B);
+    p[1] = L * exp(P[1]);
+    p[0] = T * exp(P[0]) / (sqrt(2 * NBT_PI) * p[1]);
+    p[2] = T * exp(P[2]);
+    p[3] = L * exp(P[3]);
+    p[4] = p[3] * exp(P[4]);
+    return NBT_OK;
+}
+
+double nbt_beam_fit_eval(const double *p, double rh)
+{
+    if (!(rh > 0))
+        return 0;
+    double core = p[1] > 0 ? p[0] / rh * 0.5 * erfc(rh / (sqrt(2.0) * p[1])) : 0;
+    double s = p[3], h = p[4], q = sqrt(rh * rh + h * h);
+    /* q - h without cancellation when rh << h */
+    return core + p[2] * exp(-rh * rh / ((q + h) * s)) / (2 * NBT_PI * s * (h + s));
+}
+
+nbt_status nbt_beam_fit_psi(const nbt_beam_fit *f, int infinite, const nbt_beam_medium *m, double z, double r,
+                            double *psi)
+{
+    nbt_status st = nbt_beam_check(m);
+    if (st != NBT_OK)
+        return st;
+    if (m->nlayers > 0 || m->rho_fn)
+        NBT_FAIL(NBT_EDOM, "beam fit: the fitted model is for homogeneous media only");
+    if (!(z > 0) || !isfinite(z) || !(r >= 0) || !isfinite(r))
+        NBT_FAIL(NBT_EDOM, "beam fit: needs z > 0 and r >= 0, finite");
+    double B = 0, p[NBT_BEAM_FIT_PARTS];
+    for (size_t i = 0; i < m->nlobes; i++)
+        B += m->w[i] * m->B[i];
+    if ((st = nbt_beam_fit_params(f, infinite, m->sigma_t * z, m->albedo, B, p)) != NBT_OK)
+        return st;
+    *psi = m->sigma_t * m->sigma_t * nbt_beam_fit_eval(p, m->sigma_t * r);
+    return NBT_OK;
+}
+
+static const char *const geo_name[2] = {"half", "infinite"};
+
+nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_t errlen)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        snprintf(err, errlen, "beam model '%s' cannot be opened: %s", path, strerror(errno));
+        return NBT_EIO;
+    }
+    memset(f, 0, sizeof *f);
+    char line[4096];
+    int ln = 0, got[2] = {0};
+    nbt_status st = NBT_OK;
+    while (st == NBT_OK && fgets(line, sizeof line, fp)) {
+        ln++;
+        char *p = line + strspn(line, " \t");
+        if (*p == '#' || *p == '\n' || *p == '\0')
+            continue;
+        char gname[16], pname[8];
+        int off = 0, g = -1, i = -1;
+        if (sscanf(p, "%15s %7s %n", gname, pname, &off) == 2) {
+            g = !strcmp(gname, "half") ? 0 : !strcmp(gname, "infinite") ? 1 : -1;
+            if (pname[0] == 'P' && pname[1] >= '0' && pname[1] < '0' + NBT_BEAM_FIT_PARTS && pname[2] == '\0')
+                i = pname[1] - '0';
+        }
+        if (g < 0 || i < 0) {
+            snprintf(err, errlen, "beam model '%s' line %d: expected 'half|infinite P0..P4' and %d numbers", path, ln,
+                     NBT_BEAM_FIT_TERMS);
+            st = NBT_EFORMAT;
+            break;
+        }
+        p += off;
+        for (int k = 0; k < NBT_BEAM_FIT_TERMS && st == NBT_OK; k++) {
+            char *end;
+            f->c[g][i][k] = strtod(p, &end);
+            if (end == p || !isfinite(f->c[g][i][k])) {
+                snprintf(err, errlen, "beam model '%s' line %d: expected %d finite numbers after '%s %s'", path, ln,
+                         NBT_BEAM_FIT_TERMS, gname, pname);
+                st = NBT_EFORMAT;
+            }
+            p = end;
+        }
+        if (st == NBT_OK && strspn(p, " \t\r\n") != strlen(p)) {
+            snprintf(err, errlen, "beam model '%s' line %d: more than %d numbers", path, ln, NBT_BEAM_FIT_TERMS);
+            st = NBT_EFORMAT;
+        }
+        got[g] |= 1 << i;
+    }
+    if (st == NBT_OK && ferror(fp)) {
+        snprintf(err, errlen, "beam model '%s' cannot be read: %s", path, strerror(errno));
+        st = NBT_EIO;
+    }
+    fclose(fp);
+    for (int g = 0; g < 2 && st == NBT_OK; g++) {
+        int all = (1 << NBT_BEAM_FIT_PARTS) - 1;
+        if (got[g] != 0 && got[g] != all) {
+            snprintf(err, errlen, "beam model '%s': geometry '%s' needs all of P0 .. P%d", path, geo_name[g],
+                     NBT_BEAM_FIT_PARTS - 1);
+            st = NBT_EFORMAT;
+        }
+        f->have[g] = got[g] == all;
+    }
+    if (st == NBT_OK && !f->have[0] && !f->have[1]) {
+        snprintf(err, errlen, "beam model '%s': no coefficients (lines 'half P0 ...' or 'infinite P0 ...')", path);
+        st = NBT_EFORMAT;
+    }
+    return st;
+}
+
+nbt_status nbt_beam_fit_fprint(FILE *fp, const nbt_beam_fit *f, const char *comment)
+{
+    fprintf(fp, "# nbt beam kernel model (see nbt/beam.h, doc/fit.md)\n");
+    if (comment)
+        fputs(comment, fp);
+    for (int g = 0; g < 2; g++)
+        for (int i = 0; f->have[g] && i < NBT_BEAM_FIT_PARTS; i++) {
+            fprintf(fp, "%s P%d", geo_name[g], i);
+            for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++)
+                fprintf(fp, " %.17g", f->c[g][i][k]);
+            fputc('\n', fp);
+        }
+    if (ferror(fp))
+        NBT_FAIL(NBT_EIO, "beam fit: writing the model failed");
+    return NBT_OK;
+}
