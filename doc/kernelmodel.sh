@@ -94,8 +94,9 @@ if [ "${UPDATE:-0}" = 1 ]; then
     awk 'BEGIN { print "/* written by doc/kernelmodel.sh from nbt-fit model: see doc/fit.md */" }
          /^(half|infinite) P[0-4] / { g = ($1 == "half") ? 0 : 1; i = substr($2, 2) + 0
              s = "{"; for (k = 3; k <= NF; k++) s = s $k (k < NF ? ", " : ""); c[g, i] = s "}"; have[g] = 1 }
+         /^range / { rg[$2] = "{" $3 ", " $4 "}" }
          END { printf "{"; for (g = 0; g < 2; g++) { printf "{"; for (i = 0; i < 5; i++) printf "%s%s", (have[g] ? c[g, i] : "{0}"), (i < 4 ? ",\n  " : ""); printf "}%s", (g < 1 ? ",\n " : "") }
-               printf "},\n{%d, %d}\n", have[0] + 0, have[1] + 0 }' "$DIR/model.txt" >libnbt/beam_fit_data.h.tmp
+               printf "},\n{%d, %d},\n{%s, %s, %s}\n", have[0] + 0, have[1] + 0, rg["tau"], rg["albedo"], rg["B"] }' "$DIR/model.txt" >libnbt/beam_fit_data.h.tmp
     mv libnbt/beam_fit_data.h.tmp libnbt/beam_fit_data.h
     { echo "# doc/kernelmodel.sh: $PHOTONS photons per run, sigma_t = 1, z = 1..10, r in [0, z) in 20 annuli;"
       echo "# eval-*: the training grid's (dtheta, albedo) with other seeds; held-*: off-grid pairs"

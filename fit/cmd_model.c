@@ -92,7 +92,7 @@ static int model_res(const double *x, double *r, double *jac, void *vp)
             double p[NBT_BEAM_FIT_PARTS], t[NBT_BEAM_FIT_TERMS];
             if (nbt_beam_fit_params(&f, c->geo, d->sigma_t * d->z[j], d->albedo, d->B, p) != NBT_OK)
                 return 1;
-            nbt_beam_fit_terms(d->sigma_t * d->z[j], d->albedo, d->B, t);
+            nbt_beam_fit_terms(NULL, d->sigma_t * d->z[j], d->albedo, d->B, t);
             for (size_t k = 0; k < d->nbins; k++) {
                 size_t i = j * d->nbins + k;
                 double w = c->scale[q] * M_PI * (d->lo[i] + d->hi[i]), D[NBT_BEAM_FIT_PARTS];
@@ -381,6 +381,14 @@ int cmd_model(int argc, char **argv)
         rc = EXIT_USAGE;
     else if (rc != 0)
         fit_report_finish(&rep);
+    for (size_t q = 0; q < nruns; q++) { /* the data's range: the model clamps its monomials' arguments to it */
+        const psi_data *d = &runs[q];
+        double v[3][2] = {{d->sigma_t * d->z[0], d->sigma_t * d->z[d->nplanes - 1]}, {d->albedo, d->albedo}, {d->B, d->B}};
+        for (int i = 0; i < 3; i++) {
+            f.range[i][0] = q == 0 ? v[i][0] : fmin(f.range[i][0], v[i][0]);
+            f.range[i][1] = q == 0 ? v[i][1] : fmax(f.range[i][1], v[i][1]);
+        }
+    }
     if (rc == 0) {
         fit_text_add(&log, "# ridge %g; fitted by nbt-fit model to %zu runs:\n", ridge, nruns);
         for (size_t q = 0; q < nruns; q++)

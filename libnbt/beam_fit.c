@@ -20,8 +20,18 @@ const nbt_beam_fit *nbt_beam_fit_default(void)
     return &default_fit;
 }
 
-void nbt_beam_fit_terms(double tau, double albedo, double B, double *t)
+static double clampr(const nbt_beam_fit *f, int i, double v)
 {
+    if (!f || !(f->range[i][0] < f->range[i][1]))
+        return v;
+    return v < f->range[i][0] ? f->range[i][0] : v > f->range[i][1] ? f->range[i][1] : v;
+}
+
+void nbt_beam_fit_terms(const nbt_beam_fit *f, double tau, double albedo, double B, double *t)
+{
+    tau = clampr(f, 0, tau);
+    albedo = clampr(f, 1, albedo);
+    B = clampr(f, 2, B);
     double x = log(tau) - 1.15, w = albedo - 0.5, v = log(B / 0.05);
     double m[NBT_BEAM_FIT_TERMS] = {1, x, w, v, x * x, x * w, x * v, w * w, w * v, v * v,
                                     x * x * x, x * x * w, x * x * v, x * w * w, x * w * v, x * v * v};
@@ -36,10 +46,16 @@ nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, 
     if (!(tau > 0) || !isfinite(tau) || !(albedo >= 0 && albedo <= 1) || !(B > 0) || !isfinite(B))
         NBT_FAIL(NBT_EDOM, "beam fit: needs tau > 0 finite, albedo in [0, 1], B > 0 finite");
     double t[NBT_BEAM_FIT_TERMS], P[NBT_BEAM_FIT_PARTS] = {0};
-    nbt_beam_fit_terms(tau, albedo, B, t);
+    nbt_beam_fit_terms(f, tau, albedo, B, t);
     for (int i = 0; i < NBT_BEAM_FIT_PARTS; i++)
         for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++)
             P[i] += f->c[g][i][k] * t[k];
+    nbt_beam_fit_from_P(P, tau, albedo, B, p);
+    return NBT_OK;
+}
+
+void nbt_beam_fit_from_P(const double *P, double tau, double albedo, double B, double *p)
+{
     /* T: the scattered light that goes on forward in small-angle theory;
      * L: the single-scattering width */
     double T = exp(-(1 - albedo) * tau) * -expm1(-albedo * tau), L = tau * sqrt(2 * B);
@@ -48,7 +64,6 @@ nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, 
     p[2] = T * exp(P[2]);
     p[3] = L * exp(P[3]);
     p[4] = p[3] * exp(P[4]);
-    return NBT_OK;
 }
 
 double nbt_beam_fit_eval(const double *p, double rh)
@@ -100,6 +115,22 @@ nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_
             continue;
         char gname[16], pname[8];
         int off = 0, g = -1, i = -1;
+        if (!strncmp(p, "range ", 6)) {
+            double lo, hi;
+            char extra;
+            int ri = -1;
+            if (sscanf(p, "range %15s %lf %lf %c", pname, &lo, &hi, &extra) == 3)
+                ri = !strcmp(pname, "tau") ? 0 : !strcmp(pname, "albedo") ? 1 : !strcmp(pname, "B") ? 2 : -1;
+            if (ri < 0 || !isfinite(lo) || !isfinite(hi) || !(lo <= hi)) {
+                snprintf(err, errlen, "beam model '%s' line %d: expected 'range tau|albedo|B LO HI' with LO <= HI",
+                         path, ln);
+                st = NBT_EFORMAT;
+                break;
+            }
+            f->range[ri][0] = lo;
+            f->range[ri][1] = hi;
+            continue;
+        }
         if (sscanf(p, "%15s %7s %n", gname, pname, &off) == 2) {
             g = !strcmp(gname, "half") ? 0 : !strcmp(gname, "infinite") ? 1 : -1;
             if (pname[0] == 'P' && pname[1] >= '0' && pname[1] < '0' + NBT_BEAM_FIT_PARTS && pname[2] == '\0')
@@ -154,6 +185,10 @@ nbt_status nbt_beam_fit_fprint(FILE *fp, const nbt_beam_fit *f, const char *comm
     fprintf(fp, "# nbt beam kernel model (see nbt/beam.h, doc/fit.md)\n");
     if (comment)
         fputs(comment, fp);
+    static const char *const rn[3] = {"tau", "albedo", "B"};
+    for (int i = 0; i < 3; i++)
+        if (f->range[i][0] < f->range[i][1])
+            fprintf(fp, "range %s %.17g %.17g\n", rn[i], f->range[i][0], f->range[i][1]);
     for (int g = 0; g < 2; g++)
         for (int i = 0; f->have[g] && i < NBT_BEAM_FIT_PARTS; i++) {
             fprintf(fp, "%s P%d", geo_name[g], i);

@@ -111,23 +111,31 @@ nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c
 typedef struct {
     double c[2][NBT_BEAM_FIT_PARTS][NBT_BEAM_FIT_TERMS]; /* [geometry][P0..P4][term] */
     int have[2];                         /* the geometries this model holds */
+    /* the fitted data's range of tau, albedo and B: the monomials clamp their
+     * arguments to it, so that outside it the P_i stay at their edge values
+     * (a cubic would run away) while T and L keep their exact scaling;
+     * lo >= hi: no clamp */
+    double range[3][2];
 } nbt_beam_fit;
 
-/* The monomials: with x = ln tau - 1.15, w = albedo - 0.5, v = ln(B/0.05):
+/* The monomials: with x = ln tau - 1.15, w = albedo - 0.5, v = ln(B/0.05)
+ * (tau, albedo, B clamped to f's range; f may be NULL: no clamp):
  * 1, x, w, v, x^2, xw, xv, w^2, wv, v^2, x^3, x^2w, x^2v, xw^2, xwv, xv^2. */
-void nbt_beam_fit_terms(double tau, double albedo, double B, double *t);
+void nbt_beam_fit_terms(const nbt_beam_fit *f, double tau, double albedo, double B, double *t);
 /* The model shipped with libnbt (fitted by doc/kernelmodel.sh). */
 const nbt_beam_fit *nbt_beam_fit_default(void);
 /* p = (a, b, M, s, h) of Psi_hat at tau > 0, albedo in [0, 1], B > 0
  * (NBT_EDOM outside, or for a geometry the model does not hold). */
 nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, double albedo, double B, double *p);
+/* The same from the log-parameters P0..P4 (e.g. read from nbt-gen kernel --model fitted's tables). */
+void nbt_beam_fit_from_P(const double *P, double tau, double albedo, double B, double *p);
 /* Psi_hat(rh) from p (rh > 0; 0 at rh <= 0, where the core is infinite). */
 double nbt_beam_fit_eval(const double *p, double rh);
 /* Psi(z, r) of a homogeneous medium m (one or more lobes; layers: NBT_EDOM). */
 nbt_status nbt_beam_fit_psi(const nbt_beam_fit *f, int infinite, const nbt_beam_medium *m, double z, double r,
                             double *psi);
 /* Read / write the text form nbt-fit model writes: lines 'half P0 c_0 .. c_15'
- * (P0..P4, and 'infinite P0 ..'), '#' comments. Read: err gets one line. */
+ * (P0..P4, and 'infinite P0 ..'), 'range tau|albedo|B LO HI', '#' comments. Read: err gets one line. */
 nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_t errlen);
 nbt_status nbt_beam_fit_fprint(FILE *fp, const nbt_beam_fit *f, const char *comment);
 
