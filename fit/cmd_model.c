@@ -69,6 +69,10 @@ static double model_annulus(const psi_data *d, const double *p, size_t i, double
     return st2 * m;
 }
 
+/* start: the core carrying half the light at single scattering's width, the diffuse half three times as
+ * wide, between exponential and Gaussian (h = s) */
+static const double start_c[NBT_BEAM_FIT_PARTS] = {-0.69314718055994531, 0, -0.69314718055994531, 1.0986122886681098, 0};
+
 static void unpack(model_ctx *c, const double *x)
 {
     int n = 0;
@@ -108,19 +112,18 @@ static int model_res(const double *x, double *r, double *jac, void *vp)
             }
         }
     }
-    /* the ridge: L c for every free non-constant coefficient */
+    /* the ridge: L (c - c_start) for every free coefficient (the start is 0 but for the constants),
+     * so that a part the data do not need cannot run away to e^P = 0 (where its gradient vanishes) */
     int e = 0;
     for (int qq = 0; qq < NBT_BEAM_FIT_PARTS; qq++)
         for (int kk = 0; kk < NBT_BEAM_FIT_TERMS; kk++)
             if (c->free_[qq][kk]) {
-                if (kk > 0) {
-                    r[n] = c->ridge * c->c[qq][kk];
-                    if (jac) {
-                        memset(jac + n * (size_t)np, 0, (size_t)np * sizeof *jac);
-                        jac[n * (size_t)np + (size_t)e] = c->ridge;
-                    }
-                    n++;
+                r[n] = c->ridge * (c->c[qq][kk] - (kk == 0 ? start_c[qq] : 0));
+                if (jac) {
+                    memset(jac + n * (size_t)np, 0, (size_t)np * sizeof *jac);
+                    jac[n * (size_t)np + (size_t)e] = c->ridge;
                 }
+                n++;
                 e++;
             }
     return 0;
@@ -206,12 +209,8 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
         c.scale[q] = 1 / sqrt(den);
         nres += runs[q].nplanes * runs[q].nbins;
     }
-    /* start: the core carrying half the light at single scattering's width, the diffuse half three times as
-     * wide, between exponential and Gaussian (h = s) */
-    c.c[0][0] = log(0.5);
-    c.c[2][0] = log(0.5);
-    c.c[3][0] = log(3.0);
-    c.c[4][0] = 0;
+    for (int q = 0; q < NBT_BEAM_FIT_PARTS; q++)
+        c.c[q][0] = start_c[q];
     /* continuation: constants, then total degree <= 1, 2, 3; the diffuse shape P4 stays at h = s
      * while only constants are free (alone it runs to h -> 0, the exponential, where its gradient
      * vanishes and the later stages could not move it back) */
@@ -225,7 +224,7 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
             for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++) {
                 c.free_[q][k] = c.active[k] && pw[k][0] + pw[k][1] + pw[k][2] <= deg && (q < 4 || deg >= 1);
                 np += c.free_[q][k];
-                nridge += c.free_[q][k] && k > 0;
+                nridge += c.free_[q][k];
             }
         if (np > NBT_FIT_MAX_PARAMS)
             die("model: %d coefficients exceed the solver's %d", np, NBT_FIT_MAX_PARAMS);
@@ -239,7 +238,7 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
         nbt_fit_options o;
         nbt_fit_options_default(&o);
         o.analytic_jacobian = 1;
-        o.max_iterations = 500;
+        o.max_iterations = 2000;
         size_t nr = nres + (size_t)nridge;
         if (nbt_fit_solve(np, x, NULL, NULL, (int)nr, model_res, &c, &o, &s)) {
             fprintf(stderr, "%s: model (%s): the fit failed at degree %d: %s (%s)\n", cli_prog, geo_word[geo], deg,
