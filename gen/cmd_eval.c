@@ -265,6 +265,8 @@ static int eval_beam(const args_t *a, const char *what)
     double r = psi ? need(a, O_R, "--r", 0, 1, INFINITY, 1) : 0;
     nbt_beam_medium m = nbt_beam_homogeneous(st_, W, B);
     double *zl = NULL, *rl = NULL;
+    if (fitted && a->arg[O_DENSITY])
+        die_usage("--model fitted: the fitted model is for homogeneous media only (no --density)");
     if (a->arg[O_DENSITY]) {
         char err[512];
         if (nbt_density_read(a->arg[O_DENSITY], &zl, &rl, &m.nlayers, err, sizeof err) != NBT_OK)
@@ -292,8 +294,6 @@ static int eval_beam(const args_t *a, const char *what)
         nbt_beam_fit own;
         const nbt_beam_fit *f = nbt_beam_fit_default();
         char err[512];
-        if (a->arg[O_DENSITY])
-            die_usage("--model fitted: the fitted model is for homogeneous media only (no --density)");
         if (a->arg[O_BEAMMODEL]) {
             if (nbt_beam_fit_read(a->arg[O_BEAMMODEL], &own, err, sizeof err) != NBT_OK)
                 die_usage("--beam-model: %s", err);
