@@ -101,4 +101,27 @@ if [ "${UPDATE:-0}" = 1 ]; then
     { echo "# doc/kernelmodel.sh: $PHOTONS photons per run, sigma_t = 1, z = 1..10, r in [0, z) in 20 annuli;"
       echo "# eval-*: the training grid's (dtheta, albedo) with other seeds; held-*: off-grid pairs"
       cat "$DIR/rms.txt"; } >doc/kernelmodel_rms.txt
+    # the figure: RMS against albedo on the evaluation grid, model (filled) and moment kernel (open), per dtheta
+    if command -v gnuplot >/dev/null 2>&1; then
+        for g in half infinite; do grep "^$g .*eval-" "$DIR/rms.txt" >"$DIR/$g.dat"; done
+        gnuplot <<GP && mv "$DIR/fig.png" doc/figures/kernelmodel_rms.png
+set terminal pngcairo size 1300,450 font ",10"
+set output "$DIR/fig.png"
+set multiplot layout 1,2
+set logscale y
+set yrange [0.008:0.6]
+set xrange [0.05:1.04]
+set xlabel "albedo"
+set ylabel "relative RMS of 2 pi r Psi vs photon counting"
+set key outside right maxrows 11 font ",8"
+set grid
+do for [g in "half infinite"] {
+  set title (g eq "half" ? "beam entering a half-space" : "source inside the medium (--infinite)")
+  plot for [i=0:4] "$DIR/".g.".dat" every ::(4*i)::(4*i+3) using 3:5 with linespoints pt 7 lc i+1 title sprintf("model %s deg", word("10 20 30 45 60", i+1)), \\
+       for [i=0:4] "$DIR/".g.".dat" every ::(4*i)::(4*i+3) using 3:6 with linespoints pt 6 dt 2 lc i+1 title sprintf("moment %s deg", word("10 20 30 45 60", i+1)), \\
+       0.05 with lines lc rgb "black" dt 3 title "5 %"
+}
+unset multiplot
+GP
+    fi
 fi
