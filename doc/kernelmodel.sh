@@ -12,6 +12,9 @@
 # 2. nbt-fit model on them -> DIR/model.txt, and with UPDATE=1 (run from a
 #    build in the source tree) libnbt/beam_fit_data.h (the compiled-in default)
 #    and doc/kernelmodel_rms.txt (step 3's table);
+# 4. (after 3) layered media: three density profiles (DIR/dens-*.txt), dtheta = 30 deg,
+#    albedo 0.5 and 0.9 (half-space) and 0.9 (infinite), nbt-fit model --apply --density:
+#    DIR/rms_layers.txt (doc/kernelmodel_layers.txt with UPDATE=1);
 # 3. evaluation runs with other seeds, planes z = 1..10, r in [0, z) in 20
 #    annuli (the RMS definition of doc/beam_rms.txt): the same dtheta x
 #    {0.1,0.5,0.9,0.99} grid (seed 101..), and off-grid (dtheta, albedo)
@@ -90,6 +93,27 @@ done
 # shellcheck disable=SC2086
 "$NBT_FIT" model --apply "$DIR/model.txt" $evals | sed "s|$DIR/||g" >"$DIR/rms.txt"
 cat "$DIR/rms.txt"
+# layered media: the model through zeta and the eq. 28/29 moments (nbt_beam_fit_psi)
+printf '# dense, then thin\n0 2\n3 0.5\n' >"$DIR/dens-A.txt"
+printf '# thin, dense, then 1\n0 0.5\n2 2\n5 1\n' >"$DIR/dens-B.txt"
+printf '# a vacuum gap from z = 2 to 4\n0 1\n2 0\n4 1\n' >"$DIR/dens-C.txt"
+: >"$DIR/rms_layers.txt"
+s=301
+for L in A B C; do
+    for p in half:0.5 half:0.9 infinite:0.9; do
+        g=${p%%:*} a=${p#*:}
+        f="$DIR/layer-$L-$g-$a.exr"
+        if [ ! -s "$f" ]; then
+            flag=; [ "$g" = infinite ] && flag=--infinite
+            "$NBT_FIT" mc --albedo "$a" --sigma-t 1 --B "$(bof 30)" --photons "$PHOTONS" --seed $s --threads "$THREADS" \
+                --z-planes 1:10:10 --r-bins 20 --density "$DIR/dens-$L.txt" $flag -o "$f.tmp.exr" >/dev/null 2>&1
+            mv "$f.tmp.exr" "$f"
+        fi
+        s=$((s + 1))
+    done
+    "$NBT_FIT" model --apply "$DIR/model.txt" --density "$DIR/dens-$L.txt" "$DIR"/layer-$L-*.exr | sed "s|$DIR/||g" >>"$DIR/rms_layers.txt"
+done
+cat "$DIR/rms_layers.txt"
 if [ "${UPDATE:-0}" = 1 ]; then
     awk 'BEGIN { print "/* written by doc/kernelmodel.sh from nbt-fit model: see doc/fit.md */" }
          /^(half|infinite) P[0-4] / { g = ($1 == "half") ? 0 : 1; i = substr($2, 2) + 0
@@ -101,6 +125,9 @@ if [ "${UPDATE:-0}" = 1 ]; then
     { echo "# doc/kernelmodel.sh: $PHOTONS photons per run, sigma_t = 1, z = 1..10, r in [0, z) in 20 annuli;"
       echo "# eval-*: the training grid's (dtheta, albedo) with other seeds; held-*: off-grid pairs"
       cat "$DIR/rms.txt"; } >doc/kernelmodel_rms.txt
+    { echo "# doc/kernelmodel.sh: layered media, $PHOTONS photons per run, dtheta = 30 deg, z = 1..10, r in [0, z) in 20 annuli;"
+      echo "# density A: 2 on [0, 3), 0.5 beyond; B: 0.5 on [0, 2), 2 on [2, 5), 1 beyond; C: 1, vacuum on [2, 4), 1"
+      cat "$DIR/rms_layers.txt"; } >doc/kernelmodel_layers.txt
     # the figure: RMS against albedo on the evaluation grid, model (filled) and moment kernel (open), per dtheta
     if command -v gnuplot >/dev/null 2>&1; then
         for g in half infinite; do grep "^$g .*eval-" "$DIR/rms.txt" >"$DIR/$g.dat"; done

@@ -21,7 +21,7 @@ static void help(void)
 {
     puts("Usage: nbt-fit model MC.exr|MC.csv [MORE ...] -o MODEL.txt [--albedo W --sigma-t ST --B B]\n"
          "                     [--infinite] [--ridge L] [--strict]\n"
-         "       nbt-fit model --apply MODEL.txt|default MC.exr [MORE ...]\n\n"
+         "       nbt-fit model --apply MODEL.txt|default MC.exr [MORE ...] [--density FILE]\n\n"
          "Fits the kernel model of nbt/beam.h (nbt_beam_fit): Psi = a/r G(r/b) + M exp(-r^2/2s^2)/(2 pi s^2)\n"
          "with log-parameters P0..P3 as polynomials in ln(sigma_t z), albedo and ln B (the terms in albedo\n"
          "and B only where the runs differ in them), one set per geometry, to all runs at once: it\n"
@@ -32,7 +32,10 @@ static void help(void)
          "stderr gets 'RMS FILE model X moment Y' per run and the fit's status (see nbt-fit kernel --help);\n"
          "--strict: a flagged fit is an error (exit 2, nothing written).\n"
          "--apply: for each run, 'geometry dtheta albedo mc_se model moment' (relative RMS of 2 pi r Psi;\n"
-         "mc_se the counts' own noise on that scale; dtheta = 2 sqrt(B) in degrees) on stdout.");
+         "mc_se the counts' own noise on that scale; dtheta = 2 sqrt(B) in degrees) on stdout.\n"
+         "--apply --density FILE: the runs were counted in that layered density (nbt-fit mc --density);\n"
+         "the model is evaluated as nbt_beam_fit_psi does there (equivalent depth zeta, widths scaled by\n"
+         "the eq. 29 / eq. 26 second moments), the moment kernel from eq. 28/29.");
 }
 
 typedef struct {
@@ -131,14 +134,26 @@ static int model_res(const double *x, double *r, double *jac, void *vp)
 
 /* relative RMS of 2 pi r Psi over a whole run: model (f, geometry) or, f == NULL, the moment kernel;
  * *noise (may be NULL) gets the counts' standard errors on the same scale */
-static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double *noise)
+/* the layered density of --apply --density (NULL: homogeneous) */
+typedef struct {
+    size_t n;
+    const double *z, *rho;
+} layers;
+
+static double run_rms_in(const psi_data *d, const nbt_beam_fit *f, int geo, const layers *ly, double *noise)
 {
-    double num = 0, den = 0, se2 = 0;
+    double num = 0, den = 0, se2 = 0, st = d->sigma_t;
     nbt_beam_medium m = nbt_beam_homogeneous(d->sigma_t, d->albedo, d->B);
+    if (ly) {
+        m.nlayers = ly->n;
+        m.z = ly->z;
+        m.rho = ly->rho;
+    }
     for (size_t j = 0; j < d->nplanes; j++) {
-        double p[NBT_BEAM_FIT_PARTS] = {0}, a = 0, b = 0;
-        if (f) {
-            if (nbt_beam_fit_params(f, geo, d->sigma_t * d->z[j], d->albedo, d->B, p) != NBT_OK)
+        double p[NBT_BEAM_FIT_PARTS] = {0}, a = 0, b = 0, zeta = d->z[j], lam = 1;
+        if (f) { /* layers: the homogeneous model at zeta(z), widths scaled by lambda (nbt_beam_fit_psi) */
+            if (nbt_beam_fit_equivalent(&m, d->z[j], &zeta, &lam) != NBT_OK ||
+                (zeta > 0 && nbt_beam_fit_params(f, geo, st * zeta, d->albedo, d->B, p) != NBT_OK))
                 return NAN;
         } else {
             double M0, M2;
@@ -147,8 +162,13 @@ static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double 
         }
         for (size_t k = 0; k < d->nbins; k++) {
             size_t i = j * d->nbins + k;
-            double w = M_PI * (d->lo[i] + d->hi[i]);
-            double v = f ? model_annulus(d, p, i, NULL) : (b > 0 ? kernel_annulus(a, b, d->lo[i], d->hi[i], NULL, NULL) : 0);
+            double w = M_PI * (d->lo[i] + d->hi[i]), v = 0;
+            if (f && zeta > 0) {
+                double lo = st * d->lo[i] / lam, hi = st * d->hi[i] / lam;
+                v = st * st / (lam * lam) *
+                    (kernel_annulus(p[0], p[1], lo, hi, NULL, NULL) + pexp_annulus(p[2], p[3], p[4], lo, hi, NULL, NULL, NULL));
+            } else if (!f && b > 0)
+                v = kernel_annulus(a, b, d->lo[i], d->hi[i], NULL, NULL);
             num += w * w * (v - d->psi[i]) * (v - d->psi[i]);
             den += w * w * d->psi[i] * d->psi[i];
             se2 += w * w * d->se[i] * d->se[i];
@@ -157,6 +177,11 @@ static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double 
     if (noise)
         *noise = sqrt(se2 / den);
     return sqrt(num / den);
+}
+
+static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double *noise)
+{
+    return run_rms_in(d, f, geo, NULL, noise);
 }
 
 /* terms of monomial k: powers of (x, w, v) */
@@ -285,8 +310,9 @@ int cmd_model(int argc, char **argv)
         {"sigma-t", required_argument, 0, 's'}, {"B", required_argument, 0, 'B'},
         {"infinite", no_argument, 0, 'I'},     {"ridge", required_argument, 0, 'r'},
         {"apply", required_argument, 0, 'A'},  {"strict", no_argument, 0, 'T'},
+        {"density", required_argument, 0, 'd'},
         {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
-    const char *out = NULL, *apply = NULL;
+    const char *out = NULL, *apply = NULL, *density = NULL;
     double albedo = NAN, sigma_t = NAN, B = NAN, ridge = 1e-3;
     int infinite = 0, strict = 0, o;
     optind = 1;
@@ -300,6 +326,7 @@ int cmd_model(int argc, char **argv)
         case 'r': ridge = opt_double("--ridge", optarg, 0, 0, 1e3, 0); break;
         case 'A': apply = optarg; break;
         case 'T': strict = 1; break;
+        case 'd': density = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit model --help'");
         }
@@ -311,6 +338,8 @@ int cmd_model(int argc, char **argv)
         die_usage("model: -o MODEL.txt is required (or --apply MODEL.txt to measure one)");
     if (apply && out)
         die_usage("model: --apply and -o exclude each other");
+    if (density && !apply)
+        die_usage("model: --density applies to --apply only (the model is fitted to homogeneous runs)");
     nbt_beam_fit applied;
     char err[512];
     if (apply) {
@@ -341,17 +370,29 @@ int cmd_model(int argc, char **argv)
                       geo_word[d->infinite]);
     }
     if (apply) {
-        printf("# relative RMS of 2 pi r Psi vs photon counting, model %s; mc_se: the counts' own noise\n"
-               "geometry dtheta albedo   mc_se    model   moment  file\n", apply);
+        layers ly = {0, NULL, NULL};
+        double *lz = NULL, *lr = NULL;
+        if (density) {
+            if (nbt_density_read(density, &lz, &lr, &ly.n, err, sizeof err) != NBT_OK)
+                die_usage("--density: %s", err);
+            ly.z = lz;
+            ly.rho = lr;
+        }
+        printf("# relative RMS of 2 pi r Psi vs photon counting, model %s%s%s; mc_se: the counts' own noise\n"
+               "geometry dtheta albedo   mc_se    model   moment  file\n", apply, density ? ", density " : "",
+               density ? density : "");
         for (size_t q = 0; q < nruns; q++) {
             const psi_data *d = &runs[q];
-            double se, r1 = run_rms(d, &applied, d->infinite, &se), r0 = run_rms(d, NULL, 0, NULL);
+            double se, r1 = run_rms_in(d, &applied, d->infinite, density ? &ly : NULL, &se),
+                       r0 = run_rms_in(d, NULL, 0, density ? &ly : NULL, NULL);
             printf("%-8s %6.1f %6.3f %7.4f %8.4f %8.4f  %s\n", geo_word[d->infinite], 2 * sqrt(d->B) * 180 / M_PI,
                    d->albedo, se, r1, r0, d->name);
         }
         for (size_t q = 0; q < nruns; q++)
             psi_data_free(&runs[q]);
         free(runs);
+        free(lz);
+        free(lr);
         return 0;
     }
     check_writable("-o", out);

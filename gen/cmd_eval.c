@@ -50,7 +50,8 @@ static void eval_help(void)
          "                [--beam-model FILE]   the fitted kernel model (nbt/beam.h nbt_beam_fit): libnbt's\n"
          "                default or FILE (nbt-fit model -o FILE); --infinite: a source inside the medium\n"
          "                (as nbt-fit mc --infinite), default a beam entering a half-space from vacuum;\n"
-         "                homogeneous media only; the error column is 0 (its model error: doc/fit.md)\n\n"
+         "                with --density through zeta and the second moments (nbt_beam_fit_psi); the\n"
+         "                error column is 0 (the model's measured error: doc/fit.md)\n\n"
          "Prints the value and its estimated absolute error, 17 significant digits.\n"
          "A density FILE has lines 'z rho': layers from z (first 0) with density rho >= 0.\n"
          "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
@@ -265,8 +266,6 @@ static int eval_beam(const args_t *a, const char *what)
     double r = psi ? need(a, O_R, "--r", 0, 1, INFINITY, 1) : 0;
     nbt_beam_medium m = nbt_beam_homogeneous(st_, W, B);
     double *zl = NULL, *rl = NULL;
-    if (fitted && a->arg[O_DENSITY])
-        die_usage("--model fitted: the fitted model is for homogeneous media only (no --density)");
     if (a->arg[O_DENSITY]) {
         char err[512];
         if (nbt_density_read(a->arg[O_DENSITY], &zl, &rl, &m.nlayers, err, sizeof err) != NBT_OK)

@@ -159,12 +159,29 @@ int main(void)
     t_true(nbt_beam_fit_params(f, 0, 0, 0.5, 0.05, po) == NBT_EDOM, "tau = 0 rejected");
     t_true(nbt_beam_fit_params(f, 0, 1, 1.5, 0.05, po) == NBT_EDOM, "albedo > 1 rejected");
     t_true(nbt_beam_fit_params(f, 0, 1, 0.5, NAN, po) == NBT_EDOM, "B = NaN rejected");
-    double zl[2] = {0, 1}, rl[2] = {1, 2};
+    /* layers: a constant density rho is exactly the homogeneous medium with rho sigma_t; no medium
+     * crossed yet (a vacuum first layer): no scattered light; a step is finite and continuous in z */
+    double zl[2] = {0, 1.3}, rl[2] = {2.385, 2.385};
     nbt_beam_medium lay = m1;
     lay.nlayers = 2;
     lay.z = zl;
     lay.rho = rl;
-    t_true(nbt_beam_fit_psi(f, 0, &lay, 2, 0.5, &a1) == NBT_EDOM, "layered medium rejected (homogeneous model)");
+    nbt_beam_medium hom = nbt_beam_homogeneous(2.385, 0.8, 0.05);
+    for (int g = 0; g < 2; g++) {
+        nbt_beam_fit_psi(f, g, &lay, 2.7, 0.61, &a1);
+        nbt_beam_fit_psi(f, g, &hom, 2.7, 0.61, &a2);
+        t_rel(a1, a2, 1e-9, "geometry %d: constant density 2.385 in two layers = sigma_t x 2.385", g);
+    }
+    rl[0] = 0;
+    rl[1] = 1.7;
+    t_true(nbt_beam_fit_psi(f, 0, &lay, 1.0, 0.2, &a1) == NBT_OK && a1 == 0, "inside a vacuum first layer: 0");
+    double near, mid;
+    t_true(nbt_beam_fit_psi(f, 0, &lay, 1.3 + 1e-9, 0.05, &near) == NBT_OK && isfinite(near) && near >= 0,
+           "just past the vacuum (zeta = 1.7e-9): finite (%g)", near);
+    t_true(nbt_beam_fit_psi(f, 1, &lay, 3.1, 0.4, &mid) == NBT_OK && isfinite(mid) && mid > 0, "inside the second layer: > 0");
+    nbt_beam_medium badl = lay;
+    badl.albedo = 1.5;
+    t_true(nbt_beam_fit_psi(f, 0, &badl, 2, 0.5, &a1) == NBT_EDOM, "bad medium rejected");
     nbt_beam_fit half = *f;
     half.have[1] = 0;
     t_true(nbt_beam_fit_params(&half, 1, 1, 0.5, 0.05, po) == NBT_EDOM, "a geometry the model lacks rejected");

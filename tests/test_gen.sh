@@ -46,7 +46,13 @@ for g in "" --infinite; do
   fb=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 3 --r 0.7 --model fitted $g | cut -d' ' -f1)
   close "$fa" "$(awk -v b="$fb" 'BEGIN { printf "%.17g", 4 * b }')" 1e-12 "eval psi --model fitted $g: sigma_t scaling"
 done
-expect_usage "fitted with layers" "homogeneous" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --density "$tmp/bm.txt"
+# layers: a constant density 2 is the homogeneous medium with twice sigma_t (exact: zeta = 2 z, lambda = 1/2)
+printf '0 2\n' >"$tmp/d2.txt"
+fa=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --density "$tmp/d2.txt" | cut -d' ' -f1)
+fb=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 2 --B 0.0685 --z 2 --r 0.3 --model fitted | cut -d' ' -f1)
+close "$fa" "$fb" 1e-10 "eval psi --model fitted --density: constant density 2 = sigma_t x 2"
+expect_usage "fitted with a bad density file" "density file" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --density "$tmp/bm.txt"
+rm -f "$tmp/d2.txt"
 expect_usage "--infinite for another model" "--infinite does not apply" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --infinite
 expect_usage "--beam-model missing" "No such file" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --beam-model /nonexistent/m.txt
 # its tables: the log-parameters at a node (constants here), P4 in the second file

@@ -131,9 +131,19 @@ nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, 
 void nbt_beam_fit_from_P(const double *P, double tau, double albedo, double B, double *p);
 /* Psi_hat(rh) from p (rh > 0; 0 at rh <= 0, where the core is infinite). */
 double nbt_beam_fit_eval(const double *p, double rh);
-/* Psi(z, r) of a homogeneous medium m (one or more lobes; layers: NBT_EDOM). */
+/* Psi(z, r) of medium m (one or more lobes: B = B_mix). Layered or continuous
+ * density: the homogeneous model at the equivalent depth zeta(z) (which has
+ * eq. 28's M0), its widths scaled by lambda (nbt_beam_fit_equivalent):
+ * Psi(z, r) = Psi_hom(zeta, r/lambda)/lambda^2; 0 where zeta(z) = 0. Fitted
+ * to homogeneous runs only: see doc/fit.md for its measured error in layers
+ * (2-11% on three profiles). */
 nbt_status nbt_beam_fit_psi(const nbt_beam_fit *f, int infinite, const nbt_beam_medium *m, double z, double r,
                             double *psi);
+/* zeta(z) and lambda = sqrt(M2(z) / M2_hom(zeta)) of m, M2 the small-angle
+ * random walk's (NBT_BEAM_SMALLANGLE; closer to layered photon counts than
+ * eq. 29 / 26 here); homogeneous: z and 1; exact for a constant density rho,
+ * where lambda = 1/rho. */
+nbt_status nbt_beam_fit_equivalent(const nbt_beam_medium *m, double z, double *zeta, double *lambda);
 /* Read / write the text form nbt-fit model writes: lines 'half P0 c_0 .. c_15'
  * (P0..P4, and 'infinite P0 ..'), 'range tau|albedo|B LO HI', '#' comments. Read: err gets one line. */
 nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_t errlen);
