@@ -22,13 +22,15 @@ static void help(void)
     puts("Usage: nbt-fit model MC.exr|MC.csv [MORE ...] -o MODEL.txt [--albedo W --sigma-t ST --B B]\n"
          "                     [--infinite] [--ridge L] [--strict]\n"
          "       nbt-fit model --apply MODEL.txt|default MC.exr [MORE ...] [--density FILE]\n\n"
-         "Fits the kernel model of nbt/beam.h (nbt_beam_fit): Psi = a/r G(r/b) + M exp(-r^2/2s^2)/(2 pi s^2)\n"
-         "with log-parameters P0..P3 as polynomials in ln(sigma_t z), albedo and ln B (the terms in albedo\n"
-         "and B only where the runs differ in them), one set per geometry, to all runs at once: it\n"
+         "Fits the kernel model of nbt/beam.h (nbt_beam_fit): Psi = a/r G(r/b) + M e^{-(q-h)/s}/(2 pi s (h+s)),\n"
+         "q = sqrt(r^2 + h^2) (sigma_t = 1 units), with log-parameters P0..P4 as polynomials in\n"
+         "ln(sigma_t z), albedo and ln B (the terms in albedo and B only where the runs differ in them),\n"
+         "one set per geometry, to all runs at once: it\n"
          "minimises the sum over runs of the squared relative RMS of 2 pi r Psi (annulus means, as\n"
-         "counted), plus L^2 sum c^2 over the non-constant coefficients (--ridge, default 1e-3), which\n"
-         "keeps the fit well-posed. The medium and geometry come from an EXR's metadata (nbt-fit mc -o\n"
-         "X.exr) or --albedo/--sigma-t/--B and --infinite (the source inside the medium) for CSV files.\n"
+         "counted), plus L^2 sum (c - c_start)^2 over the coefficients (--ridge, default 1e-3; the start is\n"
+         "0 but for the constants), which keeps the fit well-posed. The medium and geometry come from\n"
+         "an EXR's metadata (nbt-fit mc -o X.exr) or --albedo/--sigma-t/--B and --infinite (the source\n"
+         "inside the medium) for CSV files.\n"
          "stderr gets 'RMS FILE model X moment Y' per run and the fit's status (see nbt-fit kernel --help);\n"
          "--strict: a flagged fit is an error (exit 2, nothing written).\n"
          "--apply: for each run, 'geometry dtheta albedo mc_se model moment' (relative RMS of 2 pi r Psi;\n"
@@ -244,12 +246,10 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
     int np = 0;
     for (int deg = 0; deg <= 3; deg++) {
         np = 0;
-        int nridge = 0;
         for (int q = 0; q < NBT_BEAM_FIT_PARTS; q++)
             for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++) {
                 c.free_[q][k] = c.active[k] && pw[k][0] + pw[k][1] + pw[k][2] <= deg && (q < 4 || deg >= 1);
                 np += c.free_[q][k];
-                nridge += c.free_[q][k];
             }
         if (np > NBT_FIT_MAX_PARAMS)
             die("model: %d coefficients exceed the solver's %d", np, NBT_FIT_MAX_PARAMS);
@@ -264,7 +264,7 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
         nbt_fit_options_default(&o);
         o.analytic_jacobian = 1;
         o.max_iterations = 2000;
-        size_t nr = nres + (size_t)nridge;
+        size_t nr = nres + (size_t)np; /* the data, then one ridge residual per coefficient */
         if (nbt_fit_solve(np, x, NULL, NULL, (int)nr, model_res, &c, &o, &s)) {
             fprintf(stderr, "%s: model (%s): the fit failed at degree %d: %s (%s)\n", cli_prog, geo_word[geo], deg,
                     s.termination, s.message);
