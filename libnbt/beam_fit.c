@@ -154,8 +154,8 @@ nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_
             double lo, hi;
             char extra;
             int ri = -1;
-            if (sscanf(p, "range %15s %lf %lf %c", pname, &lo, &hi, &extra) == 3)
-                ri = !strcmp(pname, "tau") ? 0 : !strcmp(pname, "albedo") ? 1 : !strcmp(pname, "B") ? 2 : -1;
+            if (sscanf(p, "range %15s %lf %lf %c", gname, &lo, &hi, &extra) == 3)
+                ri = !strcmp(gname, "tau") ? 0 : !strcmp(gname, "albedo") ? 1 : !strcmp(gname, "B") ? 2 : -1;
             if (ri < 0 || !isfinite(lo) || !isfinite(hi) || !(lo <= hi)) {
                 snprintf(err, errlen, "beam model '%s' line %d: expected 'range tau|albedo|B LO HI' with LO <= HI",
                          path, ln);
