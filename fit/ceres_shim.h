@@ -30,7 +30,7 @@ typedef struct {
     void *progress_data;
 } nbt_fit_options;
 
-#define NBT_FIT_MAX_PARAMS 64
+#define NBT_FIT_MAX_PARAMS 96
 
 typedef struct {
     int usable;                 /* 1: converged, or stopped at a usable point */

@@ -5,5 +5,6 @@
 int cmd_mc(int argc, char **argv);
 int cmd_kernel(int argc, char **argv); /* with Ceres only */
 int cmd_phase(int argc, char **argv);  /* with Ceres only */
+int cmd_model(int argc, char **argv);  /* with Ceres only */
 
 #endif

@@ -40,6 +40,29 @@ double gauss_annulus(double M, double s, double lo, double hi, double *dm, doubl
     return M * base;
 }
 
+/* mass fraction outside r of the diffuse part: ((q + s)/(h + s)) e^{-(q - h)/s}, q = sqrt(r^2 + h^2),
+ * with its log-derivatives in s and h */
+static double pexp_outside(double r, double s, double h, double *ls, double *lh)
+{
+    double q = sqrt(r * r + h * h), qh = r * r / (q + h); /* q - h */
+    *ls = 1 / (q + s) - 1 / (h + s) + qh / (s * s);
+    *lh = (h / q) / (q + s) - 1 / (h + s) + qh / (q * s);
+    return (q + s) / (h + s) * exp(-qh / s);
+}
+
+double pexp_annulus(double M, double s, double h, double lo, double hi, double *dm, double *ds, double *dh)
+{
+    double area = M_PI * (hi * hi - lo * lo), sl, hl, sh, hh;
+    double fl = pexp_outside(lo, s, h, &sl, &hl), fh = pexp_outside(hi, s, h, &sh, &hh);
+    if (dm)
+        *dm = (fl - fh) / area;
+    if (ds)
+        *ds = M * (fl * sl - fh * sh) / area;
+    if (dh)
+        *dh = M * (fl * hl - fh * hh) / area;
+    return M * (fl - fh) / area;
+}
+
 double shape_annulus(int shape, const double *p, double lo, double hi, double *grad)
 {
     double m = kernel_annulus(p[0], p[1], lo, hi, grad ? &grad[0] : NULL, grad ? &grad[1] : NULL);

@@ -12,6 +12,10 @@ double kernel_annulus(double alpha, double beta, double lo, double hi, double *d
  * M exp(-r^2/2s^2)/(2 pi s^2), over the annulus; derivatives into *dm, *ds. */
 double gauss_annulus(double M, double s, double lo, double hi, double *dm, double *ds);
 
+/* Mean of the diffuse part of nbt_beam_fit, M e^{-(q - h)/s}/(2 pi s (h + s)),
+ * q = sqrt(r^2 + h^2) (total weight M), over the annulus; derivatives in M, s, h. */
+double pexp_annulus(double M, double s, double h, double lo, double hi, double *dm, double *ds, double *dh);
+
 #include "psi_data.h"
 
 /* The fitted shapes: 1 erfc (alpha, beta); 2 erfc2 (alpha1, beta1, alpha2,

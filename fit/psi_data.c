@@ -65,6 +65,7 @@ static int read_exr(const char *path, psi_data *d, char *err, size_t errlen)
         d->sigma_t = atof(s + 8);
     if (b)
         d->B = atof(b + 8);
+    d->infinite = strstr(t->phase, " infinite") != NULL;
     nbt_table_free(t);
     return 0;
 }

@@ -9,6 +9,7 @@ typedef struct {
     double *z;                   /* [plane] */
     double *lo, *hi, *psi, *se;  /* [plane * nbins + bin] */
     double albedo, sigma_t, B;   /* the medium, NaN when the file does not say */
+    int infinite;                /* 1: the EXR's metadata says the source was inside the medium (mc --infinite) */
     char name[256];
 } psi_data;
 

@@ -12,7 +12,7 @@
 enum {
     O_K, O_U, O_V, O_N, O_T, O_THETA, O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP,
     O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_METHOD, O_TERMS, O_TOL, O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_R,
-    O_MODEL, O_DENSITY, O_COUNT
+    O_MODEL, O_DENSITY, O_INFINITE, O_BEAMMODEL, O_COUNT
 };
 static const struct option opts[] = {
     {"k", required_argument, 0, O_K},         {"u", required_argument, 0, O_U},
@@ -29,7 +29,8 @@ static const struct option opts[] = {
     {"albedo", required_argument, 0, O_ALBEDO}, {"sigma-t", required_argument, 0, O_SIGMAT},
     {"B", required_argument, 0, O_BSPREAD},   {"z", required_argument, 0, O_Z},
     {"r", required_argument, 0, O_R},         {"model", required_argument, 0, O_MODEL},
-    {"density", required_argument, 0, O_DENSITY},
+    {"density", required_argument, 0, O_DENSITY}, {"infinite", no_argument, 0, O_INFINITE},
+    {"beam-model", required_argument, 0, O_BEAMMODEL},
     {"help", no_argument, 0, 'h'},            {0, 0, 0, 0}};
 
 static void eval_help(void)
@@ -44,7 +45,13 @@ static void eval_help(void)
          "       nbt-gen eval moments --albedo W --sigma-t ST --B B --z Z [--model ishimaru|smallangle]\n"
          "                [--density FILE]           prints M0 M2 alpha beta (narrow beam, pencil at z = 0)\n"
          "       nbt-gen eval psi --albedo W --sigma-t ST --B B --z Z --r R\n"
-         "                [--model ishimaru|smallangle|lineint|single|elek] [--density FILE]\n\n"
+         "                [--model ishimaru|smallangle|lineint|single|elek] [--density FILE]\n"
+         "       nbt-gen eval psi --albedo W --sigma-t ST --B B --z Z --r R --model fitted [--infinite]\n"
+         "                [--beam-model FILE]   the fitted kernel model (nbt/beam.h nbt_beam_fit): libnbt's\n"
+         "                default or FILE (nbt-fit model -o FILE); --infinite: a source inside the medium\n"
+         "                (as nbt-fit mc --infinite), default a beam entering a half-space from vacuum;\n"
+         "                with --density through zeta and the second moments (nbt_beam_fit_psi); the\n"
+         "                error column is 0 (the model's measured error: doc/fit.md)\n\n"
          "Prints the value and its estimated absolute error, 17 significant digits.\n"
          "A density FILE has lines 'z rho': layers from z (first 0) with density rho >= 0.\n"
          "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
@@ -249,8 +256,9 @@ static int eval_phys(const args_t *a, phys_t *ph)
 static int eval_beam(const args_t *a, const char *what)
 {
     int psi = !strcmp(what, "psi");
-    static const int ok[] = {O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_MODEL, O_DENSITY, O_R};
-    only(a, what, ok, psi ? 7 : 6);
+    static const int ok[] = {O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_MODEL, O_DENSITY, O_R, O_INFINITE, O_BEAMMODEL};
+    int fitted = psi && a->arg[O_MODEL] && !strcmp(a->arg[O_MODEL], "fitted");
+    only(a, what, ok, fitted ? 9 : psi ? 7 : 6);
     double W = need(a, O_ALBEDO, "--albedo", 0, 0, 1, 0);
     double st_ = need(a, O_SIGMAT, "--sigma-t", 0, 1, INFINITY, 1);
     double B = need(a, O_BSPREAD, "--B", 0, 1, INFINITY, 1);
@@ -281,6 +289,22 @@ static int eval_beam(const args_t *a, const char *what)
             die("evaluation failed: %s", nbt_strerror(st));
         nbt_beam_kernel_params(M0, M2, &al, &be);
         printf("%.17g %.17g %.17g %.17g\n", M0, M2, al, be);
+    } else if (fitted) {
+        nbt_beam_fit own;
+        const nbt_beam_fit *f = nbt_beam_fit_default();
+        char err[512];
+        if (a->arg[O_BEAMMODEL]) {
+            if (nbt_beam_fit_read(a->arg[O_BEAMMODEL], &own, err, sizeof err) != NBT_OK)
+                die_usage("--beam-model: %s", err);
+            f = &own;
+        }
+        int inf = a->arg[O_INFINITE] != NULL;
+        if (!f->have[inf])
+            die_usage("--beam-model: '%s' holds no coefficients for the %s geometry", a->arg[O_BEAMMODEL],
+                      inf ? "infinite (--infinite)" : "half-space");
+        double v;
+        st = nbt_beam_fit_psi(f, inf, &m, z, r, &v);
+        print_result(st, v, 0);
     } else {
         static const char *names[] = {"ishimaru", "smallangle", "lineint", "single", "elek"};
         static const nbt_psi_model models[] = {NBT_PSI_ISHIMARU, NBT_PSI_SMALLANGLE, NBT_PSI_LINEINT, NBT_PSI_SINGLE,
@@ -293,7 +317,7 @@ static int eval_beam(const args_t *a, const char *what)
             die_usage("--model pi: the path-integral width of Shinya et al.'s supplement (eq. 14-16) is not "
                       "available here; accepted are ishimaru, smallangle, lineint, single, elek");
         if (k < 0)
-            die_usage("--model: '%s' is not accepted: ishimaru, smallangle, lineint, single or elek", model);
+            die_usage("--model: '%s' is not accepted: ishimaru, smallangle, lineint, single, elek or fitted", model);
         double v, e;
         st = nbt_beam_psi(&m, models[k], z, r, &v, &e);
         print_result(st, v, e);
@@ -322,7 +346,7 @@ int cmd_eval(int argc, char **argv)
         }
         if (c < 0 || c >= O_COUNT)
             die_usage("see 'nbt-gen eval --help'");
-        a.arg[c] = optarg;
+        a.arg[c] = optarg ? optarg : ""; /* a flag without argument is present as "" */
     }
     if (optind < argc)
         die_usage("eval: unexpected argument '%s'", argv[optind]);

@@ -51,13 +51,18 @@ int cmd_info(int argc, char **argv)
         printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
     printf("storage     %s\n", t->half ? "half" : "float");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
-    if (t->kind == NBT_TABLE_KERNEL)
+    int fitted = t->kind == NBT_TABLE_KERNEL && strstr(t->phase, " fitted ") != NULL;
+    if (fitted)
+        printf("use         the fitted kernel model's log-parameters at (sigma_t z, albedo): nbt_beam_fit_from_P\n");
+    else if (t->kind == NBT_TABLE_KERNEL)
         printf("use         Psi(z, r) = alpha/r G(r/beta), alpha = sigma_t R, beta = G/sigma_t at (sigma_t z, albedo)\n");
     static const char *CH = "RGBA";
     for (size_t ch = 0; ch < t->nch; ch++) {
         char what[32];
         if (t->kind == NBT_TABLE_PSI)
             snprintf(what, sizeof what, ch == 0 ? "psi" : "psi_stderr");
+        else if (fitted)
+            snprintf(what, sizeof what, "P%d", strstr(t->phase, " P4") ? 4 : (int)ch);
         else if (t->kind == NBT_TABLE_KERNEL)
             snprintf(what, sizeof what, ch == 0 ? "alpha/sig_t" : "beta*sig_t");
         else if (t->k[ch] < 0)

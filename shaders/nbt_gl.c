@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <nbt/beam.h>
 #include "nbt/gl.h"
 
 /* generated from the GLSL modules at build time (nbt_glsl.c) */
@@ -107,4 +108,23 @@ unsigned nbt_gl_upload_table(const nbt_table *t)
         return 0;
     }
     return tex;
+}
+
+int nbt_gl_set_beam_fit(unsigned program, const nbt_beam_fit *f, int infinite)
+{
+    int g = infinite ? 1 : 0;
+    if (!f || !f->have[g])
+        return 1;
+    float c[NBT_BEAM_FIT_PARTS * NBT_BEAM_FIT_TERMS], lo[3], hi[3];
+    for (int i = 0; i < NBT_BEAM_FIT_PARTS; i++)
+        for (int k = 0; k < NBT_BEAM_FIT_TERMS; k++)
+            c[i * NBT_BEAM_FIT_TERMS + k] = (float)f->c[g][i][k];
+    for (int i = 0; i < 3; i++) {
+        lo[i] = (float)f->range[i][0];
+        hi[i] = (float)f->range[i][1];
+    }
+    glUniform1fv(glGetUniformLocation(program, "nbt_beam_fit_c"), NBT_BEAM_FIT_PARTS * NBT_BEAM_FIT_TERMS, c);
+    glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_lo"), 1, lo);
+    glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_hi"), 1, hi);
+    return 0;
 }

@@ -188,6 +188,43 @@ else
   expect_usage "phase --strict" "strict: 3 of 4 fits flagged" "$NBT_FIT" phase --target rayleigh --terms 4 --strict -o "$tmp/rs.sog"
   [ ! -e "$tmp/rs.sog" ] && [ ! -s "$tmp/out" ] && ok || bad "phase --strict left output"
 
+  # model: the kernel model over depth, albedo and B (nbt-fit model), fitted to 9 small half-space runs
+  # (3 albedos x 3 widths) and 2 infinite ones: every run ends well below the moment kernel's RMS
+  for a in 0.3 0.6 0.9; do for B in 0.03 0.0685 0.154; do
+    "$NBT_FIT" mc --albedo $a --sigma-t 1 --B $B --photons 20000 --z-planes 1:8:8 --r-bins 12 --seed 5 -o "$tmp/mh-$a-$B.exr" >/dev/null 2>&1
+  done; done
+  "$NBT_FIT" model "$tmp"/mh-*.exr -o "$tmp/m.txt" 2>"$tmp/merr" && ok || bad "model fit: $(cat "$tmp/merr")"
+  [ "$(grep -c '^RMS ' "$tmp/merr")" -eq 9 ] && ! grep -q "^nbt-fit: model" "$tmp/merr" && grep -q "fit status ok" "$tmp/m.txt" && ok ||
+    bad "model: one RMS line per run, not flagged: $(cat "$tmp/merr")"
+  # the moment kernel misses these by 11-23%; the model (80 coefficients on 9 runs) must reach half of that or better
+  awk '/^RMS/ { if (!($4 + 0 < 0.5 * $6)) { print; b = 1 } } END { exit b }' "$tmp/merr" >"$tmp/mbad" && ok ||
+    bad "model RMS below half the moment kernel's on every run: $(cat "$tmp/mbad")"
+  [ "$(grep -c '^half P[0-4] ' "$tmp/m.txt")" -eq 5 ] && ! grep -q '^infinite ' "$tmp/m.txt" && grep -q '^range tau 1 8$' "$tmp/m.txt" && ok ||
+    bad "model file: 5 half-space lines, the range: $(cat "$tmp/m.txt")"
+  # --apply gives the same numbers as the fit's report
+  "$NBT_FIT" model --apply "$tmp/m.txt" "$tmp"/mh-*.exr >"$tmp/mapp" 2>&1 && ok || bad "model --apply: $(cat "$tmp/mapp")"
+  awk 'NR == FNR { if ($1 == "RMS") f[$2] = $4; next } /^half/ { n++; if (f[$7] != sprintf("%.4f", $5)) b = 1 } END { exit b || n != 9 }' \
+    "$tmp/merr" "$tmp/mapp" && ok || bad "--apply = the fit's RMS: $(cat "$tmp/mapp")"
+  # the shipped model on these runs (it was fitted to other seeds and a finer grid): within 5% where the runs' own noise
+  # allows (their mc_se column is ~1-3%), and below the moment kernel
+  "$NBT_FIT" model --apply default "$tmp"/mh-*.exr >"$tmp/mdef" 2>&1 &&
+    awk '/^half/ { if (!($5 < 0.05 + 2 * $4 && $5 < $6)) { print; b = 1 } } END { exit b }' "$tmp/mdef" >"$tmp/mbad" && ok ||
+    bad "the shipped model on fresh runs: $(cat "$tmp/mbad" "$tmp/mdef")"
+  # an infinite run: the geometry comes from the EXR; a half-space-only model refuses it
+  "$NBT_FIT" mc --albedo 0.6 --sigma-t 1 --B 0.0685 --photons 20000 --z-planes 1:8:8 --r-bins 12 --seed 5 --infinite -o "$tmp/mi.exr" >/dev/null 2>&1
+  expect_usage "model --apply, geometry missing" "no coefficients for the infinite geometry" "$NBT_FIT" model --apply "$tmp/m.txt" "$tmp/mi.exr"
+  "$NBT_FIT" model --apply default "$tmp/mi.exr" 2>&1 | grep -q '^infinite ' && ok || bad "the default model holds the infinite geometry"
+  # --strict: a flagged fit (two runs cannot determine 80 coefficients without the ridge) writes nothing
+  expect_usage "model --strict" "strict: 1 of 1 fits flagged" "$NBT_FIT" model "$tmp/mh-0.3-0.03.exr" "$tmp/mh-0.9-0.154.exr" --ridge 0 --strict -o "$tmp/ms.txt"
+  [ ! -e "$tmp/ms.txt" ] && ok || bad "model --strict left a file"
+  expect_usage "model without -o" "-o MODEL.txt" "$NBT_FIT" model "$tmp/mi.exr"
+  expect_usage "model -o and --apply" "exclude" "$NBT_FIT" model "$tmp/mi.exr" --apply default -o "$tmp/ms.txt"
+  expect_usage "model --apply missing" "No such file or directory" "$NBT_FIT" model --apply /nonexistent/m.txt "$tmp/mi.exr"
+  expect_usage "model bad ridge" "--ridge" "$NBT_FIT" model "$tmp/mi.exr" --ridge -1 -o "$tmp/ms.txt"
+  expect_usage "model CSV, medium unknown" "--albedo" "$NBT_FIT" model "$tmp/k1.csv" -o "$tmp/ms.txt"
+  expect_fail "model to a missing directory" "-o: cannot write .*No such file or directory" "$NBT_FIT" model "$tmp/mi.exr" -o /nonexistent/dir/m.txt
+  [ ! -e "$tmp/ms.txt" ] && ok || bad "refused model fits left output"
+
   # degenerate data
   printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.5,0,0\n1,0.5,1,0,0\n1,1,1.5,0,0\n1,1.5,2,0,0\n1,2,2.5,0,0\n1,2.5,3,0,0\n' >"$tmp/zero.csv"
   expect_usage "all-zero histogram" "all-zero" "$NBT_FIT" kernel "$tmp/zero.csv" --albedo 0.5 --sigma-t 1 --B 0.1 -o "$tmp/z.csv"
@@ -244,7 +281,7 @@ expect_usage "unknown estimator" "--estimator" "$NBT_FIT" mc --albedo 0.5 --sigm
 expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --order-max 0 -o "$tmp/x.csv"
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
-expect_usage "no command: all listed" "mc, kernel or phase" "$NBT_FIT"
+expect_usage "no command: all listed" "mc, kernel, phase or model" "$NBT_FIT"
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
 # a missing or unreadable input file is bad input in every command that reads one: exit 2, one line with the OS reason
 miss=/nonexistent/dir/in

@@ -30,6 +30,43 @@ for m in ishimaru smallangle lineint single elek; do
   set -- $("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model $m)
   awk -v v="$1" 'BEGIN { exit !(v > 0 && v < 10) }' && ok || bad "eval psi --model $m: $1"
 done
+# the fitted model: a hand-made model file with constant log-parameters and no core (e^-60) leaves the
+# diffuse part, M e^{-(q - h)/s}/(2 pi s (h + s)) in sigma_t = 1 units, checked here in closed form
+z16=" 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0"
+printf 'half P0 -60%s\nhalf P1 0.2%s\nhalf P2 -0.3%s\nhalf P3 0.4%s\nhalf P4 -0.5%s\n' "$z16" "$z16" "$z16" "$z16" "$z16" >"$tmp/bm.txt"
+set -- $("$NBT_GEN" eval psi --albedo 0.8 --sigma-t 1.7 --B 0.05 --z 2.1 --r 0.9 --model fitted --beam-model "$tmp/bm.txt")
+want=$(awk 'BEGIN { st = 1.7; a = 0.8; tau = st * 2.1; rh = st * 0.9; T = exp(-(1 - a) * tau) * (1 - exp(-a * tau))
+  L = tau * sqrt(2 * 0.05); M = T * exp(-0.3); s = L * exp(0.4); h = s * exp(-0.5); q = sqrt(rh * rh + h * h)
+  printf "%.17g", st * st * M * exp(-(q - h) / s) / (2 * 3.141592653589793 * s * (h + s)) }')
+close "$1" "$want" 1e-12 "eval psi --model fitted --beam-model: the diffuse part in closed form"
+expect_usage "beam model without the infinite geometry" "no coefficients" "$NBT_GEN" eval psi --albedo 0.8 --sigma-t 1.7 --B 0.05 --z 2.1 --r 0.9 --model fitted --beam-model "$tmp/bm.txt" --infinite
+# the shipped model: both geometries, sigma_t scaling Psi(st, z, r) = st^2 Psi(1, st z, st r)
+for g in "" --infinite; do
+  fa=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 2 --B 0.0685 --z 1.5 --r 0.35 --model fitted $g | cut -d' ' -f1)
+  fb=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 3 --r 0.7 --model fitted $g | cut -d' ' -f1)
+  close "$fa" "$(awk -v b="$fb" 'BEGIN { printf "%.17g", 4 * b }')" 1e-12 "eval psi --model fitted $g: sigma_t scaling"
+done
+# layers: a constant density 2 is the homogeneous medium with twice sigma_t (exact: zeta = 2 z, lambda = 1/2)
+printf '0 2\n' >"$tmp/d2.txt"
+fa=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --density "$tmp/d2.txt" | cut -d' ' -f1)
+fb=$("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 2 --B 0.0685 --z 2 --r 0.3 --model fitted | cut -d' ' -f1)
+close "$fa" "$fb" 1e-10 "eval psi --model fitted --density: constant density 2 = sigma_t x 2"
+expect_usage "fitted with a bad density file" "density file" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --density "$tmp/bm.txt"
+rm -f "$tmp/d2.txt"
+expect_usage "--infinite for another model" "--infinite does not apply" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --infinite
+expect_usage "--beam-model missing" "No such file" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --beam-model /nonexistent/m.txt
+# its tables: the log-parameters at a node (constants here), P4 in the second file
+"$NBT_GEN" kernel --B 0.05 --model fitted --beam-model "$tmp/bm.txt" --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/kf.exr" >/dev/null 2>&1 &&
+  [ -s "$tmp/kf-P4.exr" ] && ok || bad "kernel --model fitted: two files"
+set -- $("$NBT_GEN" info "$tmp/kf.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
+close "$1" -60 1e-7 "fitted table P0"; close "$2" 0.2 1e-7 "fitted table P1"; close "$3" -0.3 1e-7 "fitted table P2"; close "$4" 0.4 1e-7 "fitted table P3"
+set -- $("$NBT_GEN" info "$tmp/kf-P4.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
+close "$1" -0.5 1e-7 "fitted table P4"
+expect_usage "kernel --infinite without --model fitted" "--model fitted only" "$NBT_GEN" kernel --B 0.05 --infinite -o "$tmp/x.exr"
+expect_usage "kernel fitted with a correction" "correction" "$NBT_GEN" kernel --B 0.05 --model fitted --correction "$tmp/bm.txt" -o "$tmp/x.exr"
+expect_usage "kernel bad model" "--model" "$NBT_GEN" kernel --B 0.05 --model spline -o "$tmp/x.exr"
+[ ! -e "$tmp/x.exr" ] && ok || bad "refused kernel runs left output"
+rm -f "$tmp/bm.txt" "$tmp/kf.exr" "$tmp/kf-P4.exr"
 expect_usage "psi pi model" "supplement" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model pi
 expect_usage "albedo > 1" "--albedo" "$NBT_GEN" eval moments --albedo 1.5 --sigma-t 1 --B 0.0685 --z 2
 expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2

@@ -222,6 +222,62 @@ int main(void)
     t_true(within, "airlight within 1.25x the tables' recorded error of the exact series (worst %.2f of the bound)",
            worst_exact);
 
+    /* the fitted kernel model (nbt_beam_fit_psi) against libnbt's double evaluation, both geometries:
+     * R over albedo and depth, G over B and radius, B over depth from far below to far above the
+     * fitted range (its clamped monomials), A over radius deep in the medium */
+    {
+        const char *FIT =
+            "uniform vec2 res;\nout vec4 color;\nvoid main() {\n"
+            "  vec2 f = (gl_FragCoord.xy - 0.5) / (res - 1.0);\n"
+            "  float z = mix(0.3, 6.0, f.y);\n"
+            "  color.r = nbt_beam_fit_psi(1.7, mix(0.1, 0.99, f.x), 0.0685, z, 0.3 * z);\n"
+            "  color.g = nbt_beam_fit_psi(1.0, 0.9, mix(0.0076, 0.274, f.y), 3.0, mix(0.02, 4.5, f.x));\n"
+            "  color.b = nbt_beam_fit_psi(1.0, 0.5, 0.03, mix(0.05, 25.0, f.x), mix(0.05, 1.5, f.y) * mix(0.05, 25.0, f.x));\n"
+            "  color.a = nbt_beam_fit_psi(0.8, 0.97, 0.2, 12.5, mix(0.01, 12.5, f.x) * mix(0.1, 1.5, f.y));\n"
+            "}\n";
+        nbt_gl_config bc = {0, 0, 0, 0, 1, 0};
+        validate(&bc, FIT);
+        src = nbt_gl_shader_source(&bc, FIT);
+        GLuint pf = gl_fullscreen_program(src, err, sizeof err);
+        free(src);
+        t_true(pf != 0, "fitted-model shader: %s", pf ? "ok" : err);
+        const nbt_beam_fit *fit = nbt_beam_fit_default();
+        for (int inf = 0; inf < 2 && pf; inf++) {
+            glUseProgram(pf);
+            t_true(nbt_gl_set_beam_fit(pf, fit, inf) == 0, "nbt_gl_set_beam_fit (%s)", inf ? "infinite" : "half-space");
+            glUniform2f(glGetUniformLocation(pf, "res"), W, H);
+            gl_draw_fullscreen();
+            glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+            double wf[4] = {0};
+            int fin = 1;
+            for (int j = 0; j < H; j++)
+                for (int i = 0; i < W; i++) {
+                    double fx = (double)i / (W - 1), fy = (double)j / (H - 1), z = 0.3 + 5.7 * fy, ref[4];
+                    nbt_beam_medium m0 = nbt_beam_homogeneous(1.7, 0.1 + 0.89 * fx, 0.0685);
+                    nbt_beam_medium m1 = nbt_beam_homogeneous(1.0, 0.9, 0.0076 + (0.274 - 0.0076) * fy);
+                    nbt_beam_medium m2 = nbt_beam_homogeneous(1.0, 0.5, 0.03);
+                    nbt_beam_medium m3 = nbt_beam_homogeneous(0.8, 0.97, 0.2);
+                    nbt_beam_fit_psi(fit, inf, &m0, z, 0.3 * z, &ref[0]);
+                    nbt_beam_fit_psi(fit, inf, &m1, 3.0, 0.02 + 4.48 * fx, &ref[1]);
+                    nbt_beam_fit_psi(fit, inf, &m2, 0.05 + 24.95 * fx, (0.05 + 1.45 * fy) * (0.05 + 24.95 * fx), &ref[2]);
+                    nbt_beam_fit_psi(fit, inf, &m3, 12.5, (0.01 + 12.49 * fx) * (0.1 + 1.4 * fy), &ref[3]);
+                    for (int c = 0; c < 4; c++) {
+                        const float v = px[(j * W + i) * 4 + c];
+                        fin &= isfinite(v) && v > 0;
+                        wf[c] = fmax(wf[c], fabs(v - ref[c]) / ref[c]);
+                    }
+                }
+            t_true(fin, "fitted model (%s): every pixel finite and > 0", inf ? "infinite" : "half-space");
+            /* float arithmetic: the polynomials' sums (|P| <~ 15, ~1e-6 absolute), exp of them and of the
+             * Gaussian exponent, erfc to 1.2e-7 relative: a few 1e-6 relative at most */
+            for (int c = 0; c < 4; c++)
+                t_abs(wf[c], 0, 1e-5, "fitted model (%s) channel %d: shader = libnbt within 1e-5 relative (worst %.2e)",
+                      inf ? "infinite" : "half-space", c, wf[c]);
+        }
+        if (pf)
+            glDeleteProgram(pf);
+    }
+
     /* singular places: gamma = 0 through the source, gamma = pi, u far beyond the table, no surface */
     const char *SING =
         "out vec4 color;\nvoid main() {\n"

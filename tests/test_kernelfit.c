@@ -185,6 +185,17 @@ static void judge_checks(void)
            "status words");
 }
 
+typedef struct {
+    const double *p;
+} pctx;
+/* 2 pi r Psi_hat(r) of the fitted model's point evaluation */
+static int pexp_f(double r, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    f[0] = 2 * M_PI * r * nbt_beam_fit_eval(((const pctx *)vp)->p, r);
+    return 0;
+}
+
 int main(void)
 {
     judge_checks();
@@ -207,6 +218,29 @@ int main(void)
     t_rel(db, (kernel_annulus(c.alpha, c.beta + h, lo, hi, NULL, NULL) - kernel_annulus(c.alpha, c.beta - h, lo, hi, NULL, NULL)) / (2 * h), 1e-8, "d/dbeta");
     t_rel(dm, (gauss_annulus(c.M + h, c.s, lo, hi, NULL, NULL) - gauss_annulus(c.M - h, c.s, lo, hi, NULL, NULL)) / (2 * h), 1e-8, "d/dM");
     t_rel(ds, (gauss_annulus(c.M, c.s + h, lo, hi, NULL, NULL) - gauss_annulus(c.M, c.s - h, lo, hi, NULL, NULL)) / (2 * h), 1e-8, "d/ds");
+    /* the fitted model's diffuse part (nbt-fit model): the annulus formula equals the quadrature of
+     * libnbt's point evaluation (nbt_beam_fit_eval, core switched off), and its derivatives the
+     * central differences, from nearly exponential (h << s) to nearly Gaussian (h >> s) */
+    {
+        static const double sh[3][2] = {{0.8, 0.01}, {0.8, 0.9}, {0.3, 40}};
+        nbt_quad_ws *w2 = nbt_quad_ws_alloc(1, 500);
+        for (int i = 0; i < 3; i++) {
+            double p[NBT_BEAM_FIT_PARTS] = {0, 0, 0.43, sh[i][0], sh[i][1]}, dM, dS, dH, q, qe;
+            pctx pc = {p};
+            for (int j = 0; j < 2; j++) {
+                double a = j ? 0.0 : 0.35, b = j ? 0.2 : 1.7;
+                nbt_quad_gk(w2, pexp_f, &pc, 1, a, b, 0, 1e-13, &q, &qe);
+                t_rel(pexp_annulus(p[2], p[3], p[4], a, b, NULL, NULL, NULL), q / (M_PI * (b * b - a * a)), 1e-10,
+                      "diffuse part s %g h %g on [%g, %g]: annulus mean = quadrature of nbt_beam_fit_eval", p[3], p[4], a, b);
+            }
+            pexp_annulus(p[2], p[3], p[4], lo, hi, &dM, &dS, &dH);
+            double hs = 1e-5 * p[3], hh = 1e-4 * p[4]; /* steps where roundoff and truncation are both below 1e-7 */
+            t_rel(dM, (pexp_annulus(p[2] + h, p[3], p[4], lo, hi, NULL, NULL, NULL) - pexp_annulus(p[2] - h, p[3], p[4], lo, hi, NULL, NULL, NULL)) / (2 * h), 1e-7, "  d/dM");
+            t_rel(dS, (pexp_annulus(p[2], p[3] + hs, p[4], lo, hi, NULL, NULL, NULL) - pexp_annulus(p[2], p[3] - hs, p[4], lo, hi, NULL, NULL, NULL)) / (2 * hs), 1e-6, "  d/ds");
+            t_rel(dH, (pexp_annulus(p[2], p[3], p[4] + hh, lo, hi, NULL, NULL, NULL) - pexp_annulus(p[2], p[3], p[4] - hh, lo, hi, NULL, NULL, NULL)) / (2 * hh), 1e-6, "  d/dh");
+        }
+        nbt_quad_ws_free(w2);
+    }
     /* noise-free synthetic data: the parameters come back to 1e-8 */
     syn d;
     for (int k = 0; k < NB; k++) {

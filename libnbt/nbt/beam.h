@@ -11,6 +11,7 @@
 #define NBT_BEAM_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include <nbt/error.h>
 
 #ifdef __cplusplus
@@ -91,6 +92,62 @@ nbt_status nbt_kernel_corrected(const nbt_kernel_correction *c, const nbt_beam_m
                                 double *beta);
 /* Read the file nbt-fit writes ('beta' and 'alpha' lines of 7 numbers, '#' comments). */
 nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c, char *err, size_t errlen);
+
+/* The fitted kernel model (doc/fit.md, "A kernel model over the parameter
+ * space"): a core plus a diffuse part, in sigma_t = 1 units (tau = sigma_t z,
+ * rh = sigma_t r; Psi = sigma_t^2 Psi_hat(tau, rh)):
+ *   Psi_hat = a/rh G(rh/b) + M e^{-(q - h)/s} / (2 pi s (h + s)),  q = sqrt(rh^2 + h^2),
+ *   sqrt(2 pi) a b = T e^{P0},  b = L e^{P1},  M = T e^{P2},  s = L e^{P3},  h = s e^{P4},
+ * T = e^{-(1-albedo) tau}(1 - e^{-albedo tau}) (eq. 25's M0), L = tau sqrt(2B)
+ * (single scattering's width), B = B_mix. The core carries sqrt(2 pi) a b and
+ * the diffuse part M; the diffuse part is exponential in rh for h << s and
+ * Gaussian (variance h s) for h >> s. Each P_i = sum_k c[i][k] t_k over the
+ * monomials t of nbt_beam_fit_terms. One coefficient set per geometry: 0 a
+ * beam entering a half-space from vacuum, 1 a source inside an infinite
+ * medium (nbt-fit mc --infinite). Fitted by nbt-fit model to photon counts;
+ * the compiled-in default's range and measured error are in doc/fit.md. */
+#define NBT_BEAM_FIT_PARTS 5
+#define NBT_BEAM_FIT_TERMS 16
+typedef struct {
+    double c[2][NBT_BEAM_FIT_PARTS][NBT_BEAM_FIT_TERMS]; /* [geometry][P0..P4][term] */
+    int have[2];                         /* the geometries this model holds */
+    /* the fitted data's range of tau, albedo and B: the monomials clamp their
+     * arguments to it, so that outside it the P_i stay at their edge values
+     * (a cubic would run away) while T and L keep their exact scaling;
+     * lo >= hi: no clamp */
+    double range[3][2];
+} nbt_beam_fit;
+
+/* The monomials: with x = ln tau - 1.15, w = albedo - 0.5, v = ln(B/0.05)
+ * (tau, albedo, B clamped to f's range; f may be NULL: no clamp):
+ * 1, x, w, v, x^2, xw, xv, w^2, wv, v^2, x^3, x^2w, x^2v, xw^2, xwv, xv^2. */
+void nbt_beam_fit_terms(const nbt_beam_fit *f, double tau, double albedo, double B, double *t);
+/* The model shipped with libnbt (fitted by doc/kernelmodel.sh). */
+const nbt_beam_fit *nbt_beam_fit_default(void);
+/* p = (a, b, M, s, h) of Psi_hat at tau > 0, albedo in [0, 1], B > 0
+ * (NBT_EDOM outside, or for a geometry the model does not hold). */
+nbt_status nbt_beam_fit_params(const nbt_beam_fit *f, int infinite, double tau, double albedo, double B, double *p);
+/* The same from the log-parameters P0..P4 (e.g. read from nbt-gen kernel --model fitted's tables). */
+void nbt_beam_fit_from_P(const double *P, double tau, double albedo, double B, double *p);
+/* Psi_hat(rh) from p (rh > 0; 0 at rh <= 0, where the core is infinite). */
+double nbt_beam_fit_eval(const double *p, double rh);
+/* Psi(z, r) of medium m (one or more lobes: B = B_mix). Layered or continuous
+ * density: the homogeneous model at the equivalent depth zeta(z) (which has
+ * eq. 28's M0), its widths scaled by lambda (nbt_beam_fit_equivalent):
+ * Psi(z, r) = Psi_hom(zeta, r/lambda)/lambda^2; 0 where zeta(z) = 0. Fitted
+ * to homogeneous runs only: see doc/fit.md for its measured error in layers
+ * (2-11% on three profiles). */
+nbt_status nbt_beam_fit_psi(const nbt_beam_fit *f, int infinite, const nbt_beam_medium *m, double z, double r,
+                            double *psi);
+/* zeta(z) and lambda = sqrt(M2(z) / M2_hom(zeta)) of m, M2 the small-angle
+ * random walk's (NBT_BEAM_SMALLANGLE; closer to layered photon counts than
+ * eq. 29 / 26 here); homogeneous: z and 1; exact for a constant density rho,
+ * where lambda = 1/rho. */
+nbt_status nbt_beam_fit_equivalent(const nbt_beam_medium *m, double z, double *zeta, double *lambda);
+/* Read / write the text form nbt-fit model writes: lines 'half P0 c_0 .. c_15'
+ * (P0..P4, and 'infinite P0 ..'), 'range tau|albedo|B LO HI', '#' comments. Read: err gets one line. */
+nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_t errlen);
+nbt_status nbt_beam_fit_fprint(FILE *fp, const nbt_beam_fit *f, const char *comment);
 
 /* Read a layered density profile: lines "z rho" (exactly two finite
  * numbers; '#' starts a comment, blank lines are skipped, any other line is

@@ -8,11 +8,14 @@
  *   nbt_J1_0..3, nbt_Jn_0..3          J^1 and J^n packs; nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
  * Functions: nbt_airlight(kappa_s, kappa_t, I0, dsv, gamma, dvp),
  *   nbt_surface(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n),
- *   nbt_beam_kernel_params(sigma_t, albedo, B, z) -> (alpha, beta), nbt_beam_psi(ab, r). */
+ *   nbt_beam_kernel_params(sigma_t, albedo, B, z) -> (alpha, beta), nbt_beam_psi(ab, r),
+ *   nbt_beam_fit_psi(sigma_t, albedo, B, z, r) (the fitted model; uniforms nbt_beam_fit_c[80],
+ *   nbt_beam_fit_lo, nbt_beam_fit_hi set by nbt_gl_set_beam_fit). */
 #ifndef NBT_GL_H
 #define NBT_GL_H
 
 #include <stddef.h>
+#include <nbt/beam.h>
 #include <nbt/table.h>
 
 #ifdef __cplusplus
@@ -47,6 +50,12 @@ void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table
  * filtering, CLAMP_TO_EDGE; binds it on the active texture unit. Returns the
  * texture name, 0 on failure (glGetError set). */
 unsigned nbt_gl_upload_table(const nbt_table *t);
+
+/* Set the fitted kernel model's uniforms (nbt_beam_fit_c, _lo, _hi) of the
+ * program in use to f's coefficients for one geometry (infinite: a source
+ * inside the medium; 0: a beam entering from vacuum), as floats. Returns 1
+ * when f is NULL or does not hold that geometry, else 0. */
+int nbt_gl_set_beam_fit(unsigned program, const nbt_beam_fit *f, int infinite);
 
 #ifdef __cplusplus
 }
