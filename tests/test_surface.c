@@ -113,6 +113,23 @@ int main(void)
     }
     t_true(agree == 12, "surface series = direct within 1e-6 on %d/12 random geometries (worst %.2e)", agree, worst);
 
+    /* ---- no scattering (kappa_s = 0): only the unscattered light, in closed
+     * form I0 e^{-kappa_t d}/d^2 (kd cos theta_s + ks cos^n theta_r), with the
+     * source and mirror angles different (both methods share this term) ---- */
+    {
+        nbt_surface_geom g = {0, 0.3, 2.385, 3.1, 0.4, 1.1, 0.6, 0.35, 20};
+        double want = 2.385 * exp(-0.3 * 3.1) / (3.1 * 3.1) * (0.6 * cos(0.4) + 0.35 * pow(cos(1.1), 20));
+        double Ld, Ed, Ls, Es;
+        t_true(nbt_surface_direct(hg, &g, 1e-10, &Ld, &Ed) == NBT_OK, "kappa_s = 0: direct");
+        t_rel(Ld, want, 1e-12, "kappa_s = 0: direct = the unscattered closed form");
+        t_true(nbt_surface_series(b, 40, &g, 1e-10, &Ls, &Es) == NBT_OK, "kappa_s = 0: series");
+        t_rel(Ls, want, 1e-12, "kappa_s = 0: series = the unscattered closed form");
+        g.theta_r = 2.0; /* mirror direction below the surface: no specular light */
+        want = 2.385 * exp(-0.3 * 3.1) / (3.1 * 3.1) * 0.6 * cos(0.4);
+        nbt_surface_direct(hg, &g, 1e-10, &Ld, &Ed);
+        t_rel(Ld, want, 1e-12, "kappa_s = 0, theta_r > pi/2: diffuse only");
+    }
+
     /* ---- edges ---- */
     nbt_status st = nbt_jk(3, 1, 1e3, 0.3, 1e-10, J, E);
     t_true(st == NBT_OK && isfinite(J[0]) && J[0] >= 0 && J[0] < 1e-300, "T = 1000: finite, tiny, >= 0 (%.3g)", J[0]);

@@ -48,6 +48,12 @@ static int quad_fn(double x0, double x1, double *out, void *ctx)
     out[0] = x0 * x0 + 3 * x1;
     return 0;
 }
+static int saddle_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)ctx;
+    out[0] = x0 * x0 - x1 * x1;
+    return 0;
+}
 static int fail_fn(double x0, double x1, double *out, void *ctx)
 {
     (void)x0;
@@ -91,6 +97,40 @@ int main(void)
     double v[4];
     nbt_table_lookup(t, nbt_axis_node(&maps[2], 3), nbt_axis_node(&maps[3], 5), v);
     t_abs(v[1], t->data[(5 * 9 + 3) * 3 + 1], 1e-6, "lookup at a node returns the node value");
+
+    /* every node reproduced exactly, the last ones included (an off-by-one
+     * clamp makes the last cell extrapolate from the one before) */
+    worst = 0;
+    for (size_t j = 0; j < 9; j++)
+        for (size_t i = 0; i < 9; i++) {
+            nbt_table_lookup(t, nbt_axis_node(&maps[2], i), nbt_axis_node(&maps[3], j), v);
+            for (size_t c = 0; c < 3; c++)
+                worst = fmax(worst, fabs(v[c] - t->data[(j * 9 + i) * 3 + c]));
+        }
+    t_abs(worst, 0, 1e-6, "lookup at all 81 nodes returns the node values");
+
+    /* ---- the recorded interpolation error, checked independently: x0^2 - x1^2
+     * on equal steps h. Bilinear interpolation errs by fx(1-fx)h^2 - fy(1-fy)h^2,
+     * zero at cell centres, h^2/4 at edge midpoints (the true maximum). The
+     * recorded error must bound the error at random points (exact values
+     * computed here) and be no larger than h^2/4, up to float storage (values
+     * <= 16, rounding <= 1e-6). ---- */
+    {
+        nbt_axis sa0 = {-1.3, 2.5, NBT_AXIS_LINEAR, 0, 17}, sa1 = {0.2, 4.0, NBT_AXIS_LINEAR, 0, 17};
+        nbt_table *sd = nbt_table_alloc(NBT_TABLE_J, &sa0, &sa1, 1);
+        t_true(nbt_table_tabulate(sd, saddle_fn, NULL, 1) == NBT_OK, "tabulate x0^2 - x1^2");
+        double h = 3.8 / 16, seen = 0, vv[1];
+        for (int k = 0; k < 20000; k++) {
+            double x0 = -1.3 + 3.8 * t_uniform(), x1 = 0.2 + 3.8 * t_uniform();
+            nbt_table_lookup(sd, x0, x1, vv);
+            seen = fmax(seen, fabs(vv[0] - (x0 * x0 - x1 * x1)));
+        }
+        t_true(seen <= sd->max_err[0] + 1e-6, "recorded error %.6g bounds the error %.6g at 20000 random points",
+               sd->max_err[0], seen);
+        t_abs(sd->max_err[0], h * h / 4, 2e-6, "recorded error = the true maximum h^2/4");
+        t_true(seen > 0.9 * h * h / 4, "random points come near the maximum (%.6g)", seen);
+        nbt_table_free(sd);
+    }
 
     /* ---- EXR round trips ---- */
     t->k[0] = 0;
