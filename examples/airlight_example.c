@@ -2,7 +2,7 @@
  * the airlight of a point light in fog computed two ways: Nishita's integral
  * along the ray and Hong's Legendre series over H_k, each with its error
  * estimate. Installed with nbt; build it against an installed libnbt with
- *   cc airlight_example.c $(pkg-config --cflags --libs nbt) -o airlight_example */
+ *   cc airlight_example.c $(pkg-config --cflags --libs nbt) -lm -o airlight_example */
 #include <math.h>
 #include <stdio.h>
 #include <nbt/nbt.h>
