@@ -136,7 +136,7 @@ def main():
                 if rc != 0:
                     failed = []
                     for t in tests:
-                        trs = os.path.join(tree, t + ".trs")
+                        trs = os.path.join(tree, (t[:-3] if t.endswith(".sh") else t) + ".trs")
                         if os.path.exists(trs) and ":test-result: PASS" not in open(trs).read():
                             failed.append(os.path.basename(t))
                     status = "caught by " + ",".join(failed or ["make"])

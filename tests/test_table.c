@@ -160,6 +160,22 @@ int main(void)
         halfok &= fabsf(t->data[i]) < 1.0f / 1024 || fabsf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])) -
                                                            nearbyintf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])))) == 0;
     t_true(halfok, "half rounding leaves 11 significant bits");
+    /* known IEEE half values: 1 + 2^-10 is a half, 1 + 2^-11 ties to even (1),
+     * pi -> 3.140625 (0x4248), 0.1 -> 0.0999755859375 (0x2e66), 1e-6 -> 17 x 2^-24
+     * (subnormal), 65504 the largest half */
+    {
+        nbt_axis q2 = {0, 1, NBT_AXIS_LINEAR, 0, 3};
+        nbt_table *hq = nbt_table_alloc(NBT_TABLE_H, &q2, &q2, 1);
+        const float in[9] = {1.0009765625f, 1.00048828125f, 3.14159265f, 0.1f, 1e-6f, 65504.0f, -2.5f, 0.0f, 1.0f};
+        const double want[9] = {1.0009765625, 1.0, 3.140625, 0.0999755859375, 17.0 / 16777216.0, 65504.0, -2.5, 0.0, 1.0};
+        memcpy(hq->data, in, sizeof in);
+        nbt_table_round_half(hq);
+        int same = 1;
+        for (int i = 0; i < 9; i++)
+            same &= (double)hq->data[i] == want[i];
+        t_true(same, "half rounding gives the IEEE half values (1+2^-10, ties to even, pi, 0.1, subnormal, 65504)");
+        nbt_table_free(hq);
+    }
     t_true(nbt_table_write_exr(t, path, NBT_EXR_ZIP) == NBT_OK && nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK &&
                same_tables(t, r), "half round trip is bit-exact");
     nbt_table_free(r);
