@@ -49,6 +49,13 @@ for m in lineint elek; do
 done
 expect_usage "psi pi model" "supplement" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model pi
 expect_usage "albedo > 1" "--albedo" "$NBT_GEN" eval moments --albedo 1.5 --sigma-t 1 --B 0.0685 --z 2
+expect_usage "trailing characters" "'0.9x' is not accepted" "$NBT_GEN" eval moments --albedo 0.9x --sigma-t 1 --B 0.0685 --z 2
+expect_usage "empty number" "--z: '' is not accepted" "$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z ''
+# the documented default --tol 1e-8: the same output as --tol 1e-8 and not that of
+# --tol 1e-4 (an integrand near the source, where the quadrature must adapt)
+X="--g 0.5 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.05 --dvp 20 --method direct"
+d0=$("$NBT_GEN" eval airlight $X); d8=$("$NBT_GEN" eval airlight $X --tol 1e-8); d4=$("$NBT_GEN" eval airlight $X --tol 1e-4)
+[ -n "$d0" ] && [ "$d0" = "$d8" ] && [ "$d0" != "$d4" ] && ok || bad "default --tol is 1e-8: '$d0' '$d8' '$d4'"
 expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2
 : >"$tmp/empty.txt"
 expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
