@@ -1,3 +1,4 @@
+#define _GNU_SOURCE 1 /* memmem */
 /* tests/test_table.c: axis maps, GPU-equivalent bilinear lookup, half
  * rounding, EXR round trips and bad files, recorded H interpolation error. */
 #include <math.h>
@@ -187,6 +188,31 @@ int main(void)
                same_tables(p1, r), "fixed-phase single-channel round trip");
     nbt_table_free(r);
     nbt_table_free(p1);
+    /* a header claiming a huge data window (60000 x 60000 x 4 floats = 58 GB)
+     * in a 1 kB file is refused before any allocation (fuzzing found it) */
+    {
+        t_true(nbt_table_write_exr(t, path, NBT_EXR_NONE) == NBT_OK, "write a table to corrupt");
+        FILE *fc = fopen(path, "rb");
+        static unsigned char buf[1 << 16];
+        size_t len = fread(buf, 1, sizeof buf, fc);
+        fclose(fc);
+        static const char key[] = "dataWindow\0box2i";
+        unsigned char *w = memmem(buf, len, key, sizeof key);
+        t_true(w != NULL, "dataWindow attribute found");
+        if (w) {
+            unsigned char *box = w + sizeof key + 4; /* after the 4-byte attribute size: xmin ymin xmax ymax */
+            int32_t big = 59999;
+            memcpy(box + 8, &big, 4);
+            memcpy(box + 12, &big, 4);
+            fc = fopen(path, "wb");
+            fwrite(buf, 1, len, fc);
+            fclose(fc);
+            nbt_table *rb = NULL;
+            nbt_status s = nbt_table_read_exr(path, &rb, err, sizeof err);
+            t_true(s != NBT_OK && rb == NULL && strstr(err, "more than the file can hold"), "huge data window refused: %s", err);
+            nbt_table_free(rb);
+        }
+    }
     /* bad files */
     FILE *f = fopen(path, "w");
     fputs("not an EXR file\n", f);
