@@ -29,7 +29,7 @@ if [ -n "${NBT_FUZZER:-}" ]; then
   fi
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$tmp/fuzz")
   echo "libFuzzer: ${runs:-?} executions in $T s, corpus $n -> $(ls "$tmp/corpus" | wc -l) inputs"
-  [ -n "$runs" ] && [ "$runs" -gt 1000 ] && ok || bad "libFuzzer ran ${runs:-no} inputs: $(tail -n 5 "$tmp/fuzz")"
+  [ -n "$runs" ] && [ "$runs" -gt 100 ] && ok || bad "libFuzzer ran ${runs:-no} inputs: $(tail -n 5 "$tmp/fuzz")"
 else
   echo "libFuzzer not configured (no clang with -fsanitize=fuzzer): fuzzing with the harness's mutation driver"
   "$replay" -t "$T" -s 2385 "$corpus" >"$tmp/fuzz" 2>&1 && ok || bad "mutation driver: $(tail -n 20 "$tmp/fuzz")"
