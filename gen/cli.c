@@ -93,32 +93,61 @@ const char *parse_range(const char *arg, double lo, double hi, double *a, double
     return *b < *a ? "order" : NULL;
 }
 
+int msg_double(char *err, size_t n, const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open,
+               double *v)
+{
+    if (!parse_double(arg, lo, lo_open, hi, hi_open, v))
+        return 0;
+    snprintf(err, n, "%s: '%s' is not accepted: expected a number in %s, %s", opt, arg, bound(lo, lo_open, 1),
+             bound(hi, hi_open, 0));
+    return -1;
+}
+
+int msg_long(char *err, size_t n, const char *opt, const char *arg, long lo, long hi, long *v)
+{
+    if (!parse_long(arg, lo, hi, v))
+        return 0;
+    snprintf(err, n, "%s: '%s' is not accepted: expected an integer in [%ld, %ld]", opt, arg, lo, hi);
+    return -1;
+}
+
+int msg_range(char *err, size_t n, const char *opt, const char *arg, double lo, double hi, double *a, double *b)
+{
+    const char *why = parse_range(arg, lo, hi, a, b);
+    if (!why)
+        return 0;
+    if (!strcmp(why, "length"))
+        snprintf(err, n, "%s: '%s' is too long", opt, arg);
+    else if (!strcmp(why, "order"))
+        snprintf(err, n, "%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
+    else
+        snprintf(err, n, "%s: '%s' is not accepted: expected a number or LO:HI in [%g, %g]", opt, arg, lo, hi);
+    return -1;
+}
+
 double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open)
 {
     double v;
-    if (parse_double(arg, lo, lo_open, hi, hi_open, &v))
-        die_usage("%s: '%s' is not accepted: expected a number in %s, %s", opt, arg,
-                  bound(lo, lo_open, 1), bound(hi, hi_open, 0));
+    char err[512];
+    if (msg_double(err, sizeof err, opt, arg, lo, lo_open, hi, hi_open, &v))
+        die_usage("%s", err);
     return v;
 }
 
 long opt_long(const char *opt, const char *arg, long lo, long hi)
 {
     long v;
-    if (parse_long(arg, lo, hi, &v))
-        die_usage("%s: '%s' is not accepted: expected an integer in [%ld, %ld]", opt, arg, lo, hi);
+    char err[512];
+    if (msg_long(err, sizeof err, opt, arg, lo, hi, &v))
+        die_usage("%s", err);
     return v;
 }
 
 void opt_range(const char *opt, const char *arg, double lo, double hi, double *a, double *b)
 {
-    const char *why = parse_range(arg, lo, hi, a, b);
-    if (why && !strcmp(why, "length"))
-        die_usage("%s: '%s' is too long", opt, arg);
-    if (why && !strcmp(why, "order"))
-        die_usage("%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
-    if (why)
-        die_usage("%s: '%s' is not accepted: expected a number or LO:HI in [%g, %g]", opt, arg, lo, hi);
+    char err[512];
+    if (msg_range(err, sizeof err, opt, arg, lo, hi, a, b))
+        die_usage("%s", err);
 }
 
 /* 0 if DIR (the directory of PATH) exists and is writable, else errno */

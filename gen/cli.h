@@ -21,6 +21,13 @@ int parse_double(const char *arg, double lo, int lo_open, double hi, int hi_open
 int parse_long(const char *arg, long lo, long hi, long *out);
 const char *parse_range(const char *arg, double lo, double hi, double *a, double *b);
 
+/* The same with the opt_* message (naming OPT and the accepted range) written
+ * to err instead of exiting: 0 and *v set, or -1. */
+int msg_double(char *err, size_t n, const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open,
+               double *v);
+int msg_long(char *err, size_t n, const char *opt, const char *arg, long lo, long hi, long *v);
+int msg_range(char *err, size_t n, const char *opt, const char *arg, double lo, double hi, double *a, double *b);
+
 /* Parse a finite double in [lo, hi] (bounds excluded when *_open). */
 double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open);
 /* Parse an integer in [lo, hi]. */

@@ -3,7 +3,8 @@
  * mutations of them (bit flips, random and boundary bytes, inserted, deleted
  * and duplicated runs, truncation, splices of two inputs; the first byte, the
  * reader, kept most of the time) until the time is up. Deterministic for a
- * seed (-s): a failure reproduces with the seed it printed.
+ * seed (-s): a failure reproduces with the seed it printed, and with
+ * NBT_FUZZ_SAVE=FILE the failing input is left in FILE.
  *   fuzz_replay [-t SECONDS] [-s SEED] FILE|DIR ... */
 #include <dirent.h>
 #include <stdint.h>
@@ -191,6 +192,7 @@ int main(int argc, char **argv)
         rs = seed;
         printf("fuzz_replay: mutating for %g s, seed %llu\n", seconds, (unsigned long long)seed);
         fflush(stdout);
+        const char *save = getenv("NBT_FUZZ_SAVE");
         size_t bcap = 1 << 16;
         uint8_t *buf = malloc(bcap);
         struct timespec t0, t1;
@@ -203,6 +205,13 @@ int main(int argc, char **argv)
                 size_t n = mutate(buf, bcap);
                 uint8_t *x = malloc(n ? n : 1);
                 memcpy(x, buf, n);
+                if (save) { /* NBT_FUZZ_SAVE=FILE: each input written first, so a crash leaves it there */
+                    FILE *sf = fopen(save, "wb");
+                    if (sf) {
+                        fwrite(x, 1, n, sf);
+                        fclose(sf);
+                    }
+                }
                 LLVMFuzzerTestOneInput(x, n);
                 free(x);
             }

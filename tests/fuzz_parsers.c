@@ -3,6 +3,7 @@
  *   0 density file (z rho)        1 phase SPEC string      2 phase table file
  *   3 sum-of-Gaussians file       4 photon-count CSV       5 table EXR (header, attributes, data)
  *   6 image EXR                   7 kernel correction file 8 CLI numbers (double, integer, LO:HI)
+ *   9 scene file (nbt-gen scene)
  * Files are written to a private temporary directory and read back through
  * the public path-taking API, as the programs read them. Every call must
  * return (a status, never a crash, hang or leak); successes must give sane
@@ -19,10 +20,11 @@
 #include <nbt/nbt.h>
 #include "../fit/psi_data.h"
 #include "../gen/cli.h"
+#include "../gen/scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-enum { N_TARGETS = 9 };
+enum { N_TARGETS = 10 };
 static char dir[64], f_txt[96], f_csv[96], f_exr[96];
 
 static void cleanup(void)
@@ -87,7 +89,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     int target = data[0] % N_TARGETS;
     const uint8_t *d = data + 1;
     size_t n = size - 1;
-    char err[512];
+    char err[1024];
+    err[0] = '\0';
     switch (target) {
     case 0: {
         double *z = NULL, *rho = NULL;
@@ -166,6 +169,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (parse_range(s, 0, 1, &a, &b) == NULL && !(a >= 0 && a <= b && b <= 1))
             abort();
         free(s);
+        break;
+    }
+    case 9: {
+        scene_t sc;
+        if (scene_parse(put(f_txt, d, n), &sc, err, sizeof err) == 0) {
+            if (!(sc.kt_hi > 0) || !(sc.d_hi > 0) || sc.nphong > 16 || !(sc.tol >= 1e-7 && sc.tol <= 0.5) ||
+                sc.orders_max < 1 || sc.orders_max > 512 || (sc.have_ks && sc.ks_hi > sc.kt_hi))
+                abort(); /* accepted, but not what the format allows */
+        } else if (!err[0] || strchr(err, '\n')) {
+            abort(); /* a rejection has one line */
+        }
         break;
     }
     }

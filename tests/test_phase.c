@@ -130,6 +130,11 @@ int main(void)
     nbt_phase_free(p);
     t_true(nbt_phase_parse("hg:g=1", &p, err, sizeof err) == NBT_EDOM && strstr(err, "(-1, 1)") && !p, "hg:g=1 rejected: %s", err);
     t_true(nbt_phase_parse("gauss:B=-2", &p, err, sizeof err) == NBT_EDOM && strstr(err, "B"), "gauss:B=-2 rejected: %s", err);
+    t_true(nbt_phase_parse("gauss:B=1e308", &p, err, sizeof err) == NBT_EDOM && strstr(err, "(0, 1000]") && !p,
+           "gauss:B=1e308 rejected (4B overflows): %s", err);
+    nbt_phase *g1000 = nbt_phase_gauss(1e3);
+    t_true(g1000 != NULL && nbt_phase_gauss(1001) == NULL, "B up to 1000 accepted, 1001 not");
+    nbt_phase_free(g1000);
     t_true(nbt_phase_parse("hg:g=0.8x", &p, err, sizeof err) == NBT_EDOM, "trailing garbage rejected");
     t_true(nbt_phase_parse("mie", &p, err, sizeof err) == NBT_EFORMAT && strstr(err, "mie"), "unknown kind rejected: %s", err);
     t_true(nbt_phase_parse("table:/nonexistent/x", &p, err, sizeof err) == NBT_EIO, "missing table file: %s", err);
