@@ -56,6 +56,9 @@ expect_usage "empty number" "--z: '' is not accepted" "$NBT_GEN" eval moments --
 X="--g 0.5 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.05 --dvp 20 --method direct"
 d0=$("$NBT_GEN" eval airlight $X); d8=$("$NBT_GEN" eval airlight $X --tol 1e-8); d4=$("$NBT_GEN" eval airlight $X --tol 1e-4)
 [ -n "$d0" ] && [ "$d0" = "$d8" ] && [ "$d0" != "$d4" ] && ok || bad "default --tol is 1e-8: '$d0' '$d8' '$d4'"
+X="H --k 3 --u 2.385 --v 0.7"
+d0=$("$NBT_GEN" eval $X); d8=$("$NBT_GEN" eval $X --tol 1e-8); d4=$("$NBT_GEN" eval $X --tol 1e-4)
+[ -n "$d0" ] && [ "$d0" = "$d8" ] && [ "$d0" != "$d4" ] && ok || bad "eval H: default --tol is 1e-8: '$d0' '$d8' '$d4'"
 expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2
 : >"$tmp/empty.txt"
 expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
