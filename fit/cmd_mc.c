@@ -195,7 +195,7 @@ int cmd_mc(int argc, char **argv)
         switch (o) {
         case 'a': c.albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); have[0] = 1; break;
         case 's': c.sigma_t = opt_double("--sigma-t", optarg, 0, 1, 1e12, 0); have[1] = 1; break;
-        case 'B': B = opt_double("--B", optarg, 0, 1, 1e6, 0); break;
+        case 'B': B = opt_double("--B", optarg, 0, 1, NBT_PHASE_GAUSS_BMAX, 0); break;
         case 'p': phase = optarg; break;
         case 'n': c.photons = (uint64_t)opt_double("--photons", optarg, 64, 0, 1e15, 0); have[2] = 1; break;
         case 'S': c.seed = (uint64_t)opt_long("--seed", optarg, 0, 0x7fffffffL); break;

@@ -50,46 +50,104 @@ static const char *bound(double v, int open, int lower)
     return buf[lower];
 }
 
-double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open)
+int parse_double(const char *arg, double lo, int lo_open, double hi, int hi_open, double *out)
 {
     char *end;
     errno = 0;
     double v = strtod(arg, &end);
     int ok = end != arg && *end == '\0' && errno != ERANGE && isfinite(v) &&
              (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-    if (!ok)
-        die_usage("%s: '%s' is not accepted: expected a number in %s, %s", opt, arg,
-                  bound(lo, lo_open, 1), bound(hi, hi_open, 0));
-    return v;
+    if (ok)
+        *out = v;
+    return ok ? 0 : -1;
 }
 
-long opt_long(const char *opt, const char *arg, long lo, long hi)
+int parse_long(const char *arg, long lo, long hi, long *out)
 {
     char *end;
     errno = 0;
     long v = strtol(arg, &end, 10);
     if (end == arg || *end != '\0' || errno == ERANGE || v < lo || v > hi)
-        die_usage("%s: '%s' is not accepted: expected an integer in [%ld, %ld]", opt, arg, lo, hi);
+        return -1;
+    *out = v;
+    return 0;
+}
+
+const char *parse_range(const char *arg, double lo, double hi, double *a, double *b)
+{
+    const char *colon = strchr(arg, ':');
+    if (!colon) {
+        if (parse_double(arg, lo, 0, hi, 0, a))
+            return "number";
+        *b = *a;
+        return NULL;
+    }
+    char first[128];
+    size_t n = (size_t)(colon - arg);
+    if (n >= sizeof first)
+        return "length";
+    memcpy(first, arg, n);
+    first[n] = '\0';
+    if (parse_double(first, lo, 0, hi, 0, a) || parse_double(colon + 1, lo, 0, hi, 0, b))
+        return "number";
+    return *b < *a ? "order" : NULL;
+}
+
+int msg_double(char *err, size_t n, const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open,
+               double *v)
+{
+    if (!parse_double(arg, lo, lo_open, hi, hi_open, v))
+        return 0;
+    snprintf(err, n, "%s: '%s' is not accepted: expected a number in %s, %s", opt, arg, bound(lo, lo_open, 1),
+             bound(hi, hi_open, 0));
+    return -1;
+}
+
+int msg_long(char *err, size_t n, const char *opt, const char *arg, long lo, long hi, long *v)
+{
+    if (!parse_long(arg, lo, hi, v))
+        return 0;
+    snprintf(err, n, "%s: '%s' is not accepted: expected an integer in [%ld, %ld]", opt, arg, lo, hi);
+    return -1;
+}
+
+int msg_range(char *err, size_t n, const char *opt, const char *arg, double lo, double hi, double *a, double *b)
+{
+    const char *why = parse_range(arg, lo, hi, a, b);
+    if (!why)
+        return 0;
+    if (!strcmp(why, "length"))
+        snprintf(err, n, "%s: '%s' is too long", opt, arg);
+    else if (!strcmp(why, "order"))
+        snprintf(err, n, "%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
+    else
+        snprintf(err, n, "%s: '%s' is not accepted: expected a number or LO:HI in [%g, %g]", opt, arg, lo, hi);
+    return -1;
+}
+
+double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open)
+{
+    double v;
+    char err[512];
+    if (msg_double(err, sizeof err, opt, arg, lo, lo_open, hi, hi_open, &v))
+        die_usage("%s", err);
+    return v;
+}
+
+long opt_long(const char *opt, const char *arg, long lo, long hi)
+{
+    long v;
+    char err[512];
+    if (msg_long(err, sizeof err, opt, arg, lo, hi, &v))
+        die_usage("%s", err);
     return v;
 }
 
 void opt_range(const char *opt, const char *arg, double lo, double hi, double *a, double *b)
 {
-    const char *colon = strchr(arg, ':');
-    if (!colon) {
-        *a = *b = opt_double(opt, arg, lo, 0, hi, 0);
-        return;
-    }
-    char first[128];
-    size_t n = (size_t)(colon - arg);
-    if (n >= sizeof first)
-        die_usage("%s: '%s' is too long", opt, arg);
-    memcpy(first, arg, n);
-    first[n] = '\0';
-    *a = opt_double(opt, first, lo, 0, hi, 0);
-    *b = opt_double(opt, colon + 1, lo, 0, hi, 0);
-    if (*b < *a)
-        die_usage("%s: '%s' is not accepted: the range must be LO:HI with LO <= HI", opt, arg);
+    char err[512];
+    if (msg_range(err, sizeof err, opt, arg, lo, hi, a, b))
+        die_usage("%s", err);
 }
 
 /* 0 if DIR (the directory of PATH) exists and is writable, else errno */

@@ -14,6 +14,20 @@ extern const char *cli_prog;
 _Noreturn void die_usage(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 _Noreturn void die(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
+/* The parsers without the exit (what opt_* use; fuzzed by tests/fuzz_parsers.c):
+ * 0 and *out set on success, -1 otherwise; parse_range returns NULL on
+ * success, else why: "number", "length" (LO too long) or "order" (HI < LO). */
+int parse_double(const char *arg, double lo, int lo_open, double hi, int hi_open, double *out);
+int parse_long(const char *arg, long lo, long hi, long *out);
+const char *parse_range(const char *arg, double lo, double hi, double *a, double *b);
+
+/* The same with the opt_* message (naming OPT and the accepted range) written
+ * to err instead of exiting: 0 and *v set, or -1. */
+int msg_double(char *err, size_t n, const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open,
+               double *v);
+int msg_long(char *err, size_t n, const char *opt, const char *arg, long lo, long hi, long *v);
+int msg_range(char *err, size_t n, const char *opt, const char *arg, double lo, double hi, double *a, double *b);
+
 /* Parse a finite double in [lo, hi] (bounds excluded when *_open). */
 double opt_double(const char *opt, const char *arg, double lo, int lo_open, double hi, int hi_open);
 /* Parse an integer in [lo, hi]. */

@@ -11,112 +11,7 @@
 #include <sys/stat.h>
 #include "cli.h"
 #include "commands.h"
-
-/* libnbt-gl's airlight and surface shaders take at most 4 RGBA packs per
- * kind (GLSL 3.30 indexes sampler arrays with constants only): 16 orders. */
-#define NBT_SCENE_GL_ORDERS 16
-
-typedef struct {
-    double kt_lo, kt_hi, ks_lo, ks_hi, d_lo, d_hi, g_lo, g_hi, tol;
-    int have_kt, have_ks, have_d, have_g, airlight, diffuse, half;
-    char phase[256];
-    int phong[16];
-    long orders_max;  /* Legendre orders the tables may hold (default: what libnbt-gl takes) */
-    size_t nphong;
-} scene_t;
-
-static char *trim(char *s)
-{
-    while (*s == ' ' || *s == '\t')
-        s++;
-    char *e = s + strlen(s);
-    while (e > s && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\n' || e[-1] == '\r'))
-        *--e = '\0';
-    return s;
-}
-
-static int yesno(const char *file, int line, const char *key, const char *v)
-{
-    if (!strcmp(v, "yes"))
-        return 1;
-    if (!strcmp(v, "no"))
-        return 0;
-    die_usage("%s:%d: %s = '%s' is not accepted: yes or no", file, line, key, v);
-}
-
-static void parse_scene(const char *path, scene_t *s)
-{
-    FILE *f = fopen(path, "r");
-    if (!f)
-        die_usage("scene: cannot open '%s': %s", path, strerror(errno));
-    memset(s, 0, sizeof *s);
-    s->airlight = s->diffuse = 1;
-    s->tol = 1e-3;
-    s->orders_max = NBT_SCENE_GL_ORDERS;
-    char buf[1024], opt[160];
-    int line = 0;
-    while (fgets(buf, sizeof buf, f)) {
-        line++;
-        char *h = strchr(buf, '#');
-        if (h)
-            *h = '\0';
-        char *l = trim(buf);
-        if (!*l)
-            continue;
-        char *eq = strchr(l, '=');
-        if (!eq)
-            die_usage("%s:%d: expected 'key = value', got '%s'", path, line, l);
-        *eq = '\0';
-        char *key = trim(l), *val = trim(eq + 1);
-        snprintf(opt, sizeof opt, "%s:%d: %s", path, line, key);
-        if (!strcmp(key, "kappa_t")) {
-            opt_range(opt, val, 0, 1e3, &s->kt_lo, &s->kt_hi);
-            if (!(s->kt_hi > 0))
-                die_usage("%s = '%s' is not accepted: extinction must be > 0", opt, val);
-            s->have_kt = 1;
-        } else if (!strcmp(key, "kappa_s")) {
-            opt_range(opt, val, 0, 1e3, &s->ks_lo, &s->ks_hi);
-            s->have_ks = 1;
-        } else if (!strcmp(key, "distance")) {
-            opt_range(opt, val, 0, 1e9, &s->d_lo, &s->d_hi);
-            if (!(s->d_hi > 0))
-                die_usage("%s = '%s' is not accepted: the largest distance must be > 0", opt, val);
-            s->have_d = 1;
-        } else if (!strcmp(key, "g")) {
-            opt_range(opt, val, -0.99, 0.99, &s->g_lo, &s->g_hi);
-            s->have_g = 1;
-        } else if (!strcmp(key, "phase")) {
-            snprintf(s->phase, sizeof s->phase, "%s", val);
-        } else if (!strcmp(key, "airlight")) {
-            s->airlight = yesno(path, line, key, val);
-        } else if (!strcmp(key, "diffuse")) {
-            s->diffuse = yesno(path, line, key, val);
-        } else if (!strcmp(key, "half")) {
-            s->half = yesno(path, line, key, val);
-        } else if (!strcmp(key, "orders_max")) {
-            s->orders_max = opt_long(opt, val, 1, 512);
-        } else if (!strcmp(key, "tol")) {
-            s->tol = opt_double(opt, val, 1e-7, 0, 0.5, 0);
-        } else if (!strcmp(key, "phong")) {
-            for (char *tok = strtok(val, " ,"); tok; tok = strtok(NULL, " ,")) {
-                if (s->nphong == sizeof s->phong / sizeof s->phong[0])
-                    die_usage("%s: at most 16 Phong exponents", opt);
-                s->phong[s->nphong++] = (int)opt_long(opt, tok, 2, 10000);
-            }
-        } else
-            die_usage("%s:%d: unknown key '%s': accepted are kappa_t, kappa_s, distance, g, phase, airlight, "
-                      "diffuse, phong, tol, half, orders_max", path, line, key);
-    }
-    fclose(f);
-    if (!s->have_kt || !s->have_d)
-        die_usage("%s: kappa_t and distance are required", path);
-    if (s->have_g == !!s->phase[0])
-        die_usage("%s: give exactly one of g (a value or range: Legendre tables) and phase (fixed phase)", path);
-    if (s->have_ks && s->ks_hi > s->kt_hi)
-        die_usage("%s: kappa_s (%g) must not exceed kappa_t (%g)", path, s->ks_hi, s->kt_hi);
-    if (!s->airlight && !s->diffuse && s->nphong == 0)
-        die_usage("%s: the scene needs no tables (airlight = no, diffuse = no, no phong)", path);
-}
+#include "scene.h"
 
 int cmd_scene(int argc, char **argv)
 {
@@ -144,7 +39,9 @@ int cmd_scene(int argc, char **argv)
     if (optind != argc - 1)
         die_usage("scene: expected exactly one scene file");
     scene_t s;
-    parse_scene(argv[optind], &s);
+    char perr[1024];
+    if (scene_parse(argv[optind], &s, perr, sizeof perr))
+        die_usage("%s", perr);
     nbt_phase *ph = NULL;
     if (s.phase[0]) {
         char err[256];

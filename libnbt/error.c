@@ -4,7 +4,7 @@
 #include <nbt/nbt.h>
 #include "internal.h"
 
-static _Atomic(nbt_error_handler *) handler = NULL;
+static _Atomic(nbt_error_handler *) handler; /* static: starts as NULL (clang rejects "= NULL" for an _Atomic pointer) */
 
 const char *nbt_strerror(nbt_status s)
 {

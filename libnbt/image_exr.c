@@ -21,6 +21,14 @@
 #include <nbt/image.h>
 #include "internal.h"
 
+int nbt__exr_raw_plausible(const char *path, double raw_bytes)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return 1; /* the reader reports the file's own problem */
+    return raw_bytes <= 1e4 * (double)st.st_size + 16.0 * 1024 * 1024;
+}
+
 nbt_image *nbt_image_alloc(size_t w, size_t h, int with_z)
 {
     if (w == 0 || h == 0 || h > SIZE_MAX / w)
@@ -417,6 +425,11 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
     }
     if (w64 > INT32_MAX / (int64_t)(3 * sizeof(float))) {
         st = fail(NBT_EFORMAT, path, err, errlen, "data window too wide (%lld pixels)", (long long)w64);
+        goto done;
+    }
+    if (!nbt__exr_raw_plausible(path, (double)w64 * (double)h64 * 4.0 * sizeof(float))) {
+        st = fail(NBT_EFORMAT, path, err, errlen, "data window %lld x %lld is more than the file can hold: corrupt header",
+                  (long long)w64, (long long)h64);
         goto done;
     }
     if ((uint64_t)w64 > SIZE_MAX || (uint64_t)h64 > SIZE_MAX ||

@@ -82,4 +82,12 @@ typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);
 nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx);
 unsigned nbt__nthreads(unsigned requested, size_t n);
 
+/* An EXR header can claim any data window. Before allocating for it, the
+ * pixels' raw size must be one the file could hold: ZIP (deflate) compresses
+ * by at most 1032:1 and the other codecs by less on real data, so raw bytes
+ * above 1e4 x the file's size, plus 16 MiB below which any claim is harmless,
+ * mean a corrupt or hostile header (found by fuzzing: a 1 kB file asked for
+ * 13 GB). Nonzero when plausible. */
+int nbt__exr_raw_plausible(const char *path, double raw_bytes);
+
 #endif

@@ -75,7 +75,7 @@ nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B)
         return NULL;
     double sw = 0;
     for (size_t i = 0; i < n; i++) {
-        if (!(w[i] >= 0 && isfinite(w[i])) || !(B[i] > 0 && isfinite(B[i])))
+        if (!(w[i] >= 0 && isfinite(w[i])) || !(B[i] > 0 && B[i] <= NBT_PHASE_GAUSS_BMAX))
             return NULL;
         sw += w[i];
     }
@@ -476,8 +476,8 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         }
         *out = nbt_phase_hg(v);
     } else if (!strncmp(spec, "gauss:B=", 8)) {
-        if (!parse_double(spec + 8, &v) || !(v > 0.0)) {
-            snprintf(err, errlen, "phase '%s': B must be a number > 0", spec);
+        if (!parse_double(spec + 8, &v) || !(v > 0.0 && v <= NBT_PHASE_GAUSS_BMAX)) {
+            snprintf(err, errlen, "phase '%s': B must be a number in (0, %g]", spec, NBT_PHASE_GAUSS_BMAX);
             return NBT_EDOM;
         }
         *out = nbt_phase_gauss(v);
@@ -491,7 +491,8 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         free(w);
         free(B);
         if (!*out) {
-            snprintf(err, errlen, "phase '%s': need rows 'w B' with w >= 0 (not all 0) and B > 0", spec);
+            snprintf(err, errlen, "phase '%s': need rows 'w B' with w >= 0 (not all 0) and 0 < B <= %g", spec,
+                     NBT_PHASE_GAUSS_BMAX);
             return NBT_EFORMAT;
         }
         return NBT_OK;
@@ -503,7 +504,7 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         return read_table_file(spec + 6, out, err, errlen);
     } else {
         snprintf(err, errlen,
-                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (B>0), table:FILE, sog:FILE",
+                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (0<B<=1000), table:FILE, sog:FILE",
                  spec);
         return NBT_EFORMAT;
     }

@@ -233,7 +233,8 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         goto done;
     }
     for (int a = 0; a < 2; a++) {
-        ax[a].n = (size_t)(a == 0 ? dw.max.x - dw.min.x + 1 : dw.max.y - dw.min.y + 1);
+        int64_t na = a == 0 ? (int64_t)dw.max.x - dw.min.x + 1 : (int64_t)dw.max.y - dw.min.y + 1;
+        ax[a].n = na > 0 ? (size_t)na : 0; /* 0: rejected by nbt_table_alloc */
         if (exr_attr_get_string(ctx, 0, axis_attr(a, "map", an, sizeof an), &len, &s) != EXR_ERR_SUCCESS ||
             nbt_axis_map_parse(s, &ax[a].map) != NBT_OK ||
             exr_attr_get_double(ctx, 0, axis_attr(a, "lo", an, sizeof an), &ax[a].lo) != EXR_ERR_SUCCESS ||
@@ -251,6 +252,10 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
             st = rd_fail(err, errlen, path, "channels must be 1-4 of R, G, B, A, all FLOAT or all HALF");
             goto done;
         }
+    if (!nbt__exr_raw_plausible(path, (double)ax[0].n * (double)ax[1].n * (double)(nc ? nc : 1) * (half ? 2.0 : 4.0))) {
+        st = rd_fail(err, errlen, path, "the data window is more than the file can hold: corrupt header");
+        goto done;
+    }
     t = nbt_table_alloc(kind, &ax[0], &ax[1], nc);
     if (!t) {
         st = rd_fail(err, errlen, path, "bad table axes or size");

@@ -10,18 +10,20 @@
 #ifndef NBT_GAMMA_EPS
 #define NBT_GAMMA_EPS 1e-3
 #endif
-uniform sampler2D nbt_H0;
+NBT_SAMPLER(nbt_H0, 3)
 #if NBT_H_PACKS > 1
-uniform sampler2D nbt_H1;
+NBT_SAMPLER(nbt_H1, 4)
 #endif
 #if NBT_H_PACKS > 2
-uniform sampler2D nbt_H2;
+NBT_SAMPLER(nbt_H2, 5)
 #endif
 #if NBT_H_PACKS > 3
-uniform sampler2D nbt_H3;
+NBT_SAMPLER(nbt_H3, 6)
 #endif
-uniform vec4 nbt_H_ax0, nbt_H_ax1; // u axis, v axis: vec4(lo, hi, c, n)
-uniform int nbt_H_map0, nbt_H_map1;
+NBT_BLOCK_BEGIN(nbt_H_block, 1)
+NBT_U vec4 nbt_H_ax0, nbt_H_ax1; // u axis, v axis: vec4(lo, hi, c, n)
+NBT_U int nbt_H_map0, nbt_H_map1;
+NBT_BLOCK_END
 
 // sum_k w_k [H_k(u, v1) - H_k(u, v0)]
 float nbt_h_diff(float u, float v0, float v1)

@@ -15,6 +15,11 @@ extern const char nbt_glsl_nbt_table[], nbt_glsl_nbt_weights[], nbt_glsl_nbt_air
 
 char *nbt_gl_shader_source(const nbt_gl_config *c, const char *user_src)
 {
+    return nbt_gl_shader_source_target(c, NBT_GL_TARGET_GL330, user_src);
+}
+
+char *nbt_gl_shader_source_target(const nbt_gl_config *c, int target, const char *user_src)
+{
     if (c->h_packs < 0 || c->h_packs > 4 || c->j1_packs < 0 || c->j1_packs > 4 || c->jn_packs < 0 ||
         c->jn_packs > 4 || (c->jn_packs > 0 && c->j1_packs == 0) ||
         (c->fixed_phase && (c->h_packs > 1 || c->j1_packs > 1 || c->jn_packs > 1)))
@@ -22,9 +27,24 @@ char *nbt_gl_shader_source(const nbt_gl_config *c, const char *user_src)
     int w = c->h_packs > c->j1_packs ? c->h_packs : c->j1_packs;
     if (c->jn_packs > w)
         w = c->jn_packs;
-    char head[512];
-    int n = snprintf(head, sizeof head, "#version 330 core\n%s#define NBT_W_PACKS %d\n#define NBT_GAMMA_EPS %.9g\n",
-                     c->fixed_phase ? "#define NBT_FIXED_PHASE 1\n" : "", w > 0 ? w : 1,
+    /* the version line and how the modules declare their uniforms: loose
+     * uniforms for OpenGL and OpenGL ES (ES also needs default precisions, and
+     * highp: the tables' values and axes need 32-bit floats); Vulkan allows
+     * only blocks and samplers with explicit set/binding (bindings in gl.h) */
+    static const char *const target_head[3] = {
+        "#version 330 core\n#define NBT_U uniform\n#define NBT_BLOCK_BEGIN(name, b)\n#define NBT_BLOCK_END\n"
+        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n",
+        "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler2D;\n"
+        "#define NBT_U uniform\n#define NBT_BLOCK_BEGIN(name, b)\n#define NBT_BLOCK_END\n"
+        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n",
+        "#version 450\n#define NBT_VULKAN 1\n#define NBT_U\n"
+        "#define NBT_BLOCK_BEGIN(name, b) layout(std140, set = 0, binding = b) uniform name {\n"
+        "#define NBT_BLOCK_END };\n#define NBT_SAMPLER(name, b) layout(set = 0, binding = b) uniform sampler2D name;\n"};
+    if (target < NBT_GL_TARGET_GL330 || target > NBT_GL_TARGET_VULKAN)
+        return NULL;
+    char head[1024];
+    int n = snprintf(head, sizeof head, "%s%s#define NBT_W_PACKS %d\n#define NBT_GAMMA_EPS %.9g\n",
+                     target_head[target], c->fixed_phase ? "#define NBT_FIXED_PHASE 1\n" : "", w > 0 ? w : 1,
                      c->gamma_eps > 0 ? c->gamma_eps : 1e-3);
     if (c->h_packs)
         n += snprintf(head + n, sizeof head - (size_t)n, "#define NBT_H_PACKS %d\n", c->h_packs);

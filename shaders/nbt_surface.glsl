@@ -6,29 +6,31 @@
 // Defines: NBT_J1_PACKS (1..4) diffuse tables; NBT_JN_PACKS (0..4) Phong
 // tables for one exponent n (0: no specular term). T beyond the table reads
 // its edge.
-uniform sampler2D nbt_J1_0;
+NBT_SAMPLER(nbt_J1_0, 7)
 #if NBT_J1_PACKS > 1
-uniform sampler2D nbt_J1_1;
+NBT_SAMPLER(nbt_J1_1, 8)
 #endif
 #if NBT_J1_PACKS > 2
-uniform sampler2D nbt_J1_2;
+NBT_SAMPLER(nbt_J1_2, 9)
 #endif
 #if NBT_J1_PACKS > 3
-uniform sampler2D nbt_J1_3;
+NBT_SAMPLER(nbt_J1_3, 10)
 #endif
-uniform vec4 nbt_J_ax0, nbt_J_ax1; // T axis, theta axis (all J tables share them)
-uniform int nbt_J_map0, nbt_J_map1;
+NBT_BLOCK_BEGIN(nbt_J_block, 2)
+NBT_U vec4 nbt_J_ax0, nbt_J_ax1; // T axis, theta axis (all J tables share them)
+NBT_U int nbt_J_map0, nbt_J_map1;
+NBT_BLOCK_END
 #if NBT_JN_PACKS > 0
-uniform sampler2D nbt_Jn_0;
+NBT_SAMPLER(nbt_Jn_0, 11)
 #endif
 #if NBT_JN_PACKS > 1
-uniform sampler2D nbt_Jn_1;
+NBT_SAMPLER(nbt_Jn_1, 12)
 #endif
 #if NBT_JN_PACKS > 2
-uniform sampler2D nbt_Jn_2;
+NBT_SAMPLER(nbt_Jn_2, 13)
 #endif
 #if NBT_JN_PACKS > 3
-uniform sampler2D nbt_Jn_3;
+NBT_SAMPLER(nbt_Jn_3, 14)
 #endif
 
 #define NBT_JLOOK(tex, T, th) nbt_lookup(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, T, th)

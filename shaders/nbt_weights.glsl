@@ -3,4 +3,6 @@
 // 0 for orders not used, so the number of terms and g change at run time.
 // Fixed-phase tables use nbt_hw[0] = (1, 0, 0, 0). NBT_W_PACKS is the largest
 // pack count of the tables in use.
-uniform vec4 nbt_hw[NBT_W_PACKS];
+NBT_BLOCK_BEGIN(nbt_weights_block, 0)
+NBT_U vec4 nbt_hw[NBT_W_PACKS];
+NBT_BLOCK_END

@@ -297,6 +297,12 @@ if "$NBT_FIT" kernel --help >/dev/null 2>&1; then
   expect_usage "phase --target sog missing" "$enoent" "$NBT_FIT" phase --target sog:$miss.sog --terms 2
   # read before the fits (16 lobes would take a while)
   expect_usage "phase --against missing" "$enoent" timeout 10 "$NBT_FIT" phase --target hg:g=0.9 --terms 16 --against $miss.exr
+  # malformed photon counts: the line named, nothing fitted
+  printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.1,0.5,0.01\n1,0.1,0.2,-0.3,0.01\n' >"$tmp/neg.csv"
+  expect_usage "kernel CSV with a negative psi" "neg.csv line 3: expected .*psi >= 0" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
+  printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0.2,0.1,0.5,0.01\n' >"$tmp/neg.csv"
+  expect_usage "kernel CSV with r_hi < r_lo" "neg.csv line 2: expected" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
+  rm -f "$tmp/neg.csv"
 fi
 [ ! -e "$tmp/x.csv" ] && ok || bad "missing inputs left output"
 

@@ -26,7 +26,24 @@ printf '0 1\n1.5 1\n' >"$tmp/dens.txt"
 a=$("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385 | cut -d' ' -f2)
 b=$("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2.385 --density "$tmp/dens.txt" | cut -d' ' -f2)
 close "$b" "$a" 1e-10 "eval moments: equal layers = homogeneous"
-for m in ishimaru smallangle lineint single elek; do
+# psi = alpha/r G(r/beta), G(x) = erfc(x/sqrt 2)/2, with alpha, beta as eval moments
+# prints them (erfc by its Taylor series here: x < 1, 40 terms, error < 1e-15);
+# single scattering in closed form, sigma_s e^{-sigma_t z}/(2 sqrt(pi B)) (1/r) G(r/(z sqrt(2B)))
+psi_ref='function G(x,  y, s, t, n) { y = x / sqrt(2); t = y; s = y;
+  for (n = 1; n < 40; n++) { t *= -y * y / n; s += t / (2 * n + 1) }
+  return 0.5 * (1 - 2 / sqrt(3.141592653589793) * s) }'
+for m in ishimaru smallangle; do
+  set -- $("$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --model $m)
+  want=$(awk -v a="$3" -v b="$4" "$psi_ref"' BEGIN { printf "%.17g", a / 0.3 * G(0.3 / b) }')
+  set -- $("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model $m)
+  close "$1" "$want" 1e-12 "eval psi --model $m = alpha/r G(r/beta) of eval moments"
+done
+set -- $("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model single)
+close "$1" "$(awk "$psi_ref"' BEGIN { printf "%.17g", 0.9 * exp(-2) / (2 * sqrt(3.141592653589793 * 0.0685)) / 0.3 * G(0.3 / (2 * sqrt(2 * 0.0685))) }')" \
+  1e-12 "eval psi --model single: closed form"
+# the line integral and Elek's width have no closed form here (test_beam checks them
+# against quadrature); through the CLI: positive, finite, and 17 digits
+for m in lineint elek; do
   set -- $("$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model $m)
   awk -v v="$1" 'BEGIN { exit !(v > 0 && v < 10) }' && ok || bad "eval psi --model $m: $1"
 done
@@ -69,6 +86,16 @@ expect_usage "kernel bad model" "--model" "$NBT_GEN" kernel --B 0.05 --model spl
 rm -f "$tmp/bm.txt" "$tmp/kf.exr" "$tmp/kf-P4.exr"
 expect_usage "psi pi model" "supplement" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model pi
 expect_usage "albedo > 1" "--albedo" "$NBT_GEN" eval moments --albedo 1.5 --sigma-t 1 --B 0.0685 --z 2
+expect_usage "trailing characters" "'0.9x' is not accepted" "$NBT_GEN" eval moments --albedo 0.9x --sigma-t 1 --B 0.0685 --z 2
+expect_usage "empty number" "--z: '' is not accepted" "$NBT_GEN" eval moments --albedo 0.9 --sigma-t 1 --B 0.0685 --z ''
+# the documented default --tol 1e-8: the same output as --tol 1e-8 and not that of
+# --tol 1e-4 (an integrand near the source, where the quadrature must adapt)
+X="--g 0.5 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma 0.05 --dvp 20 --method direct"
+d0=$("$NBT_GEN" eval airlight $X); d8=$("$NBT_GEN" eval airlight $X --tol 1e-8); d4=$("$NBT_GEN" eval airlight $X --tol 1e-4)
+[ -n "$d0" ] && [ "$d0" = "$d8" ] && [ "$d0" != "$d4" ] && ok || bad "default --tol is 1e-8: '$d0' '$d8' '$d4'"
+X="H --k 3 --u 2.385 --v 0.7"
+d0=$("$NBT_GEN" eval $X); d8=$("$NBT_GEN" eval $X --tol 1e-8); d4=$("$NBT_GEN" eval $X --tol 1e-4)
+[ -n "$d0" ] && [ "$d0" = "$d8" ] && [ "$d0" != "$d4" ] && ok || bad "eval H: default --tol is 1e-8: '$d0' '$d8' '$d4'"
 expect_usage "negative B" "--B" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B -1 --z 2
 : >"$tmp/empty.txt"
 expect_usage "empty density" "empty" "$NBT_GEN" eval moments --albedo 0.5 --sigma-t 1 --B 0.1 --z 2 --density "$tmp/empty.txt"
@@ -125,17 +152,20 @@ s=$("$NBT_GEN" eval airlight $A --method series 2>/dev/null | cut -d' ' -f1)
 set -- $("$NBT_GEN" eval airlight $A --method table 2>/dev/null)
 close "$s" "$d" 1e-7 "airlight series vs direct"
 t=$1; terr=$2
-awk -v a="$t" -v b="$d" -v e="$terr" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e && e < 0.2 * b) }' && ok ||
+# the tables are built for 1e-3 relative error; the series weights (2k+1) g^k
+# amplify it to the 3.1% this geometry reports: 5% is the bound
+awk -v a="$t" -v b="$d" -v e="$terr" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e && e < 0.05 * b) }' && ok ||
   bad "airlight table $t within its reported error $terr of direct $d"
 "$NBT_GEN" eval airlight $A --dvp inf >/dev/null && ok || bad "--dvp inf accepted"
 # towards the source axis (issue 9: gamma = 3.14159265358979 printed 618.6
 # where direct gives 4.7e-5): the table method stays within its reported
-# error of the direct integral, and that error is below 20% of the value
+# error of the direct integral, and that error is below 5% of the value (the
+# largest reported here is 2.9%, at gamma = 1e-3)
 for ga in "3.14159265358979 --dvp inf" "3.14159 --dvp inf" "3.1 --dvp 20" "1e-6 --dvp 3" "1e-3 --dvp 6.9"; do
   X="--g 0.5 --kappa-s 0.1 --kappa-t 0.12 --I0 3 --dsv 7 --gamma $ga"
   d=$("$NBT_GEN" eval airlight $X --method direct | cut -d' ' -f1)
   set -- $("$NBT_GEN" eval airlight $X --method table 2>/dev/null)
-  awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0 && d <= e && e < 0.2 * b) }' && ok ||
+  awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0 && d <= e && e < 0.05 * b) }' && ok ||
     bad "airlight table at gamma $ga: $1 (error $2) vs direct $d"
 done
 # surface: direct vs series

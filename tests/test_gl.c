@@ -75,27 +75,63 @@ static double lookup_airlight(nbt_table *const *T, size_t nt, const double *b, c
     return s == 0.0 ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
 }
 
-static void validate(const nbt_gl_config *c, const char *main_src)
+/* glslangValidator on an assembled source: 0 when it accepts it */
+static int glslang(const char *src, const char *flags)
 {
-    char *src = nbt_gl_shader_source(c, main_src);
     char path[] = "/tmp/nbt-test-glsl-XXXXXX";
     int fd = mkstemp(path);
     FILE *f = fdopen(fd, "w");
     fputs(src, f);
     fclose(f);
-    char cmd[256];
-    snprintf(cmd, sizeof cmd, "glslangValidator -S frag %s >/dev/null 2>&1", path);
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "glslangValidator %s -S frag %s >/dev/null 2>&1", flags, path);
     int rc = system(cmd);
-    t_true(rc == 0, "glslangValidator accepts the variant h=%d j1=%d jn=%d fixed=%d beam=%d%s", c->h_packs, c->j1_packs,
-           c->jn_packs, c->fixed_phase, c->beam, rc == 0 ? "" : " (is glslang-tools installed?)");
-    char err[4096];
-    unsigned p = gl_fullscreen_program(src, err, sizeof err);
-    t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d: %s", c->h_packs, c->j1_packs,
-           c->jn_packs, c->fixed_phase, p ? "ok" : err);
-    if (p)
-        glDeleteProgram(p);
     unlink(path);
+    return rc;
+}
+
+/* one variant for every target: desktop GL 3.30 (validated and compiled by the
+ * driver), GLSL ES 3.00 (validated) and Vulkan (compiled to SPIR-V, -V) */
+static void validate(const nbt_gl_config *c0, const char *main_src)
+{
+    static const char *const tname[3] = {"GL 3.30", "GLSL ES 3.00", "Vulkan SPIR-V"};
+    static const char *const tflags[3] = {"", "", "-V -o /dev/null"};
+    for (int target = 0; target < 3; target++) {
+        nbt_gl_config c = *c0;
+        char *src = nbt_gl_shader_source_target(&c, target, main_src);
+        if (!src) {
+            t_true(0, "%s source assembled", tname[target]);
+            continue;
+        }
+        int rc = glslang(src, tflags[target]);
+        t_true(rc == 0, "glslangValidator accepts the %s variant h=%d j1=%d jn=%d fixed=%d beam=%d%s", tname[target],
+               c.h_packs, c.j1_packs, c.jn_packs, c.fixed_phase, c.beam, rc == 0 ? "" : " (is glslang-tools installed?)");
+        if (target == NBT_GL_TARGET_GL330) {
+            char err[4096];
+            unsigned p = gl_fullscreen_program(src, err, sizeof err);
+            t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d: %s", c.h_packs, c.j1_packs,
+                   c.jn_packs, c.fixed_phase, p ? "ok" : err);
+            if (p)
+                glDeleteProgram(p);
+        }
+        free(src);
+    }
+}
+
+/* the validators can say no: ES without default precision and Vulkan with a
+ * loose uniform are errors (what the targets' headers exist to avoid) */
+static void validators_can_fail(const char *main_src)
+{
+    nbt_gl_config c = {1, 0, 0, 0, 0, 0};
+    char *src = nbt_gl_shader_source_target(&c, NBT_GL_TARGET_ES300, main_src);
+    char *p = strstr(src, "precision highp float;");
+    memset(p, ' ', strlen("precision highp float;"));
+    t_true(glslang(src, "") != 0, "GLSL ES 3.00 without a default float precision is rejected");
     free(src);
+    src = nbt_gl_shader_source_target(&c, NBT_GL_TARGET_VULKAN, "uniform float loose;\nlayout(location = 0) out vec4 color;\nvoid main() { color = vec4(loose); }\n");
+    t_true(glslang(src, "-V -o /dev/null") != 0, "a loose uniform is rejected for Vulkan");
+    free(src);
+    t_true(nbt_gl_shader_source_target(&c, 3, NULL) == NULL, "target 3 rejected");
 }
 
 int main(void)
@@ -108,16 +144,20 @@ int main(void)
     }
     t_true(1, "GL context: %s", (const char *)glGetString(GL_RENDERER));
     /* variants */
-    const char *just_airlight = "out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30)); }\n";
-    const char *just_surface = "out vec4 color;\nvoid main() { color = vec4(nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0)); }\n";
-    const char *just_beam = "out vec4 color;\nvoid main() { color = vec4(nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3)); }\n";
+    const char *just_airlight = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30)); }\n";
+    const char *just_surface = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0)); }\n";
+    const char *just_beam = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3)); }\n";
+    validators_can_fail(just_airlight);
     for (int h = 1; h <= 4; h++)
         validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0}, just_airlight);
     for (int j = 1; j <= 4; j++)
         validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0}, just_surface);
     validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0}, just_airlight);
     validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0}, just_beam);
-    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0}, MAIN);
+    const char *just_all = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30), "
+                           "nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0), "
+                           "nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3), 1.0); }\n";
+    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0}, just_all);
     t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
     t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
 

@@ -86,7 +86,7 @@ static void test_infinite(void)
     nbt_phase *g60 = nbt_phase_gauss(0.274), *g30 = nbt_phase_gauss(0.0685), *iso = nbt_phase_iso();
     c.phase = g60;
     c.albedo = 0;
-    nbt_mc_run(&c, &h);
+    t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     c.infinite = 1;
     t_true(nbt_mc_run(&c, &f) == NBT_OK, "infinite run");
     t_true(same_tallies(h, f) && f->M0[0] == 0 && f->M0[9] == 0 && h->interactions == f->interactions,
@@ -106,9 +106,9 @@ static void test_infinite(void)
             c.phase = ph[w];
             c.albedo = alb[a];
             c.infinite = 0;
-            nbt_mc_run(&c, &h);
+            t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
             c.infinite = 1;
-            nbt_mc_run(&c, &f);
+            t_true(nbt_mc_run(&c, &f) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
             int ge = 1, gt = 1;
             double sf = 0, sh = 0;
             for (size_t j = 0; j < 10; j++) {
@@ -142,9 +142,9 @@ static void test_infinite(void)
     c.r_max_scale = 0.1;
     c.z_cut = 3;
     c.infinite = 0;
-    nbt_mc_run(&c, &h);
+    t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     c.infinite = 1;
-    nbt_mc_run(&c, &f);
+    t_true(nbt_mc_run(&c, &f) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     t_true(same_tallies(h, f) && h->M0[2] > 0 && h->interactions == f->interactions,
            "forward phase, short depth: identical tallies in both geometries");
     nbt_mc_result_free(h);
@@ -157,9 +157,9 @@ static void test_infinite(void)
     c.z_cut = 0;
     c.order_max = 1;
     c.infinite = 0;
-    nbt_mc_run(&c, &h);
+    t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     c.infinite = 1;
-    nbt_mc_run(&c, &f);
+    t_true(nbt_mc_run(&c, &f) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     t_true(same_tallies(h, f) && h->M0[0] > 0, "order_max 1: single scattering identical in both geometries");
     nbt_mc_result_free(h);
     nbt_mc_result_free(f);
@@ -175,7 +175,7 @@ static void test_infinite(void)
     c.order_max = 1;
     c.infinite = 0;
     c.photons = 400000;
-    nbt_mc_run(&c, &h);
+    t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     for (int j = 0; j < 3; j++) {
         double want = om * quad_ref(j1_f, p3[j], 0);
         t_abs(h->M0[j], want, 4 * h->M0_se[j], "order 1, z = %g: M0 %.6f vs omega J1 %.6f (se %.1e)", p3[j], h->M0[j],
@@ -189,9 +189,9 @@ static void test_infinite(void)
     for (int s = 0; s < ns; s++) {
         c.seed = 11 + 7 * (uint64_t)s;
         c.infinite = 0;
-        nbt_mc_run(&c, &h);
+        t_true(nbt_mc_run(&c, &h) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
         c.infinite = 1;
-        nbt_mc_run(&c, &f);
+        t_true(nbt_mc_run(&c, &f) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
         for (int j = 0; j < 3; j++) {
             double d = f->M0[j] - h->M0[j];
             s1[j] += d;
@@ -372,12 +372,43 @@ static double rho_smooth(double z, void *d)
     return 1.0 + 0.5 * sin(z);
 }
 
+/* The rod model: HG with g = -(1 - 1e-6) reverses a photon at every
+ * scattering (deviations ~1e-6 rad, so every photon stays within the
+ * near-vertical branch of the direction update, |uz| > 0.99999, for
+ * thousands of scatterings). A slab of optical thickness tau, albedo w, then
+ * has R = w sinh(l tau)/(l cosh(l tau) + sinh(l tau)), T = l/(l cosh + sinh),
+ * l = sqrt(1 - w^2) (two streams coupled only by back-scattering; T
+ * includes the uncollided light). Model error O(1e-6) against the MC's
+ * standard errors of ~1e-3. */
+static void test_rod(void)
+{
+    nbt_phase *back = nbt_phase_hg(-(1 - 1e-6));
+    nbt_mc_config c;
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 0.8;
+    c.phase = back;
+    c.slab = 1.5;
+    c.photons = 200000;
+    c.seed = 2385;
+    nbt_mc_result *r = NULL;
+    t_true(nbt_mc_run(&c, &r) == NBT_OK, "rod slab run");
+    if (r) {
+        double l = sqrt(1 - 0.8 * 0.8), sh = sinh(l * 1.5), ch = cosh(l * 1.5);
+        t_abs(r->R, 0.8 * sh / (l * ch + sh), 4 * r->R_se, "rod model R (se %.1e)", r->R_se);
+        t_abs(r->T, l / (l * ch + sh), 4 * r->T_se, "rod model T (se %.1e)", r->T_se);
+    }
+    nbt_mc_result_free(r);
+    nbt_phase_free(back);
+}
+
 int main(void)
 {
     gsl_set_error_handler_off();
     test_infinite();
     test_parts();
     test_weighted();
+    test_rod();
     /* van de Hulst (as quoted in the MCML manual): albedo 0.9, tau 2, HG g 0.75, n = 1 */
     nbt_phase *hg = nbt_phase_hg(0.75);
     nbt_mc_config c;
@@ -405,14 +436,14 @@ int main(void)
     t_abs(Ts, 0.66096, 3 * sqrt(Tv) + 1e-5, "slab T = 0.66096 (se %.1e)", sqrt(Tv));
     c.threads = 1;
     c.photons = 200000;
-    nbt_mc_run(&c, &r1);
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     c.threads = 2;
-    nbt_mc_run(&c, &r2);
+    t_true(nbt_mc_run(&c, &r2) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     t_true(r1->R == r2->R && r1->T == r2->T && r1->R_se == r2->R_se && r1->interactions == r2->interactions,
            "slab results identical with 1 and 2 threads");
     nbt_mc_result_free(r2);
     c.seed = 2386;
-    nbt_mc_run(&c, &r2);
+    t_true(nbt_mc_run(&c, &r2) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     t_true(r1->R != r2->R, "another seed gives another sample");
     nbt_mc_result_free(r1);
     nbt_mc_result_free(r2);
@@ -426,7 +457,7 @@ int main(void)
     nbt_phase *tab = nbt_phase_tabulated(2001, mu, pv);
     c.phase = tab;
     c.photons = 1000000;
-    nbt_mc_run(&c, &r1);
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     t_abs(r1->R, 0.09739, 3 * r1->R_se + 2e-4, "tabulated HG slab R (se %.1e)", r1->R_se);
     t_abs(r1->T, 0.66096, 3 * r1->T_se + 2e-4, "tabulated HG slab T (se %.1e)", r1->T_se);
     nbt_mc_result_free(r1);
@@ -486,7 +517,7 @@ int main(void)
     c.z_planes = p3;
     c.albedo = 0.5;
     c.photons = 1000000;
-    nbt_mc_run(&c, &r1);
+    t_true(nbt_mc_run(&c, &r1) == NBT_OK, "nbt_mc_run succeeds (line %d)", __LINE__);
     nbt_mc_config bad_base = c;
     m.albedo = 0.5;
     m.nlayers = 3;

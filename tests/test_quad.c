@@ -31,6 +31,13 @@ static int f_nan(double x, void *p, unsigned fdim, double *f)
     f[0] = x > 0.5 ? NAN : 1.0;
     return 0;
 }
+static int f_x14(double x, void *p, unsigned fdim, double *f)
+{
+    (void)p;
+    (void)fdim;
+    f[0] = pow(x, 14);
+    return 0;
+}
 static int f_peak(double x, void *p, unsigned fdim, double *f)
 {
     (void)fdim;
@@ -81,6 +88,21 @@ int main(void)
     double w = 1e-5;
     st = nbt_quad_gk(ws, f_peak, &w, 1, 0.0, 1.0, 0.0, 1e-10, r, e);
     t_rel(r[0], (atan(0.7 / w) + atan(0.3 / w)) / M_PI, 1e-9, "narrow peak found adaptively (status %d)", st);
+    /* the error estimate itself, exactly: for x^14 the Kronrod 15 rule is exact
+     * (degree <= 22) and the Gauss 7 rule's error has the closed form
+     * E = 2^15 (7!)^4 / (15 (14!)^3) f^(14) h^15 on an interval of half-width h,
+     * with f^(14) = 14! everywhere; so |K - G| = C h^15 on every interval,
+     * C = 2^15 (7!)^4 / (15 (14!)^2) = 1.854659197316540e-4 (checked with mpmath
+     * from the standard G7 nodes). epsabs = 1 keeps the given intervals. */
+    {
+        const double C = 1.854659197316540e-4, h = 0.6;
+        nbt_quad_gk(ws, f_x14, NULL, 1, -h, h, 1.0, 0.0, r, e);
+        t_rel(e[0], C * pow(h, 15), 1e-9, "G7K15 estimate on one interval = the Gauss rule's exact error C h^15");
+        t_rel(r[0], 2 * pow(h, 15) / 15, 1e-13, "K15 integrates x^14 exactly");
+        double zero = 0.0;
+        nbt_quad_gk_pts(ws, f_x14, NULL, 1, -2 * h, 2 * h, &zero, 1, 1.0, 0.0, r, e);
+        t_rel(e[0], 2 * C * pow(h, 15), 1e-6, "two intervals: the total estimate is the sum of both");
+    }
     /* errors */
     t_true(nbt_quad_gk(ws, f_nan, NULL, 1, 0.0, 1.0, 0.0, 1e-10, r, e) == NBT_EDOM, "NaN integrand -> NBT_EDOM");
     t_true(nbt_quad_gk(ws, f_vec, NULL, 1, 0.0, INFINITY, 0.0, 1e-10, r, e) == NBT_EDOM, "infinite limit -> NBT_EDOM");

@@ -113,6 +113,23 @@ int main(void)
     }
     t_true(agree == 12, "surface series = direct within 1e-6 on %d/12 random geometries (worst %.2e)", agree, worst);
 
+    /* ---- no scattering (kappa_s = 0): only the unscattered light, in closed
+     * form I0 e^{-kappa_t d}/d^2 (kd cos theta_s + ks cos^n theta_r), with the
+     * source and mirror angles different (both methods share this term) ---- */
+    {
+        nbt_surface_geom g = {0, 0.3, 2.385, 3.1, 0.4, 1.1, 0.6, 0.35, 20};
+        double want = 2.385 * exp(-0.3 * 3.1) / (3.1 * 3.1) * (0.6 * cos(0.4) + 0.35 * pow(cos(1.1), 20));
+        double Ld, Ed, Ls, Es;
+        t_true(nbt_surface_direct(hg, &g, 1e-10, &Ld, &Ed) == NBT_OK, "kappa_s = 0: direct");
+        t_rel(Ld, want, 1e-12, "kappa_s = 0: direct = the unscattered closed form");
+        t_true(nbt_surface_series(b, 40, &g, 1e-10, &Ls, &Es) == NBT_OK, "kappa_s = 0: series");
+        t_rel(Ls, want, 1e-12, "kappa_s = 0: series = the unscattered closed form");
+        g.theta_r = 2.0; /* mirror direction below the surface: no specular light */
+        want = 2.385 * exp(-0.3 * 3.1) / (3.1 * 3.1) * 0.6 * cos(0.4);
+        nbt_surface_direct(hg, &g, 1e-10, &Ld, &Ed);
+        t_rel(Ld, want, 1e-12, "kappa_s = 0, theta_r > pi/2: diffuse only");
+    }
+
     /* ---- edges ---- */
     nbt_status st = nbt_jk(3, 1, 1e3, 0.3, 1e-10, J, E);
     t_true(st == NBT_OK && isfinite(J[0]) && J[0] >= 0 && J[0] < 1e-300, "T = 1000: finite, tiny, >= 0 (%.3g)", J[0]);
@@ -124,6 +141,7 @@ int main(void)
 
     /* ---- J table: pointwise truth within the recorded error ---- */
     int ns[2] = {1, 20};
+    nbt_table *jt[2];
     for (int i = 0; i < 2; i++) {
         nbt_axis a0 = {0, 10, NBT_AXIS_SQRT, 0, 65}, a1 = {0, M_PI, NBT_AXIS_COS, 0, 65};
         nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &a0, &a1, 4);
@@ -149,8 +167,36 @@ int main(void)
         /* nodes carry the exact values (to float) */
         nbt_jk(3, ns[i], nbt_axis_node(&a0, 7), nbt_axis_node(&a1, 50), 1e-11, J, E);
         t_rel(t->data[(50 * 65 + 7) * 4], J[0], 1e-7, "J^%d table node (7, 50) = J to float precision", ns[i]);
-        nbt_table_free(t);
+        jt[i] = t;
     }
+    /* the table route against the direct integral, Rayleigh scattering (b_k = 0
+     * beyond k = 2, so orders 0..3 are the whole series): within the bound the
+     * tables' recorded errors give, kappa_s I0/(4 pi d) sum_k (2k+1) |b_k|
+     * (kd err_k(J^1) + ks err_k(J^20)) */
+    {
+        nbt_phase *ray = nbt_phase_rayleigh();
+        double rb[4] = {1, 0, 0.1, 0};
+        int in = 0;
+        for (int j = 0; j < 8; j++) {
+            nbt_surface_geom g = {0.15, 0.2, 2.385, 0.5 + 4 * t_uniform(), M_PI * t_uniform(), M_PI * t_uniform(), 0.7, 0.3, 20};
+            double Lt, Ld, Ed, bound = 0;
+            nbt_status s1 = nbt_surface_table((const nbt_table *const *)&jt[0], 1, (const nbt_table *const *)&jt[1], 1, rb, 4,
+                                              &g, &Lt);
+            nbt_status s2 = nbt_surface_direct(ray, &g, 1e-8, &Ld, &Ed);
+            for (int k = 0; k < 4; k++)
+                bound += (2 * k + 1) * fabs(rb[k]) * (g.kd * jt[0]->max_err[k] + g.ks * jt[1]->max_err[k]);
+            bound *= g.kappa_s * g.I0 / (4 * M_PI * g.dsp);
+            int ok = s1 == NBT_OK && s2 == NBT_OK && fabs(Lt - Ld) <= bound + Ed;
+            if (!ok)
+                printf("dsp=%g ts=%g tr=%g: table %.10g direct %.10g bound %.3g (%d %d)\n", g.dsp, g.theta_s, g.theta_r, Lt,
+                       Ld, bound, s1, s2);
+            in += ok;
+        }
+        t_true(in == 8, "surface table route within its recorded bound of direct on %d/8 geometries", in);
+        nbt_phase_free(ray);
+    }
+    nbt_table_free(jt[0]);
+    nbt_table_free(jt[1]);
     nbt_phase_free(hg);
     return t_done();
 }

@@ -1,3 +1,4 @@
+#define _GNU_SOURCE 1 /* memmem */
 /* tests/test_table.c: axis maps, GPU-equivalent bilinear lookup, half
  * rounding, EXR round trips and bad files, recorded H interpolation error. */
 #include <math.h>
@@ -48,6 +49,12 @@ static int quad_fn(double x0, double x1, double *out, void *ctx)
     out[0] = x0 * x0 + 3 * x1;
     return 0;
 }
+static int saddle_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)ctx;
+    out[0] = x0 * x0 - x1 * x1;
+    return 0;
+}
 static int fail_fn(double x0, double x1, double *out, void *ctx)
 {
     (void)x0;
@@ -92,6 +99,40 @@ int main(void)
     nbt_table_lookup(t, nbt_axis_node(&maps[2], 3), nbt_axis_node(&maps[3], 5), v);
     t_abs(v[1], t->data[(5 * 9 + 3) * 3 + 1], 1e-6, "lookup at a node returns the node value");
 
+    /* every node reproduced exactly, the last ones included (an off-by-one
+     * clamp makes the last cell extrapolate from the one before) */
+    worst = 0;
+    for (size_t j = 0; j < 9; j++)
+        for (size_t i = 0; i < 9; i++) {
+            nbt_table_lookup(t, nbt_axis_node(&maps[2], i), nbt_axis_node(&maps[3], j), v);
+            for (size_t c = 0; c < 3; c++)
+                worst = fmax(worst, fabs(v[c] - t->data[(j * 9 + i) * 3 + c]));
+        }
+    t_abs(worst, 0, 1e-6, "lookup at all 81 nodes returns the node values");
+
+    /* ---- the recorded interpolation error, checked independently: x0^2 - x1^2
+     * on equal steps h. Bilinear interpolation errs by fx(1-fx)h^2 - fy(1-fy)h^2,
+     * zero at cell centres, h^2/4 at edge midpoints (the true maximum). The
+     * recorded error must bound the error at random points (exact values
+     * computed here) and be no larger than h^2/4, up to float storage (values
+     * <= 16, rounding <= 1e-6). ---- */
+    {
+        nbt_axis sa0 = {-1.3, 2.5, NBT_AXIS_LINEAR, 0, 17}, sa1 = {0.2, 4.0, NBT_AXIS_LINEAR, 0, 17};
+        nbt_table *sd = nbt_table_alloc(NBT_TABLE_J, &sa0, &sa1, 1);
+        t_true(nbt_table_tabulate(sd, saddle_fn, NULL, 1) == NBT_OK, "tabulate x0^2 - x1^2");
+        double h = 3.8 / 16, seen = 0, vv[1];
+        for (int k = 0; k < 20000; k++) {
+            double x0 = -1.3 + 3.8 * t_uniform(), x1 = 0.2 + 3.8 * t_uniform();
+            nbt_table_lookup(sd, x0, x1, vv);
+            seen = fmax(seen, fabs(vv[0] - (x0 * x0 - x1 * x1)));
+        }
+        t_true(seen <= sd->max_err[0] + 1e-6, "recorded error %.6g bounds the error %.6g at 20000 random points",
+               sd->max_err[0], seen);
+        t_abs(sd->max_err[0], h * h / 4, 2e-6, "recorded error = the true maximum h^2/4");
+        t_true(seen > 0.9 * h * h / 4, "random points come near the maximum (%.6g)", seen);
+        nbt_table_free(sd);
+    }
+
     /* ---- EXR round trips ---- */
     t->k[0] = 0;
     t->k[1] = 1;
@@ -120,6 +161,22 @@ int main(void)
         halfok &= fabsf(t->data[i]) < 1.0f / 1024 || fabsf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])) -
                                                            nearbyintf(ldexpf(t->data[i], 11 - ilogbf(t->data[i])))) == 0;
     t_true(halfok, "half rounding leaves 11 significant bits");
+    /* known IEEE half values: 1 + 2^-10 is a half, 1 + 2^-11 ties to even (1),
+     * pi -> 3.140625 (0x4248), 0.1 -> 0.0999755859375 (0x2e66), 1e-6 -> 17 x 2^-24
+     * (subnormal), 65504 the largest half */
+    {
+        nbt_axis q2 = {0, 1, NBT_AXIS_LINEAR, 0, 3};
+        nbt_table *hq = nbt_table_alloc(NBT_TABLE_H, &q2, &q2, 1);
+        const float in[9] = {1.0009765625f, 1.00048828125f, 3.14159265f, 0.1f, 1e-6f, 65504.0f, -2.5f, 0.0f, 1.0f};
+        const double want[9] = {1.0009765625, 1.0, 3.140625, 0.0999755859375, 17.0 / 16777216.0, 65504.0, -2.5, 0.0, 1.0};
+        memcpy(hq->data, in, sizeof in);
+        nbt_table_round_half(hq);
+        int same = 1;
+        for (int i = 0; i < 9; i++)
+            same &= (double)hq->data[i] == want[i];
+        t_true(same, "half rounding gives the IEEE half values (1+2^-10, ties to even, pi, 0.1, subnormal, 65504)");
+        nbt_table_free(hq);
+    }
     t_true(nbt_table_write_exr(t, path, NBT_EXR_ZIP) == NBT_OK && nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK &&
                same_tables(t, r), "half round trip is bit-exact");
     nbt_table_free(r);
@@ -131,6 +188,31 @@ int main(void)
                same_tables(p1, r), "fixed-phase single-channel round trip");
     nbt_table_free(r);
     nbt_table_free(p1);
+    /* a header claiming a huge data window (60000 x 60000 x 4 floats = 58 GB)
+     * in a 1 kB file is refused before any allocation (fuzzing found it) */
+    {
+        t_true(nbt_table_write_exr(t, path, NBT_EXR_NONE) == NBT_OK, "write a table to corrupt");
+        FILE *fc = fopen(path, "rb");
+        static unsigned char buf[1 << 16];
+        size_t len = fread(buf, 1, sizeof buf, fc);
+        fclose(fc);
+        static const char key[] = "dataWindow\0box2i";
+        unsigned char *w = memmem(buf, len, key, sizeof key);
+        t_true(w != NULL, "dataWindow attribute found");
+        if (w) {
+            unsigned char *box = w + sizeof key + 4; /* after the 4-byte attribute size: xmin ymin xmax ymax */
+            int32_t big = 59999;
+            memcpy(box + 8, &big, 4);
+            memcpy(box + 12, &big, 4);
+            fc = fopen(path, "wb");
+            fwrite(buf, 1, len, fc);
+            fclose(fc);
+            nbt_table *rb = NULL;
+            nbt_status s = nbt_table_read_exr(path, &rb, err, sizeof err);
+            t_true(s != NBT_OK && rb == NULL && strstr(err, "more than the file can hold"), "huge data window refused: %s", err);
+            nbt_table_free(rb);
+        }
+    }
     /* bad files */
     FILE *f = fopen(path, "w");
     fputs("not an EXR file\n", f);

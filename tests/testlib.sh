@@ -4,7 +4,7 @@
 # DESCRIPTION PATTERN CMD... asserts exit status 1, one line on stderr matching
 # PATTERN and nothing on stdout, within 10 s (a check made before the work);
 # close A B TOL
-# DESCRIPTION compares numbers; finish prints "N passed, M failed".
+# DESCRIPTION compares numbers (and fails unless both are numbers); finish prints "N passed, M failed".
 pass=0; fail=0
 ok()  { pass=$((pass + 1)); }
 bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
@@ -24,7 +24,9 @@ expect_fail() {
   else bad "$d: rc=$rc, stderr: $(cat "$tmp/err"), stdout: $(head -c 300 "$tmp/out")"; fi
 }
 close() {
-  if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
+  # both must be numbers (awk would read an empty or garbled output as 0)
+  if awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { n = "^[-+]?([0-9]+[.]?[0-9]*|[.][0-9]+)([eE][-+]?[0-9]+)?$";
+      if (a !~ n || b !~ n) exit 1; d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b; exit !(d <= t * s) }'
   then ok; else bad "$4: $1 vs $2 (rel tol $3)"; fi
 }
 finish() {

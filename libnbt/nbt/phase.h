@@ -35,9 +35,12 @@ nbt_phase *nbt_phase_hg(double g);
  * (theta >= pi rejected, i.e. renormalised by 1 - exp(-pi^2/4B)):
  *   p(theta) = theta exp(-theta^2/4B) / (4 pi B sin(theta) (1 - exp(-pi^2/4B))).
  * This is exactly what the photon counter samples. The spread is dtheta^2 = 4B.
- * NULL unless B > 0 and finite. */
+ * NULL unless 0 < B <= NBT_PHASE_GAUSS_BMAX: at B = 1000 the phase is
+ * isotropic to 2.5e-3 and sampling it already rejects 400 draws per photon;
+ * beyond, 4B overflows near 1e308 (a fuzzed SPEC gauss:B=1e308 gave NaN). */
+#define NBT_PHASE_GAUSS_BMAX 1e3
 nbt_phase *nbt_phase_gauss(double B);
-/* Sum of n Gaussians: weights w (>= 0, renormalised to sum 1), spreads B (> 0). */
+/* Sum of n Gaussians: weights w (>= 0, renormalised to sum 1), spreads B (0 < B <= NBT_PHASE_GAUSS_BMAX). */
 nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B);
 /* Tabulated p at n >= 2 strictly increasing mu from -1 to 1 (first and last
  * exactly -1 and 1), values >= 0, piecewise linear in mu, renormalised to 1. */

@@ -31,10 +31,24 @@ typedef struct {
     double gamma_eps; /* airlight: gamma clamped to [eps, pi - eps]; 0: 1e-3 */
 } nbt_gl_config;
 
+/* Targets. GL330: "#version 330 core", loose uniforms (the default).
+ * ES300: "#version 300 es" (WebGL 2, OpenGL ES 3), highp default precisions,
+ * loose uniforms. VULKAN: "#version 450" for glslangValidator -V (SPIR-V);
+ * uniforms in std140 blocks and samplers at descriptor set 0, bindings:
+ *   0 nbt_weights_block { nbt_hw }, 1 nbt_H_block { nbt_H_ax0, nbt_H_ax1, nbt_H_map0, nbt_H_map1 },
+ *   2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1 },
+ *   3..6 nbt_H0..nbt_H3, 7..10 nbt_J1_0..nbt_J1_3, 11..14 nbt_Jn_0..nbt_Jn_3.
+ * The user's code declares its own outputs (layout(location = 0) out vec4 ...
+ * works for all three). */
+enum { NBT_GL_TARGET_GL330 = 0, NBT_GL_TARGET_ES300 = 1, NBT_GL_TARGET_VULKAN = 2 };
+
 /* "#version 330 core", the #defines, the modules the configuration needs, then
  * user_src (the shader's own code, may be NULL). malloc'd; NULL on a bad
  * configuration (pack counts out of range) or no memory. */
 char *nbt_gl_shader_source(const nbt_gl_config *c, const char *user_src);
+/* The same for a target (NBT_GL_TARGET_*): its version line and uniform
+ * declarations; NULL also for an unknown target. */
+char *nbt_gl_shader_source_target(const nbt_gl_config *c, int target, const char *user_src);
 
 /* Weights for packs x 4 channels: w[k] = (2k+1) b[k] for k < nterms, 0 beyond. */
 void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w);
