@@ -73,7 +73,8 @@ typedef struct {
     double *acc;        /* NBATCH * stride */
     size_t b0, nbatch;  /* this part runs batches [b0, b0 + nbatch) */
     atomic_uint done;
-    atomic_int over;    /* rho_fn exceeded rho_max somewhere */
+    atomic_int *over;   /* rho_fn exceeded rho_max somewhere (a flag outside the
+                         * context, which the photon loop sees as const) */
 } mc_ctx;
 
 /* Tally forward crossings of planes in (z0, z1] along a move; *jp is the
@@ -174,7 +175,7 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                     z = z1;
                     double rho = cf->rho_fn(z > 0 ? z : 0.0, cf->rho_data); /* infinite: rho(0) continues behind */
                     if (rho > cf->rho_max)
-                        atomic_store(&c->over, 1);
+                        atomic_store(c->over, 1);
                     if (rng_u(&rs) * cf->rho_max < rho)
                         break;
                 }
@@ -416,7 +417,9 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
         return NBT_OK; /* a part with no photons adds nothing */
     mc_ctx c = {.cfg = cf, .acc = tally, .b0 = b0, .nbatch = b1 - b0};
     atomic_init(&c.done, 0);
-    atomic_init(&c.over, 0);
+    atomic_int over;
+    atomic_init(&over, 0);
+    c.over = &over;
     size_t nl = cf->slab > 0 || cf->rho_fn ? 1 : (cf->nlayers ? cf->nlayers : 1);
     c.nlay = nl;
     c.slab = cf->slab > 0;
@@ -463,7 +466,7 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
      * order: the same bits whoever runs it */
     memset(tally + b0 * c.stride, 0, (b1 - b0) * c.stride * sizeof(double));
     st = nbt__parallel_for(c.nbatch, cf->threads, run_batch, &c);
-    if (st == NBT_OK && atomic_load(&c.over))
+    if (st == NBT_OK && atomic_load(&over))
         st = nbt__fail(NBT_EDOM, "mc: the density callback exceeded rho_max");
     free(c.b);
     free(c.rho);
