@@ -55,8 +55,12 @@ float nbt_beam_psi(vec2 ab, float r)
 // polynomials in ln tau, albedo, ln B (tau = sigma_t z). Uniforms (set them
 // with nbt_gl_set_beam_fit): the 5 x 16 coefficients of one geometry and the
 // fitted range the monomials' arguments are clamped to (lo >= hi: none).
-uniform float nbt_beam_fit_c[80];
-uniform vec3 nbt_beam_fit_lo, nbt_beam_fit_hi; // (tau, albedo, B)
+// The coefficients are 20 vec4s, not float[80]: std140 (Vulkan) would pad each
+// float of an array to 16 bytes.
+NBT_BLOCK_BEGIN(nbt_beam_fit_block, 15)
+NBT_U vec4 nbt_beam_fit_c[20];
+NBT_U vec3 nbt_beam_fit_lo, nbt_beam_fit_hi; // (tau, albedo, B)
+NBT_BLOCK_END
 
 // erfc(x) for x >= 0 with relative error < 1.2e-7 everywhere (a Chebyshev
 // fit; Numerical Recipes' erfcc): unlike nbt_G's A&S 7.1.26, also in the tail
@@ -84,7 +88,7 @@ void nbt_beam_fit_P(float tau, float albedo, float B, out float P[5])
     for (int i = 0; i < 5; i++) {
         float s = 0.0;
         for (int k = 0; k < 16; k++)
-            s += nbt_beam_fit_c[16 * i + k] * t[k];
+            s += nbt_beam_fit_c[4 * i + k / 4][k % 4] * t[k];
         P[i] = s;
     }
 }

@@ -143,7 +143,7 @@ int nbt_gl_set_beam_fit(unsigned program, const nbt_beam_fit *f, int infinite)
         lo[i] = (float)f->range[i][0];
         hi[i] = (float)f->range[i][1];
     }
-    glUniform1fv(glGetUniformLocation(program, "nbt_beam_fit_c"), NBT_BEAM_FIT_PARTS * NBT_BEAM_FIT_TERMS, c);
+    glUniform4fv(glGetUniformLocation(program, "nbt_beam_fit_c"), NBT_BEAM_FIT_PARTS * NBT_BEAM_FIT_TERMS / 4, c);
     glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_lo"), 1, lo);
     glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_hi"), 1, hi);
     return 0;

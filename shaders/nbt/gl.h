@@ -9,7 +9,7 @@
  * Functions: nbt_airlight(kappa_s, kappa_t, I0, dsv, gamma, dvp),
  *   nbt_surface(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n),
  *   nbt_beam_kernel_params(sigma_t, albedo, B, z) -> (alpha, beta), nbt_beam_psi(ab, r),
- *   nbt_beam_fit_psi(sigma_t, albedo, B, z, r) (the fitted model; uniforms nbt_beam_fit_c[80],
+ *   nbt_beam_fit_psi(sigma_t, albedo, B, z, r) (the fitted model; uniforms vec4 nbt_beam_fit_c[20],
  *   nbt_beam_fit_lo, nbt_beam_fit_hi set by nbt_gl_set_beam_fit). */
 #ifndef NBT_GL_H
 #define NBT_GL_H
@@ -37,7 +37,8 @@ typedef struct {
  * uniforms in std140 blocks and samplers at descriptor set 0, bindings:
  *   0 nbt_weights_block { nbt_hw }, 1 nbt_H_block { nbt_H_ax0, nbt_H_ax1, nbt_H_map0, nbt_H_map1 },
  *   2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1 },
- *   3..6 nbt_H0..nbt_H3, 7..10 nbt_J1_0..nbt_J1_3, 11..14 nbt_Jn_0..nbt_Jn_3.
+ *   3..6 nbt_H0..nbt_H3, 7..10 nbt_J1_0..nbt_J1_3, 11..14 nbt_Jn_0..nbt_Jn_3,
+ *   15 nbt_beam_fit_block { nbt_beam_fit_c[20] (vec4), nbt_beam_fit_lo, nbt_beam_fit_hi }.
  * The user's code declares its own outputs (layout(location = 0) out vec4 ...
  * works for all three). */
 enum { NBT_GL_TARGET_GL330 = 0, NBT_GL_TARGET_ES300 = 1, NBT_GL_TARGET_VULKAN = 2 };
