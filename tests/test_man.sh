@@ -38,7 +38,7 @@ check_page() {
 { "$NBT_GEN" --help; for c in airlight surface scene eval info kernel; do "$NBT_GEN" $c --help; done; } | opts_of >"$tmp/opts"
 check_page nbt-gen 30 nbt-gen
 # kernel and phase exist only in builds with Ceres; their --help fails otherwise
-{ "$NBT_FIT" --help; for c in mc kernel phase; do "$NBT_FIT" $c --help 2>/dev/null; done; } | opts_of >"$tmp/opts"
+{ "$NBT_FIT" --help; for c in mc kernel phase model; do "$NBT_FIT" $c --help 2>/dev/null; done; } | opts_of >"$tmp/opts"
 check_page nbt-fit 15 nbt-fit
 "$NBT_SCATTER" --help | opts_of >"$tmp/opts"
 check_page nbt-scatter 20 nbt-scatter
