@@ -16,7 +16,6 @@
 struct nbt_plan {
     nbt_plan_set *sets;
     size_t count;
-    int *i33;             /* per set: the proxy's axis-0 clustering index */
     nbt_table **cache;    /* per set: the npacks tables built at 33^2 and 65^2 while planning (reused by execute) */
     nbt_plan_legendre leg;
     unsigned nthreads;
@@ -242,18 +241,13 @@ static void free_packs(nbt_table **t, size_t count)
 
 /* ---- mappings and sizes ---- */
 
-/* Quadrature tolerance of the tables built, and of the proxies (only their
- * interpolation error matters there). */
+/* Quadrature tolerance of the tables built (proxies included: they are
+ * reused as tables). */
 #define QUAD_TOL 1e-10
-static double proxy_quad_tol(const nbt_plan_request *r)
-{
-    return r->tol > 0 ? fmin(1e-7, 0.01 * r->tol) : 1e-7;
-}
 
 /* Sizes of the ladder a set grows on, by ~1.5. */
 static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
 #define NSIZES (sizeof SIZES / sizeof SIZES[0])
-#define PROXY_N 33
 
 static size_t grow(size_t N)
 {
@@ -286,12 +280,12 @@ static nbt_axis make_axis(const nbt_plan_request *r, int which, int mi, size_t n
     return a;
 }
 
-/* The clustering for N nodes from the proxy's choice i33: measured on H,
- * J^1 and J^20 over [0, 10], the best log1p strength is one decade larger
- * from ~100 nodes up (doc/tables.md has the table). */
-static int map0_at(int i33, size_t N)
+/* The u/T clustering for N nodes over [0, xmax], a rule measured by
+ * exhaustive builds (doc/tables.md): log1p with c ~ 100 xmax (at least
+ * 1000) below ~100 nodes, one decade stronger from 97 nodes up. */
+static int map0_rule(double xmax, size_t N)
 {
-    int i = i33 + (N >= 97 ? 1 : 0);
+    int i = (int)lround(2.0 + log10(fmax(xmax, 10.0))) + (N >= 97 ? 1 : 0);
     return i < NMAP0 ? i : NMAP0 - 1;
 }
 
@@ -301,43 +295,6 @@ static int map0_at(int i33, size_t N)
 static int map1_rule(const nbt_plan_request *r)
 {
     return r->kind == NBT_TABLE_J && r->n == 1;
-}
-
-/* Proxy: the first pack at PROXY_N^2 on the rule's v/theta mapping; walk the
- * u/T clustering from log1p(c = 1000) towards the smaller error. */
-static nbt_status choose_mapping(const nbt_plan_request *r, unsigned nthreads, int *i0)
-{
-    double err[NMAP0];
-    int j = map1_rule(r);
-    nbt_status st = NBT_OK;
-    for (int i = 0; i < NMAP0; i++)
-        err[i] = -1;
-    int i = 3, dir = 0;
-    for (;;) {
-        for (int q = i - 1; q <= i + 1 && st == NBT_OK; q++) {
-            if (q < 0 || q >= NMAP0 || err[q] >= 0 || (dir && q != i + dir))
-                continue;
-            nbt_axis a0 = make_axis(r, 0, q, PROXY_N), a1 = make_axis(r, 1, j, PROXY_N);
-            nbt_table *t = NULL;
-            st = build_packs(r, 1, &a0, &a1, proxy_quad_tol(r), nthreads, &t);
-            if (st == NBT_OK)
-                err[q] = set_error(&t, 1);
-            nbt_table_free(t);
-        }
-        if (st != NBT_OK)
-            return st;
-        int best = i;
-        if (i > 0 && err[i - 1] >= 0 && err[i - 1] < err[best])
-            best = i - 1;
-        if (i + 1 < NMAP0 && err[i + 1] >= 0 && err[i + 1] < err[best])
-            best = i + 1;
-        if (best == i)
-            break;
-        dir = best - i;
-        i = best;
-    }
-    *i0 = i;
-    return NBT_OK;
 }
 
 static nbt_status check_request(const nbt_plan_request *r, char *err, size_t errlen)
@@ -359,57 +316,70 @@ static nbt_status check_request(const nbt_plan_request *r, char *err, size_t err
     return NBT_OK;
 }
 
-/* Plan one set: mapping by the proxy; all packs at 33^2 and 65^2 (the
- * final quadrature tolerance, error measured) give the convergence rate and
- * the cost model; both builds are kept for execution at those sizes
- * (cache: 2 x NBT_PLAN_MAX_PACKS slots). */
-static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_plan_set *ps, int *i33out,
-                           nbt_table **cache)
+/* Convergence rate and cost exponent assumed without a 65^2 proxy: the
+ * measured rates on the rule's mappings lie in 1.5 .. 2 (J^1 lowest); H's
+ * cost grows with the node count, J's mostly with the rows (G and M). */
+#define P_CONSERVATIVE 1.5
+static double cost_exponent(const nbt_plan_request *r)
+{
+    return r->kind == NBT_TABLE_H ? 2.0 : 1.1;
+}
+
+/* The first ladder size where e33 (32/(N-1))^p <= tol (the last if none). */
+static size_t ladder_size(double e33, double p, double tol)
+{
+    for (size_t i = 0; i < NSIZES; i++)
+        if (e33 * pow(32.0 / (double)(SIZES[i] - 1), p) <= tol)
+            return SIZES[i];
+    return SIZES[NSIZES - 1];
+}
+
+/* Plan one set: mappings by rule; all packs at 33^2 (the final quadrature
+ * tolerance, error measured) give e33; a 65^2 build gives the convergence
+ * rate and cost exponent where the set may be 65^2 or larger (then the
+ * proxy is the set, or cheap next to it), else the conservative rate is
+ * taken. Both builds are kept for execution at those sizes (cache: 2 x
+ * NBT_PLAN_MAX_PACKS slots). */
+static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_plan_set *ps, nbt_table **cache)
 {
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
     ps->npacks = npacks_of(r);
-    int i33 = 3, j = map1_rule(r);
-    nbt_status st = choose_mapping(r, nthreads, &i33);
-    *i33out = i33;
+    int j = map1_rule(r);
     double e[2] = {0, 0}, secs[2] = {0, 0};
     static const size_t pn[2] = {33, 65};
-    for (int q = 0; q < 2 && st == NBT_OK; q++) {
+    size_t N0 = r->size[0], N1 = r->size[1];
+    double p = P_CONSERVATIVE, a = cost_exponent(r);
+    for (int q = 0; q < 2; q++) {
+        /* the 65^2 proxy only where the set may be that large (then it is
+         * the set, or cheap next to it): below, the conservative rate */
+        if (q == 1 && (r->tol > 0 ? ladder_size(e[0], P_CONSERVATIVE, r->tol) < 65 : (N0 < 129 && N1 < 129)))
+            break;
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
-        nbt_axis a0 = make_axis(r, 0, map0_at(i33, pn[q]), pn[q]), a1 = make_axis(r, 1, j, pn[q]);
+        nbt_axis a0 = make_axis(r, 0, map0_rule(r->xmax, pn[q]), pn[q]), a1 = make_axis(r, 1, j, pn[q]);
         double t0 = now_s();
-        st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
+        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
         secs[q] = now_s() - t0;
-        if (st == NBT_OK)
-            e[q] = set_error(t, ps->npacks);
+        if (st != NBT_OK)
+            return st;
+        e[q] = set_error(t, ps->npacks);
+        if (q == 1) {
+            /* err(N) = e33 (32/(N-1))^p, p in [1, 2]: at least the log
+             * singularity's first order, at most bilinear's second */
+            if (e[1] > 0 && e[0] > 0)
+                p = fmin(fmax(log(e[0] / e[1]) / log(2.0), 1.0), 2.0);
+            if (secs[0] > 0 && secs[1] > 0)
+                a = fmin(fmax(log(secs[1] / secs[0]) / log(65.0 / 33.0), 1.0), 2.0);
+        }
     }
-    if (st != NBT_OK)
-        return st;
-    /* err(N) = e33 (32/(N-1))^p; p from the two proxies, at least 1 (the
-     * log singularity's first order on a fixed mapping), at most 2 (bilinear) */
-    double p = e[1] > 0 && e[0] > 0 ? log(e[0] / e[1]) / log(2.0) : 2.0;
-    p = fmin(fmax(p, 1.0), 2.0);
-    size_t N0, N1;
-    if (r->tol > 0) {
-        size_t N = SIZES[NSIZES - 1];
-        for (size_t i = 0; i < NSIZES; i++)
-            if (e[0] * pow(32.0 / (double)(SIZES[i] - 1), p) <= r->tol) {
-                N = SIZES[i];
-                break;
-            }
-        N0 = N1 = N;
-    } else {
-        N0 = r->size[0];
-        N1 = r->size[1];
-    }
-    ps->axis[0] = make_axis(r, 0, map0_at(i33, N0), N0);
+    if (r->tol > 0)
+        N0 = N1 = ladder_size(e[0], p, r->tol);
+    ps->axis[0] = make_axis(r, 0, map0_rule(r->xmax, N0), N0);
     ps->axis[1] = make_axis(r, 1, j, N1);
     double Nm = sqrt((double)(N0 - 1) * (double)(N1 - 1));
     ps->pred_err = e[0] * pow(32.0 / Nm, p);
-    /* cost ~ N^a between the proxies' times (J's per-row work makes a < 2) */
-    double a = secs[0] > 0 && secs[1] > 0 ? log(secs[1] / secs[0]) / log(65.0 / 33.0) : 2.0;
-    a = fmin(fmax(a, 1.0), 2.0);
-    ps->pred_seconds = secs[1] * pow((double)N0 * (double)N1 / (65.0 * 65.0), 0.5 * a);
+    /* cost ~ N^a from the 33^2 build */
+    ps->pred_seconds = secs[0] * pow((double)N0 * (double)N1 / (33.0 * 33.0), 0.5 * a);
     return NBT_OK;
 }
 
@@ -419,9 +389,8 @@ static nbt_status plan_alloc(size_t n, unsigned nthreads, nbt_plan **out)
     if (!p)
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     p->sets = calloc(n, sizeof *p->sets);
-    p->i33 = calloc(n, sizeof *p->i33);
     p->cache = calloc(2 * n * NBT_PLAN_MAX_PACKS, sizeof *p->cache);
-    if (!p->sets || !p->i33 || !p->cache) {
+    if (!p->sets || !p->cache) {
         nbt_plan_free(p);
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     }
@@ -446,7 +415,7 @@ nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nt
     if (st != NBT_OK)
         return failf(err, errlen, st, "plan: out of memory");
     for (size_t i = 0; i < nreq && st == NBT_OK; i++, p->count++)
-        st = plan_set(&req[i], nthreads, &p->sets[i], &p->i33[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
+        st = plan_set(&req[i], nthreads, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
     if (st != NBT_OK) {
         nbt_plan_free(p);
         return failf(err, errlen, st, "plan: the proxy builds failed: %s", nbt_strerror(st));
@@ -514,7 +483,6 @@ void nbt_plan_free(nbt_plan *p)
                 free_packs(p->cache + (2 * i + (size_t)q) * NBT_PLAN_MAX_PACKS, p->sets[i].npacks);
     free(p->cache);
     free(p->sets);
-    free(p->i33);
     free(p);
 }
 
@@ -601,7 +569,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
                          "(worst %.2g): ask for a larger tolerance, fewer orders or a smaller range", r->tol, worst);
         }
         nbt_tableset_free(out);
-        a0 = make_axis(r, 0, map0_at(p->i33[i], next), next); /* the rule's clustering at the new size */
+        a0 = make_axis(r, 0, map0_rule(r->xmax, next), next); /* the rule's clustering at the new size */
         a1.n = next;
     }
     out->seconds = now_s() - t0;

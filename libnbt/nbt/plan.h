@@ -11,15 +11,18 @@
  *  - Legendre terms (scenes with a g range): the smallest N whose airlight
  *    series truncation stays below tol/2 on sample rays; every table then
  *    gets tol/2 over the error amplification A = sum_{k<N} (2k+1)|g|^k.
- *  - Mappings: a small proxy (33^2 nodes, first pack, error measured at all
- *    cell and edge midpoints) chooses the u/T clustering (sqrt or log1p with
- *    c = 10 .. 1e6) and the v/theta mapping (cos or linear); from 97 nodes up
- *    the clustering is one step stronger (the best clustering grows with N).
- *  - Size (tol > 0): the error of all packs at 33^2 and 65^2 on that mapping
- *    gives the convergence rate p; the plan takes the smallest size on the
- *    ladder 33, 49, 65, 97, ..., 2049 where err(33) (32/(N-1))^p meets tol.
- *    At a fixed size the same fit predicts the error.
- *  - Cost: the 65^2 proxy's build time scaled by the node count.
+ *  - Mappings by rule (measured, doc/tables.md): u/T log1p with c ~ 100 xmax
+ *    (at least 1000), ten times that from 97 nodes up; v/theta cos, linear
+ *    for J^1.
+ *  - Size (tol > 0): all packs are built at 33^2 (error measured at all cell
+ *    and edge midpoints); where the set may reach 65^2 also at 65^2, which
+ *    gives the convergence rate p (else p = 1.5, the lowest measured). The
+ *    plan takes the smallest size on the ladder 33, 49, 65, 97, ..., 2049
+ *    where err(33) (32/(N-1))^p meets tol. At a fixed size the same fit
+ *    predicts the error. The proxy builds are kept: executing at 33^2 or
+ *    65^2 copies them.
+ *  - Cost: the 33^2 build's time scaled as N^a (a from the two builds, or
+ *    2 for H, 1.1 for J, whose work is mostly per row).
  * Execution measures the real error (as every table build does); when a set
  * planned for tol misses it, the set grows along the ladder until it meets
  * tol (NBT_ETOL past 2049 nodes). Plans hold borrowed phase pointers: keep
