@@ -50,8 +50,9 @@ int main(int argc, char **argv)
         const nbt_plan_set *ps = nbt_plan_get(plan, i);
         char name[64], map0[64];
         nbt_plan_stem(&ps->req, name, sizeof name);
-        if (ps->axis[0].map == NBT_AXIS_LOG1P)
-            snprintf(map0, sizeof map0, "log1p(c=%g)[0,%g]", ps->axis[0].c, ps->axis[0].hi);
+        if (ps->axis[0].map == NBT_AXIS_LOG1P || ps->axis[0].map == NBT_AXIS_LOG1P_CBRT)
+            snprintf(map0, sizeof map0, "%s(c=%g)[0,%g]", nbt_axis_map_name(ps->axis[0].map), ps->axis[0].c,
+                     ps->axis[0].hi);
         else
             snprintf(map0, sizeof map0, "%s[0,%g]", nbt_axis_map_name(ps->axis[0].map), ps->axis[0].hi);
 

@@ -257,44 +257,25 @@ static size_t grow(size_t N)
     return 0;
 }
 
-/* Axis-0 clustering, ordered by strength at 0 (where H and J have a log
- * singularity in u and T): sqrt, then log1p with c = 10 .. 1e6. */
-#define NMAP0 7
-static void map0(int i, nbt_axis_map *m, double *c)
-{
-    *m = i == 0 ? NBT_AXIS_SQRT : NBT_AXIS_LOG1P;
-    *c = i == 0 ? 0 : pow(10.0, i);
-}
-
-static nbt_axis make_axis(const nbt_plan_request *r, int which, int mi, size_t n)
+/* Axes by rule (measured by exhaustive builds, doc/tables.md). u/T:
+ * log1p_cbrt with c = max(xmax, 10): u ~ s^3 near 0 makes the u log u
+ * behaviour of H and J C^2 in s, so bilinear error falls as N^-2; the
+ * strength c ~ xmax was the best or within 3% for H over xmax = 1 .. 1000
+ * and for J^1, J^20 at xmax = 10. v/theta: cos for H and Phong lobes
+ * (narrow features at both ends), linear for J^1 (smooth cosine kernel). */
+static nbt_axis make_axis(const nbt_plan_request *r, int which, size_t n)
 {
     nbt_axis a = {0, 0, NBT_AXIS_LINEAR, 0, n};
     if (which == 0) {
         a.hi = r->xmax;
-        map0(mi, &a.map, &a.c);
+        a.map = NBT_AXIS_LOG1P_CBRT;
+        a.c = fmax(r->xmax, 10.0);
     } else {
         a.lo = r->kind == NBT_TABLE_H ? -NBT_PI_2 : 0;
         a.hi = r->kind == NBT_TABLE_H ? NBT_PI_2 : NBT_PI;
-        a.map = mi ? NBT_AXIS_LINEAR : NBT_AXIS_COS;
+        a.map = r->kind == NBT_TABLE_J && r->n == 1 ? NBT_AXIS_LINEAR : NBT_AXIS_COS;
     }
     return a;
-}
-
-/* The u/T clustering for N nodes over [0, xmax], a rule measured by
- * exhaustive builds (doc/tables.md): log1p with c ~ 100 xmax (at least
- * 1000) below ~100 nodes, one decade stronger from 97 nodes up. */
-static int map0_rule(double xmax, size_t N)
-{
-    int i = (int)lround(2.0 + log10(fmax(xmax, 10.0))) + (N >= 97 ? 1 : 0);
-    return i < NMAP0 ? i : NMAP0 - 1;
-}
-
-/* v/theta mapping by rule (measured on H, J^1, J^20 at 33^2 .. 513^2, see
- * doc/tables.md): cos for H and Phong lobes (narrow features at both ends),
- * linear for J^1 (its cosine kernel is smooth in theta). */
-static int map1_rule(const nbt_plan_request *r)
-{
-    return r->kind == NBT_TABLE_J && r->n == 1;
 }
 
 static nbt_status check_request(const nbt_plan_request *r, char *err, size_t errlen)
@@ -317,9 +298,9 @@ static nbt_status check_request(const nbt_plan_request *r, char *err, size_t err
 }
 
 /* Convergence rate and cost exponent assumed without a 65^2 proxy: the
- * measured rates on the rule's mappings lie in 1.5 .. 2 (J^1 lowest); H's
+ * measured rates on the rule's mappings are 1.7 (J^1, its theta) .. 2; H's
  * cost grows with the node count, J's mostly with the rows (G and M). */
-#define P_CONSERVATIVE 1.5
+#define P_CONSERVATIVE 1.75
 static double cost_exponent(const nbt_plan_request *r)
 {
     return r->kind == NBT_TABLE_H ? 2.0 : 1.1;
@@ -345,7 +326,6 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_pla
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
     ps->npacks = npacks_of(r);
-    int j = map1_rule(r);
     double e[2] = {0, 0}, secs[2] = {0, 0};
     static const size_t pn[2] = {33, 65};
     size_t N0 = r->size[0], N1 = r->size[1];
@@ -356,7 +336,7 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_pla
         if (q == 1 && (r->tol > 0 ? ladder_size(e[0], P_CONSERVATIVE, r->tol) < 65 : (N0 < 129 && N1 < 129)))
             break;
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
-        nbt_axis a0 = make_axis(r, 0, map0_rule(r->xmax, pn[q]), pn[q]), a1 = make_axis(r, 1, j, pn[q]);
+        nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
         double t0 = now_s();
         nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
         secs[q] = now_s() - t0;
@@ -374,8 +354,8 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_pla
     }
     if (r->tol > 0)
         N0 = N1 = ladder_size(e[0], p, r->tol);
-    ps->axis[0] = make_axis(r, 0, map0_rule(r->xmax, N0), N0);
-    ps->axis[1] = make_axis(r, 1, j, N1);
+    ps->axis[0] = make_axis(r, 0, N0);
+    ps->axis[1] = make_axis(r, 1, N1);
     double Nm = sqrt((double)(N0 - 1) * (double)(N1 - 1));
     ps->pred_err = e[0] * pow(32.0 / Nm, p);
     /* cost ~ N^a from the 33^2 build */
@@ -569,8 +549,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
                          "(worst %.2g): ask for a larger tolerance, fewer orders or a smaller range", r->tol, worst);
         }
         nbt_tableset_free(out);
-        a0 = make_axis(r, 0, map0_rule(r->xmax, next), next); /* the rule's clustering at the new size */
-        a1.n = next;
+        a0.n = a1.n = next;
     }
     out->seconds = now_s() - t0;
     return NBT_OK;

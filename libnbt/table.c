@@ -21,6 +21,8 @@ double nbt_axis_to_unit(const nbt_axis *a, double x)
         return sqrt(r);
     case NBT_AXIS_LOG1P:
         return log1p(a->c * r) / log1p(a->c);
+    case NBT_AXIS_LOG1P_CBRT:
+        return cbrt(log1p(a->c * r) / log1p(a->c));
     case NBT_AXIS_COS:
         return acos(1.0 - 2.0 * r) / NBT_PI;
     default:
@@ -37,6 +39,9 @@ double nbt_axis_from_unit(const nbt_axis *a, double s)
         break;
     case NBT_AXIS_LOG1P:
         r = expm1(s * log1p(a->c)) / a->c;
+        break;
+    case NBT_AXIS_LOG1P_CBRT:
+        r = expm1(s * s * s * log1p(a->c)) / a->c;
         break;
     case NBT_AXIS_COS:
         r = 0.5 * (1.0 - cos(NBT_PI * s));
@@ -56,7 +61,8 @@ double nbt_axis_node(const nbt_axis *a, size_t i)
 
 const char *nbt_axis_map_name(nbt_axis_map m)
 {
-    return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos" : "linear";
+    return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos"
+         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : "linear";
 }
 
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
@@ -69,6 +75,8 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
         *m = NBT_AXIS_LOG1P;
     else if (!strcmp(name, "cos"))
         *m = NBT_AXIS_COS;
+    else if (!strcmp(name, "log1p_cbrt"))
+        *m = NBT_AXIS_LOG1P_CBRT;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -89,7 +97,8 @@ const char *nbt_table_axis_name(nbt_table_kind k, int axis)
 static int axis_ok(const nbt_axis *a)
 {
     return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&
-           (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c)));
+           (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c))) &&
+           (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c)));
 }
 
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)

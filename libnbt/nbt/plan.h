@@ -11,12 +11,12 @@
  *  - Legendre terms (scenes with a g range): the smallest N whose airlight
  *    series truncation stays below tol/2 on sample rays; every table then
  *    gets tol/2 over the error amplification A = sum_{k<N} (2k+1)|g|^k.
- *  - Mappings by rule (measured, doc/tables.md): u/T log1p with c ~ 100 xmax
- *    (at least 1000), ten times that from 97 nodes up; v/theta cos, linear
+ *  - Mappings by rule (measured, doc/tables.md): u/T log1p_cbrt with
+ *    c = max(xmax, 10) (second order at u, T = 0); v/theta cos, linear
  *    for J^1.
  *  - Size (tol > 0): all packs are built at 33^2 (error measured at all cell
  *    and edge midpoints); where the set may reach 65^2 also at 65^2, which
- *    gives the convergence rate p (else p = 1.5, the lowest measured). The
+ *    gives the convergence rate p (else p = 1.75). The
  *    plan takes the smallest size on the ladder 33, 49, 65, 97, ..., 2049
  *    where err(33) (32/(N-1))^p meets tol. At a fixed size the same fit
  *    predicts the error. The proxy builds are kept: executing at 33^2 or
