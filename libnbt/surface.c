@@ -449,7 +449,7 @@ static nbt_status j_product(size_t i, unsigned thread, void *vp)
             double s = 0;
             for (size_t q = 0; q < c->Q; q++)
                 s += G[q * c->fdim] * M[q];
-            c->F[(j * c->nx + i) * nch + ch] = s;
+            c->F[(i * c->ny + j) * nch + ch] = s;
         }
     }
     return NBT_OK;
@@ -495,7 +495,7 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
             st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-8), Jv, Ev);
             for (size_t ch = 0; ch < c->nch && st == NBT_OK; ch++) {
                 unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-                qerr = fmax(qerr, fabs(F[(j * nx + i) * c->nch + ch] - Jv[k]) + Ev[k]);
+                qerr = fmax(qerr, fabs(F[(i * ny + j) * c->nch + ch] - Jv[k]) + Ev[k]);
             }
             if (Jv != J)
                 free(Jv);

@@ -4,7 +4,8 @@
 
 #include <nbt/table.h>
 
-/* Compute exact values at every (xs[i], ys[j]) into F[(j*nx + i)*nch + c]
+/* Compute exact values at every (xs[i], ys[j]) into F[(i*ny + j)*nch + c] (column-major: a builder's
+ * unit of work is one x row)
  * for the nch channels of all tables together, and the largest quadrature
  * error estimate into *quad_err. */
 typedef nbt_status (*nbt__grid_fill)(void *ctx, const double *xs, size_t nx, const double *ys,

@@ -194,6 +194,54 @@ int main(void)
     nbt_table_free(h);
     nbt_table_free(h1);
 
+    /* ---- H nodes from the fixed per-cell rules (libnbt/airlight.c) at the
+     * edges of the domain: the boundary layer at v -> pi/2 for small u
+     * (width ~u, inside the last cell), large u (the integrand gone within
+     * the first cells), a high order, and a table starting above -pi/2.
+     * Each node must match nbt_hk (tol 1e-13, its own estimate added) within
+     * float rounding (6e-8 relative) plus the recorded quadrature error,
+     * and that error must be small (quad_tol 1e-10 asks for ~1e-11). ---- */
+    {
+        struct {
+            double u0, u1, v0, v1;
+            int K;
+            size_t n;
+        } ed[5] = {{0, 1e-6, 1.5, M_PI_2, 3, 9}, {1e-9, 1e-3, -M_PI_2, M_PI_2, 3, 7},
+                   {100, 5e3, -M_PI_2, M_PI_2, 3, 9}, {0, 2.5, -1.2, 1.4, 11, 5}, {0.3, 0.7, -M_PI_2, -1.5, 3, 3}};
+        double eworst = 0, qmax = 0;
+        for (int q = 0; q < 5; q++) {
+            nbt_axis ax = {ed[q].u0, ed[q].u1, NBT_AXIS_LINEAR, 0, ed[q].n};
+            nbt_axis ay = {ed[q].v0, ed[q].v1, NBT_AXIS_COS, 0, ed[q].n};
+            size_t np = (size_t)(ed[q].K + 4) / 4;
+            nbt_table *hs[3];
+            for (size_t p = 0; p < np; p++) {
+                hs[p] = nbt_table_alloc(NBT_TABLE_H, &ax, &ay, 4);
+                for (int c = 0; c < 4; c++)
+                    hs[p]->k[c] = (int)(4 * p) + c;
+            }
+            nbt_build_opts oe = {1e-10, 1, 2};
+            t_true(nbt_h_table_build_set(hs, np, NULL, &oe) == NBT_OK, "edge H set %d builds", q);
+            qmax = fmax(qmax, hs[0]->quad_err);
+            for (size_t i = 0; i < ed[q].n; i++)
+                for (size_t j = 0; j < ed[q].n; j++) {
+                    double x = nbt_axis_node(&ax, i), y = nbt_axis_node(&ay, j), ex[12], ee[12];
+                    nbt_hk((size_t)ed[q].K, x, y, 1e-13, ex, ee);
+                    for (size_t p = 0; p < np; p++)
+                        for (int c = 0; c < 4; c++) {
+                            int k = 4 * (int)p + c;
+                            double d = fabs(hs[p]->data[(j * ed[q].n + i) * 4 + c] - ex[k]) - ee[k] -
+                                       6e-8 * fabs(ex[k]);
+                            eworst = fmax(eworst, d / hs[p]->quad_err);
+                        }
+                }
+            for (size_t p = 0; p < np; p++)
+                nbt_table_free(hs[p]);
+        }
+        t_true(eworst <= 1.0 && qmax <= 1e-9,
+               "H nodes at the domain edges within float rounding + quad_err (eworst %.2g of it; quad_err <= %.1e)",
+               eworst, qmax);
+    }
+
     /* ---- second order on log1p_cbrt (doc/tables.md): the recorded error
      * (honest: above, and tests/test_plan.c at random points) falls by
      * >= 3.5 from 65 to 129 nodes in u/T over [0, 10] with c = 10, where
