@@ -365,6 +365,7 @@ typedef struct {
     nbt_quad_ws **ws;
     double **buf;
     nbt_gl_rule *rk, *rm;       /* kernel rule; integration rule for M */
+    int checked;                /* the adaptive check below ran (once per build) */
 } jfill_ctx;
 
 static nbt_status j_grow(size_t i, unsigned thread, void *vp)
@@ -481,7 +482,8 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
     for (size_t i = 0; i < nx; i++)
         qerr = fmax(qerr, c->rowerr[i]) ; /* G's own error, times int K <= 2 pi */
     qerr *= 2.0 * NBT_PI;
-    if (st == NBT_OK) {
+    if (st == NBT_OK && !c->checked) {
+        c->checked = 1;
         size_t si[5] = {0, nx - 1, 0, nx - 1, nx / 2}, sj[5] = {0, 0, ny - 1, ny - 1, ny / 2};
         double J[256], E[256];
         for (int a = 0; a < 5 && st == NBT_OK; a++) {
