@@ -552,6 +552,8 @@ static void hrule_choose(const double *am, double a, double as, double eps, int 
 {
     if (eps > 1.0)
         eps = 1.0;
+    if (as <= a)
+        eps = 0.0; /* then the pole-like part passes wherever the regular part does */
     double top = eps > 0 ? fmax(a, as) : a;
     int n0 = top > 0.5 ? (int)ceil(top / 0.5) : 1;
     for (int nn = n0;; nn++) {

@@ -275,13 +275,16 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
         size_t nc = t->nch;
         for (size_t c = 0; c < nc; c++)
             t->max_abs[c] = t->max_err[c] = 0;
-        for (size_t j = 0; j < ny; j++)
-            for (size_t i = 0; i < nx; i++)
-                for (size_t c = 0; c < nc; c++) {
-                    double v = F[(i * fy + j * step) * C + off + c];
-                    t->data[(j * nx + i) * nc + c] = (float)v;
-                    t->max_abs[c] = fmax(t->max_abs[c], fabs(v));
-                }
+        /* in tiles of 16 x rows: F is column-major, the table row-major */
+        for (size_t i0 = 0; i0 < nx; i0 += 16)
+            for (size_t j = 0; j < ny; j++)
+                for (size_t i = i0; i < nx && i < i0 + 16; i++)
+                    for (size_t c = 0; c < nc; c++) {
+                        double v = F[(i * fy + j * step) * C + off + c];
+                        t->data[(j * nx + i) * nc + c] = (float)v;
+                        if (fabs(v) > t->max_abs[c])
+                            t->max_abs[c] = fabs(v);
+                    }
         if (t->half)
             nbt_table_round_half(t);
         t->quad_err = qerr;
@@ -292,7 +295,18 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
         }
         /* the lookup at a midpoint of the unit grid is the average of the
          * two (edge) or four (centre) nodes around it */
-#define D(i, j, c) ((double)t->data[((j) * nx + (i)) * nc + (c)])
+        /* the table's values column-major, as F */
+        double *DT = malloc(nx * ny * nc * sizeof(double));
+        if (!DT) {
+            st = nbt__fail(NBT_ENOMEM, "table: out of memory");
+            break;
+        }
+        for (size_t i0 = 0; i0 < nx; i0 += 16)
+            for (size_t j = 0; j < ny; j++)
+                for (size_t i = i0; i < nx && i < i0 + 16; i++)
+                    for (size_t c = 0; c < nc; c++)
+                        DT[(i * ny + j) * nc + c] = t->data[(j * nx + i) * nc + c];
+#define D(i, j, c) DT[((i) * ny + (j)) * nc + (c)]
 #define EX(i, jr, c) F[((i) * fy + (jr)) * C + off + (c)]
 #define UPD(c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; } while (0)
         double e[NBT_TABLE_MAX_CH] = {0};
@@ -327,8 +341,10 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                     double d2 = 0;
                     if (i >= 1)
                         d2 = fabs(EX(i - 1, jr, c) - 2.0 * EX(i, jr, c) + EX(i + 1, jr, c));
-                    if (i + 2 < nx)
-                        d2 = fmax(d2, fabs(EX(i, jr, c) - 2.0 * EX(i + 1, jr, c) + EX(i + 2, jr, c)));
+                    if (i + 2 < nx) {
+                        double d2b = fabs(EX(i, jr, c) - 2.0 * EX(i + 1, jr, c) + EX(i + 2, jr, c));
+                        d2 = d2b > d2 ? d2b : d2;
+                    }
                     double a0, a1;
                     if (jr % 2 == 1) {
                         a0 = fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, jr, c));
@@ -344,6 +360,7 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
         /* what the midpoints cannot see: the quadrature error at nodes */
         for (size_t c = 0; c < nc; c++)
             t->max_err[c] = e[c] + qerr;
+        free(DT);
 #undef UPD
 #undef D
 #undef EX
