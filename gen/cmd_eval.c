@@ -195,21 +195,36 @@ static int eval_phys(const args_t *a, phys_t *ph)
         if (!fixed)
             st = series_auto(ph, p, terms, 1e-3, &sv, &se, &used);
         double x = ph->surface ? ph->sg.kappa_t * ph->sg.dsp : ph->ag.kappa_t * ph->ag.dsv * sin(ph->ag.gamma);
-        tableset_spec s = {ph->surface ? NBT_TABLE_J : NBT_TABLE_H, 1, used, fixed ? p : NULL,
-                           fmax(10.0, 1.01 * x), 1e-3, {0, 0}, 0, 0};
-        tableset sets[2];
+        nbt_plan_request rq[2] = {{ph->surface ? NBT_TABLE_J : NBT_TABLE_H, 1, used, fixed ? p : NULL,
+                                   fmax(10.0, 1.01 * x), 1e-3, {0, 0}, 0}};
+        nbt_tableset sets[2];
         memset(sets, 0, sizeof sets);
         int nsets = ph->surface ? 2 : 1;
-        for (int i = 0; i < nsets; i++) {
-            s.n = i == 0 ? 1 : ph->sg.n;
-            if ((ph->surface && (i == 0 ? ph->sg.kd : ph->sg.ks) == 0) || (i == 1 && ph->sg.n == 1)) {
-                if (i == 1 && ph->sg.n == 1 && ph->sg.ks > 0)
-                    sets[1] = sets[0];
-                continue;
-            }
-            if (tableset_build(&s, &sets[i]) != 0)
-                die("building the tables failed");
+        rq[1] = rq[0];
+        rq[1].n = ph->surface ? ph->sg.n : 1;
+        /* plan only the sets the geometry uses: J^1 when kd > 0 (or the
+         * specular lobe has n = 1), J^n when ks > 0 and n > 1 */
+        size_t use[2], nuse = 0;
+        int same1 = ph->surface && ph->sg.n == 1 && ph->sg.ks > 0;
+        if (!ph->surface || ph->sg.kd > 0 || same1)
+            use[nuse++] = 0;
+        if (nsets == 2 && ph->sg.ks > 0 && ph->sg.n > 1)
+            use[nuse++] = 1;
+        if (nuse > 0) {
+            nbt_plan_request r2[2];
+            for (size_t q = 0; q < nuse; q++)
+                r2[q] = rq[use[q]];
+            nbt_plan *plan = NULL;
+            char err[512];
+            if (nbt_plan_tables(r2, nuse, 0, &plan, err, sizeof err) != NBT_OK)
+                die("building the tables failed: %s", err);
+            for (size_t q = 0; q < nuse; q++)
+                if (nbt_plan_execute(plan, q, &sets[use[q]], err, sizeof err) != NBT_OK)
+                    die("building the tables failed: %s", err);
+            nbt_plan_free(plan);
         }
+        if (same1)
+            sets[1] = sets[0];
         double *b = malloc((used + 1) * sizeof(double));
         if (!b || nbt_phase_moments(p, used, b) != NBT_OK)
             die("cannot compute the Legendre moments");
@@ -241,9 +256,9 @@ static int eval_phys(const args_t *a, phys_t *ph)
             st = NBT_OK;
         free(b);
         int same = ph->surface && sets[1].t[0] == sets[0].t[0];
-        tableset_free(&sets[0]);
+        nbt_tableset_free(&sets[0]);
         if (!same)
-            tableset_free(&sets[1]);
+            nbt_tableset_free(&sets[1]);
         fprintf(stderr, "nbt-gen: %zu Legendre terms, %s tables\n", used, fixed ? "fixed-phase" : "Legendre");
     } else
         die_usage("--method: '%s' is not accepted: direct, series or table", method);

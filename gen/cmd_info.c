@@ -46,8 +46,10 @@ int cmd_info(int argc, char **argv)
         printf("n           %d\n", t->n);
     for (int a = 0; a < 2; a++)
         printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(t->axis[a].map),
-               t->axis[a].map == NBT_AXIS_LOG1P ? "(c)" : "", t->axis[a].lo, t->axis[a].hi, t->axis[a].n);
-    if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P)
+               t->axis[a].map == NBT_AXIS_LOG1P || t->axis[a].map == NBT_AXIS_LOG1P_CBRT ? "(c)" : "", t->axis[a].lo,
+               t->axis[a].hi, t->axis[a].n);
+    if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P || t->axis[0].map == NBT_AXIS_LOG1P_CBRT ||
+        t->axis[1].map == NBT_AXIS_LOG1P_CBRT)
         printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
     printf("storage     %s\n", t->half ? "half" : "float");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");

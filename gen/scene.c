@@ -27,7 +27,14 @@ static int yesno(const char *file, int line, const char *key, const char *v, int
     return -1;
 }
 
-static int parse_lines(FILE *f, const char *path, scene_t *s, char *err, size_t n)
+/* values the file set (the rest keeps nbt_scene_init's defaults) */
+typedef struct {
+    int have_kt, have_d;
+    long orders_max;
+    char phase[256];
+} seen_t;
+
+static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, char *err, size_t n)
 {
     char buf[1024], opt[160];
     int line = 0;
@@ -48,31 +55,30 @@ static int parse_lines(FILE *f, const char *path, scene_t *s, char *err, size_t 
         char *key = trim(l), *val = trim(eq + 1);
         snprintf(opt, sizeof opt, "%s:%d: %s", path, line, key);
         if (!strcmp(key, "kappa_t")) {
-            if (msg_range(err, n, opt, val, 0, 1e3, &s->kt_lo, &s->kt_hi))
+            if (msg_range(err, n, opt, val, 0, 1e3, &s->kappa_t[0], &s->kappa_t[1]))
                 return -1;
-            if (!(s->kt_hi > 0)) {
+            if (!(s->kappa_t[1] > 0)) {
                 snprintf(err, n, "%s = '%s' is not accepted: extinction must be > 0", opt, val);
                 return -1;
             }
-            s->have_kt = 1;
+            seen->have_kt = 1;
         } else if (!strcmp(key, "kappa_s")) {
-            if (msg_range(err, n, opt, val, 0, 1e3, &s->ks_lo, &s->ks_hi))
+            if (msg_range(err, n, opt, val, 0, 1e3, &s->kappa_s[0], &s->kappa_s[1]))
                 return -1;
-            s->have_ks = 1;
         } else if (!strcmp(key, "distance")) {
-            if (msg_range(err, n, opt, val, 0, 1e9, &s->d_lo, &s->d_hi))
+            if (msg_range(err, n, opt, val, 0, 1e9, &s->distance[0], &s->distance[1]))
                 return -1;
-            if (!(s->d_hi > 0)) {
+            if (!(s->distance[1] > 0)) {
                 snprintf(err, n, "%s = '%s' is not accepted: the largest distance must be > 0", opt, val);
                 return -1;
             }
-            s->have_d = 1;
+            seen->have_d = 1;
         } else if (!strcmp(key, "g")) {
-            if (msg_range(err, n, opt, val, -0.99, 0.99, &s->g_lo, &s->g_hi))
+            if (msg_range(err, n, opt, val, -0.99, 0.99, &s->g[0], &s->g[1]))
                 return -1;
             s->have_g = 1;
         } else if (!strcmp(key, "phase")) {
-            snprintf(s->phase, sizeof s->phase, "%s", val);
+            snprintf(seen->phase, sizeof seen->phase, "%s", val);
         } else if (!strcmp(key, "airlight")) {
             if (yesno(path, line, key, val, &s->airlight, err, n))
                 return -1;
@@ -83,7 +89,7 @@ static int parse_lines(FILE *f, const char *path, scene_t *s, char *err, size_t 
             if (yesno(path, line, key, val, &s->half, err, n))
                 return -1;
         } else if (!strcmp(key, "orders_max")) {
-            if (msg_long(err, n, opt, val, 1, 512, &s->orders_max))
+            if (msg_long(err, n, opt, val, 1, 512, &seen->orders_max))
                 return -1;
         } else if (!strcmp(key, "tol")) {
             if (msg_double(err, n, opt, val, 1e-7, 0, 0.5, 0, &s->tol))
@@ -92,7 +98,7 @@ static int parse_lines(FILE *f, const char *path, scene_t *s, char *err, size_t 
             char *save = NULL;
             for (char *tok = strtok_r(val, " ,", &save); tok; tok = strtok_r(NULL, " ,", &save)) {
                 long e;
-                if (s->nphong == sizeof s->phong / sizeof s->phong[0]) {
+                if (s->nphong == NBT_SCENE_MAX_PHONG) {
                     snprintf(err, n, "%s: at most 16 Phong exponents", opt);
                     return -1;
                 }
@@ -109,30 +115,39 @@ static int parse_lines(FILE *f, const char *path, scene_t *s, char *err, size_t 
     return 0;
 }
 
-int scene_parse(const char *path, scene_t *s, char *err, size_t n)
+int scene_parse(const char *path, nbt_scene *s, nbt_phase **ph, char *err, size_t n)
 {
+    *ph = NULL;
     FILE *f = fopen(path, "r");
     if (!f) {
         snprintf(err, n, "scene: cannot open '%s': %s", path, strerror(errno));
         return -1;
     }
-    memset(s, 0, sizeof *s);
-    s->airlight = s->diffuse = 1;
-    s->tol = 1e-3;
-    s->orders_max = NBT_SCENE_GL_ORDERS;
-    int rc = parse_lines(f, path, s, err, n);
+    nbt_scene_init(s);
+    seen_t seen = {0, 0, NBT_PLAN_GL_ORDERS, ""};
+    int rc = parse_lines(f, path, s, &seen, err, n);
     fclose(f);
     if (rc)
         return -1;
-    if (!s->have_kt || !s->have_d)
+    if (!seen.have_kt || !seen.have_d) {
         snprintf(err, n, "%s: kappa_t and distance are required", path);
-    else if (s->have_g == !!s->phase[0])
-        snprintf(err, n, "%s: give exactly one of g (a value or range: Legendre tables) and phase (fixed phase)", path);
-    else if (s->have_ks && s->ks_hi > s->kt_hi)
-        snprintf(err, n, "%s: kappa_s (%g) must not exceed kappa_t (%g)", path, s->ks_hi, s->kt_hi);
-    else if (!s->airlight && !s->diffuse && s->nphong == 0)
-        snprintf(err, n, "%s: the scene needs no tables (airlight = no, diffuse = no, no phong)", path);
-    else
-        return 0;
-    return -1;
+        return -1;
+    }
+    s->orders_max = (size_t)seen.orders_max;
+    if (seen.phase[0]) {
+        char perr[256];
+        if (nbt_phase_parse(seen.phase, ph, perr, sizeof perr) != NBT_OK) {
+            snprintf(err, n, "%s: phase: %s", path, perr);
+            return -1;
+        }
+        s->phase = *ph;
+    }
+    char cerr[512];
+    if (nbt_scene_check(s, cerr, sizeof cerr) != NBT_OK) {
+        snprintf(err, n, "%s: %s", path, cerr);
+        nbt_phase_free(*ph);
+        *ph = NULL;
+        return -1;
+    }
+    return 0;
 }

@@ -477,6 +477,273 @@ nbt_status nbt_airlight_table(const nbt_table *const *tables, size_t ntables, co
 
 #include "tablefill.h"
 
+/* Legendre channels use fixed Gauss-Legendre rules on each cell of the v
+ * grid, prefix-summed along v: one exponential and one Legendre recurrence
+ * per node. The variable is s = tan(pi/4 + t/2) for t <= 0 and w = 1/s for
+ * t >= 0, where the integrand is
+ *   exp(-u s) 2/(1+s^2) P_k((1-s^2)/(1+s^2)) ds,  exp(-u/w) 2/(1+w^2) P_k((w^2-1)/(w^2+1)) dw:
+ * exp(-u s) is entire in s, the rest is rational with poles at s = +-i (distance
+ * >= 1 from [0, 1]), and the only other singularity is exp(-u/w)'s at w = 0
+ * (the boundary layer at v -> pi/2 for small u), which pieces of ratio <= 2
+ * in w resolve. A cell's rule (pieces, nodes) follows from the analytic
+ * structure (the rule per row, not adaptivity per texel): with a the
+ * piece's exponent range a = u h_s plus its half-width over the distance to
+ * the poles (times the order), the Gauss-Legendre error of e^{a x} on
+ * [-1, 1], c_m a^{2m} e^a, must stay below the target. The error estimate of
+ * a build also reruns some rows with a 1e4 times tighter target. */
+
+#define HF_MMAX 8
+
+typedef struct {
+    nbt_gl_rule *gl[HF_MMAX + 1];
+    double cm[HF_MMAX + 1];
+} hrules;
+
+static void hrules_free(hrules *R)
+{
+    for (int m = 0; m <= HF_MMAX; m++)
+        nbt_gl_rule_free(R->gl[m]);
+}
+
+static int hrules_alloc(hrules *R)
+{
+    memset(R, 0, sizeof *R);
+    for (int m = 2; m <= HF_MMAX; m++) {
+        if (!(R->gl[m] = nbt_gl_rule_alloc((size_t)m))) {
+            hrules_free(R);
+            memset(R, 0, sizeof *R);
+            return -1;
+        }
+        /* error of the m-point rule for e^{ax} on [-1, 1]: c_m a^{2m} e^{xi a} */
+        R->cm[m] = exp((2.0 * m + 1.0) * log(2.0) + 4.0 * lgamma(m + 1.0) - log(2.0 * m + 1.0) -
+                       3.0 * lgamma(2.0 * m + 1.0));
+    }
+    return 0;
+}
+
+/* am[m]: the largest a with c_m a^{2m} e^a <= target/2 */
+static void hrules_limits(const hrules *R, double target, double *am)
+{
+    for (int m = 2; m <= HF_MMAX; m++) {
+        double lo = 0.0, hi = 20.0;
+        for (int it = 0; it < 60; it++) {
+            double mid = 0.5 * (lo + hi);
+            if (R->cm[m] * pow(mid, 2 * m) * exp(mid) <= 0.5 * target)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        am[m] = lo;
+    }
+}
+
+static double ipow(double x, int n)
+{
+    double r = 1.0;
+    while (n-- > 0)
+        r *= x;
+    return r;
+}
+
+/* Smallest pieces n (then nodes m) with the regular part (a per piece <=
+ * am[m]) and a pole-like part of relative strength eps (as) both within
+ * target/2. */
+static void hrule_choose(const double *am, double a, double as, double eps, int *n, int *m)
+{
+    if (eps > 1.0)
+        eps = 1.0;
+    if (as <= a)
+        eps = 0.0; /* then the pole-like part passes wherever the regular part does */
+    double top = eps > 0 ? fmax(a, as) : a;
+    int n0 = top > 0.5 ? (int)ceil(top / 0.5) : 1;
+    for (int nn = n0;; nn++) {
+        double an = a / nn, asn = as / nn;
+        for (int mm = 2; mm <= HF_MMAX; mm++)
+            if ((an <= am[mm] && (eps == 0 || eps * ipow(asn / am[mm], 2 * mm) <= 1.0)) ||
+                (mm == HF_MMAX && nn >= 4 * n0 + 8)) {
+                *n = nn;
+                *m = mm;
+                return;
+            }
+    }
+}
+
+/* One cell's part in s (wvar = 0) or w (wvar = 1), with its one-piece rules
+ * for m = 2..HF_MMAX precomputed: per node y (= s, or 1/w, so that the
+ * exponential is exp(-u y)) and the fdim weights g_q 2/(1+x^2) w_k(mu) h. */
+typedef struct {
+    double lo, hi;
+    int wvar;
+    double *tab;
+    size_t off[HF_MMAX + 1];
+} hpiece;
+
+typedef struct {
+    const hrules *R;
+    const nbt__weights *w;
+    unsigned fdim;
+    double u, kfac, bound;
+    const double *am;     /* hrules_limits of target */
+    double target;
+    double *f;            /* fdim scratch */
+} hrow_ctx;
+
+/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1), n pieces of m nodes */
+static void h_pieces(hrow_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+{
+    const nbt_gl_rule *g = c->R->gl[m];
+    double step = (hi - lo) / n, u = c->u;
+    for (int p = 0; p < n; p++) {
+        double a = lo + p * step, b = p + 1 == n ? hi : a + step;
+        double mid = 0.5 * (a + b), hw = 0.5 * (b - a);
+        for (size_t q = 0; q < g->n; q++) {
+            double x = mid + hw * g->x[q], x2 = x * x, r = 1.0 / (1.0 + x2);
+            double e = u > 0 ? exp(wvar ? -u / x : -u * x) : 1.0;
+            double mu = wvar ? (x2 - 1.0) * r : (1.0 - x2) * r;
+            weights_at(c->w, mu, 2.0 * x * r, c->f);
+            double wt = hw * g->w[q] * 2.0 * r * e;
+            for (unsigned k = 0; k < c->fdim; k++)
+                acc[k] += wt * c->f[k];
+        }
+    }
+    c->bound += 2.0 * (hi - lo) * c->target;
+}
+
+/* the precomputed one-piece rule of m nodes */
+static void h_tab(hrow_ctx *c, const hpiece *P, int m, double *acc)
+{
+    const double *t = P->tab + P->off[m];
+    unsigned fd = c->fdim;
+    double u = c->u;
+    for (int q = 0; q < m; q++, t += fd + 1) {
+        double e = u > 0 ? exp(-u * t[0]) : 1.0;
+        for (unsigned k = 0; k < fd; k++)
+            acc[k] += e * t[1 + k];
+    }
+    c->bound += 2.0 * (P->hi - P->lo) * c->target;
+}
+
+/* add int_{lo}^{hi} dw, 0 < lo < hi <= 1, u > 0: pieces of ratio <= 2 */
+static void h_wsplit(hrow_ctx *c, double lo, double hi, double *acc)
+{
+    double u = c->u;
+    while (hi > 2.0 * lo) {
+        h_wsplit(c, 0.5 * hi, hi, acc);
+        hi *= 0.5;
+    }
+    int n, m;
+    hrule_choose(c->am, 0.5 * u * (1.0 / lo - 1.0 / hi) + (hi - lo) * c->kfac, 1.5 * (hi - lo) / lo, u / lo, &n, &m);
+    h_pieces(c, 1, lo, hi, n, m, acc);
+}
+
+static void h_piece(hrow_ctx *c, const hpiece *P, double *acc)
+{
+    double u = c->u, lo = P->lo, hi = P->hi;
+    int n, m;
+    if (!P->wvar) {
+        if (u > 0 && u * lo > Y_TAIL)
+            return; /* below e^-80 of the integrand at v = -pi/2 */
+        if (u > 0 && u * hi > Y_TAIL)
+            hi = Y_TAIL / u;
+        hrule_choose(c->am, (hi - lo) * (0.5 * u + c->kfac), 0.0, 0.0, &n, &m);
+        if (n == 1 && hi == P->hi)
+            h_tab(c, P, m, acc);
+        else
+            h_pieces(c, 0, lo, hi, n, m, acc);
+        return;
+    }
+    if (u > 0) {
+        lo = fmax(lo, u / Y_TAIL);
+        if (!(hi > lo))
+            return;
+        if (lo != P->lo || hi > 2.0 * lo) {
+            h_wsplit(c, lo, hi, acc);
+            return;
+        }
+        hrule_choose(c->am, 0.5 * u * (1.0 / lo - 1.0 / hi) + (hi - lo) * c->kfac, 1.5 * (hi - lo) / lo, u / lo, &n, &m);
+    } else
+        hrule_choose(c->am, (hi - lo) * c->kfac, 0.0, 0.0, &n, &m);
+    if (n == 1)
+        h_tab(c, P, m, acc);
+    else
+        h_pieces(c, 1, lo, hi, n, m, acc);
+}
+
+/* H at u for every node: cell j's pieces are P[pj[j]] .. P[pj[j+1]-1];
+ * out[j*stride + k] */
+static void h_row_fixed(hrow_ctx *c, const hpiece *P, const size_t *pj, size_t ny, double *acc, double *out,
+                        size_t stride)
+{
+    for (unsigned k = 0; k < c->fdim; k++)
+        acc[k] = 0.0;
+    for (size_t j = 0; j < ny; j++) {
+        for (size_t p = pj[j]; p < pj[j + 1]; p++)
+            h_piece(c, &P[p], acc);
+        for (unsigned k = 0; k < c->fdim; k++)
+            out[j * stride + k] = acc[k];
+    }
+}
+
+/* Split the cells [-pi/2, ys[0]], [ys[0], ys[1]], ... at t = 0 into pieces
+ * in s and w and precompute their rules; *P and *pj malloc'd. */
+static int h_pieces_make(const hrules *R, const nbt__weights *w, const double *ys, size_t ny, hpiece **Pout,
+                         size_t **pjout)
+{
+    unsigned fd = nbt__fdim(w);
+    hpiece *P = calloc(2 * ny, sizeof *P);
+    size_t *pj = malloc((ny + 1) * sizeof *pj), np = 0, per = 0;
+    double *f = malloc(fd * sizeof(double));
+    for (int m = 2; m <= HF_MMAX; m++)
+        per += (size_t)m * (fd + 1);
+    int bad = !P || !pj || !f;
+    double prev = -NBT_PI_2;
+    for (size_t j = 0; j < ny && !bad; j++) {
+        double ta = prev, tb = ys[j];
+        pj[j] = np;
+        if (ta < 0.0 && tb > ta)
+            P[np++] = (hpiece){nbt__s_of_t(ta), tb >= 0.0 ? 1.0 : nbt__s_of_t(tb), 0, NULL, {0}};
+        if (tb > 0.0 && tb > ta)
+            P[np++] = (hpiece){w_of_t(tb), ta <= 0.0 ? 1.0 : w_of_t(ta), 1, NULL, {0}};
+        prev = tb > prev ? tb : prev;
+    }
+    if (!bad)
+        pj[ny] = np;
+    for (size_t p = 0; p < np && !bad; p++) {
+        hpiece *Q = &P[p];
+        if (!(Q->tab = malloc(per * sizeof(double)))) {
+            bad = 1;
+            break;
+        }
+        double mid = 0.5 * (Q->lo + Q->hi), hw = 0.5 * (Q->hi - Q->lo), *t = Q->tab;
+        for (int m = 2; m <= HF_MMAX; m++) {
+            Q->off[m] = (size_t)(t - Q->tab);
+            const nbt_gl_rule *g = R->gl[m];
+            for (int q = 0; q < m; q++, t += fd + 1) {
+                double x = mid + hw * g->x[q], x2 = x * x, r = 1.0 / (1.0 + x2);
+                weights_at(w, Q->wvar ? (x2 - 1.0) * r : (1.0 - x2) * r, 2.0 * x * r, f);
+                t[0] = Q->wvar ? 1.0 / x : x;
+                for (unsigned k = 0; k < fd; k++)
+                    t[1 + k] = hw * g->w[q] * 2.0 * r * f[k];
+            }
+        }
+    }
+    free(f);
+    if (bad) {
+        for (size_t p = 0; P && p < np; p++)
+            free(P[p].tab);
+        free(P);
+        free(pj);
+        return -1;
+    }
+    *Pout = P;
+    *pjout = pj;
+    return 0;
+}
+
+/* ---- H tables: cumulative quadrature in v, one u row per task ---- */
+
+#include "tablefill.h"
+
 typedef struct {
     size_t nch;
     const int *kmap;      /* Legendre order (or -1: fixed phase) per channel */
@@ -489,7 +756,46 @@ typedef struct {
     nbt_quad_ws **ws;     /* one per thread */
     double **buf;         /* one per thread: 4 fdim doubles */
     unsigned nt;
+    hrules R;             /* fixed rules (Legendre channels) */
+    double **rowbuf;      /* one per thread: ny * fdim doubles */
+    hpiece *P;            /* the cells' pieces and their rules */
+    size_t *pj;
+    double am[HF_MMAX + 1], amfine[HF_MMAX + 1], target;
 } hfill_ctx;
+
+/* rows rerun with a tighter rule to check the a-priori bound */
+static int h_check_row(size_t i, size_t nx)
+{
+    return i < 3 || i + 1 == nx || i % 16 == 0;
+}
+
+static nbt_status h_column_fixed(size_t i, unsigned thread, void *vp)
+{
+    hfill_ctx *c = vp;
+    unsigned fdim = nbt__fdim(&c->w);
+    double *acc = c->buf[thread], *f = acc + fdim;
+    hrow_ctx r = {&c->R, &c->w, fdim, c->xs[i], 1.5 * ((double)c->w.kmax + 2.0), 0.0, c->am, c->target, f};
+    double *row = c->rowbuf[thread];
+    h_row_fixed(&r, c->P, c->pj, c->ny, acc, row, fdim);
+    size_t nc = c->nch;
+    for (size_t j = 0; j < c->ny; j++)
+        for (size_t ch = 0; ch < nc; ch++)
+            c->F[(i * c->ny + j) * nc + ch] = row[j * fdim + (size_t)c->kmap[ch]];
+    double e = r.bound;
+    if (h_check_row(i, c->nx)) {
+        hrow_ctx fine = r;
+        fine.am = c->amfine;
+        fine.target = 1e-4 * c->target;
+        h_row_fixed(&fine, c->P, c->pj, c->ny, acc, row, fdim);
+        double d = 0;
+        for (size_t j = 0; j < c->ny; j++)
+            for (size_t ch = 0; ch < nc; ch++)
+                d = fmax(d, fabs(row[j * fdim + (size_t)c->kmap[ch]] - c->F[(i * c->ny + j) * nc + ch]));
+        e = fmax(e, 2.0 * d);
+    }
+    c->colerr[i] = e;
+    return NBT_OK;
+}
 
 static nbt_status h_column(size_t i, unsigned thread, void *vp)
 {
@@ -511,7 +817,7 @@ static nbt_status h_column(size_t i, unsigned thread, void *vp)
         prev = c->ys[j];
         for (size_t ch = 0; ch < nc; ch++) {
             size_t k = c->w.phase ? 0 : (size_t)c->kmap[ch];
-            c->F[(j * c->nx + i) * nc + ch] = acc[k];
+            c->F[(i * c->ny + j) * nc + ch] = acc[k];
         }
     }
     double e = 0;
@@ -533,7 +839,31 @@ static nbt_status h_fill(void *vp, const double *xs, size_t nx, const double *ys
     c->colerr = calloc(nx, sizeof(double));
     if (!c->colerr)
         NBT_FAIL(NBT_ENOMEM, "H table: out of memory");
-    nbt_status st = nbt__parallel_for(nx, c->nt, h_column, c);
+    c->rowbuf = NULL;
+    nbt_status st = NBT_OK;
+    if (!c->w.phase) {
+        double *rb[64] = {0};
+        for (unsigned t = 0; t < c->nt; t++)
+            if (!(rb[t] = malloc(ny * nbt__fdim(&c->w) * sizeof(double))))
+                st = NBT_ENOMEM;
+        c->rowbuf = rb;
+        c->target = fmax(0.1 * c->tol, 1e-15);
+        hrules_limits(&c->R, c->target, c->am);
+        hrules_limits(&c->R, 1e-4 * c->target, c->amfine);
+        if (st == NBT_OK && h_pieces_make(&c->R, &c->w, ys, ny, &c->P, &c->pj))
+            st = NBT_ENOMEM;
+        if (st == NBT_OK) {
+            st = nbt__parallel_for(nx, c->nt, h_column_fixed, c);
+            for (size_t p = 0; p < c->pj[ny]; p++)
+                free(c->P[p].tab);
+            free(c->P);
+            free(c->pj);
+        }
+        for (unsigned t = 0; t < c->nt; t++)
+            free(rb[t]);
+        c->rowbuf = NULL;
+    } else
+        st = nbt__parallel_for(nx, c->nt, h_column, c);
     *quad_err = 0;
     for (size_t i = 0; i < nx; i++)
         *quad_err = fmax(*quad_err, c->colerr[i]);
@@ -577,8 +907,11 @@ nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phas
     c.ws = ws;
     c.buf = buf;
     c.nt = nthr;
+    if (st == NBT_OK && hrules_alloc(&c.R))
+        st = NBT_ENOMEM;
     if (st == NBT_OK)
         st = nbt__table_fill(ts, nt, o->measure_error, h_fill, &c);
+    hrules_free(&c.R);
     for (unsigned i = 0; i < nthr; i++) {
         nbt_quad_ws_free(ws[i]);
         free(buf[i]);

@@ -365,6 +365,7 @@ typedef struct {
     nbt_quad_ws **ws;
     double **buf;
     nbt_gl_rule *rk, *rm;       /* kernel rule; integration rule for M */
+    int checked;                /* the adaptive check below ran (once per build) */
 } jfill_ctx;
 
 static nbt_status j_grow(size_t i, unsigned thread, void *vp)
@@ -449,7 +450,7 @@ static nbt_status j_product(size_t i, unsigned thread, void *vp)
             double s = 0;
             for (size_t q = 0; q < c->Q; q++)
                 s += G[q * c->fdim] * M[q];
-            c->F[(j * c->nx + i) * nch + ch] = s;
+            c->F[(i * c->ny + j) * nch + ch] = s;
         }
     }
     return NBT_OK;
@@ -481,7 +482,8 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
     for (size_t i = 0; i < nx; i++)
         qerr = fmax(qerr, c->rowerr[i]) ; /* G's own error, times int K <= 2 pi */
     qerr *= 2.0 * NBT_PI;
-    if (st == NBT_OK) {
+    if (st == NBT_OK && !c->checked) {
+        c->checked = 1;
         size_t si[5] = {0, nx - 1, 0, nx - 1, nx / 2}, sj[5] = {0, 0, ny - 1, ny - 1, ny / 2};
         double J[256], E[256];
         for (int a = 0; a < 5 && st == NBT_OK; a++) {
@@ -495,7 +497,7 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
             st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-8), Jv, Ev);
             for (size_t ch = 0; ch < c->nch && st == NBT_OK; ch++) {
                 unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-                qerr = fmax(qerr, fabs(F[(j * nx + i) * c->nch + ch] - Jv[k]) + Ev[k]);
+                qerr = fmax(qerr, fabs(F[(i * ny + j) * c->nch + ch] - Jv[k]) + Ev[k]);
             }
             if (Jv != J)
                 free(Jv);

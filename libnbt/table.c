@@ -21,6 +21,8 @@ double nbt_axis_to_unit(const nbt_axis *a, double x)
         return sqrt(r);
     case NBT_AXIS_LOG1P:
         return log1p(a->c * r) / log1p(a->c);
+    case NBT_AXIS_LOG1P_CBRT:
+        return cbrt(log1p(a->c * r) / log1p(a->c));
     case NBT_AXIS_COS:
         return acos(1.0 - 2.0 * r) / NBT_PI;
     default:
@@ -37,6 +39,9 @@ double nbt_axis_from_unit(const nbt_axis *a, double s)
         break;
     case NBT_AXIS_LOG1P:
         r = expm1(s * log1p(a->c)) / a->c;
+        break;
+    case NBT_AXIS_LOG1P_CBRT:
+        r = expm1(s * s * s * log1p(a->c)) / a->c;
         break;
     case NBT_AXIS_COS:
         r = 0.5 * (1.0 - cos(NBT_PI * s));
@@ -56,7 +61,8 @@ double nbt_axis_node(const nbt_axis *a, size_t i)
 
 const char *nbt_axis_map_name(nbt_axis_map m)
 {
-    return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos" : "linear";
+    return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos"
+         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : "linear";
 }
 
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
@@ -69,6 +75,8 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
         *m = NBT_AXIS_LOG1P;
     else if (!strcmp(name, "cos"))
         *m = NBT_AXIS_COS;
+    else if (!strcmp(name, "log1p_cbrt"))
+        *m = NBT_AXIS_LOG1P_CBRT;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -89,7 +97,8 @@ const char *nbt_table_axis_name(nbt_table_kind k, int axis)
 static int axis_ok(const nbt_axis *a)
 {
     return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&
-           (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c)));
+           (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c))) &&
+           (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c)));
 }
 
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
@@ -204,64 +213,164 @@ nbt_status nbt__table_set_prepare(nbt_table *const *ts, size_t nt, const nbt_pha
     return NBT_OK;
 }
 
+/* Rows between nodes (in the first axis) computed exactly when measuring:
+ * the first MID_HEAD (where u, T -> 0 make the error peak), then every
+ * MID_STRIDE-th and the last; the others are estimated from second
+ * differences of the exact node rows. */
+#define MID_HEAD 8
+#define MID_STRIDE 4
+/* bilinear error at a midpoint in s is -(h^2/8) f_ss: second differences /8,
+ * with this margin for f_ss varying over the cell */
+#define MID_MARGIN 1.0
+
+static int mid_exact(size_t i, size_t ncell)
+{
+    return i < MID_HEAD || i % MID_STRIDE == 0 || i + 1 == ncell;
+}
+
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx)
 {
     const nbt_table *t0 = ts[0];
     size_t nx = t0->axis[0].n, ny = t0->axis[1].n, C = 0;
     for (size_t i = 0; i < nt; i++)
         C += ts[i]->nch;
-    size_t fx = measure ? 2 * nx - 1 : nx, fy = measure ? 2 * ny - 1 : ny;
-    double *xs = malloc(fx * sizeof(double)), *ys = malloc(fy * sizeof(double));
-    double *F = malloc(fx * fy * C * sizeof(double));
-    if (!xs || !ys || !F) {
+    /* node rows (x nodes) at every y node and, when measuring, y midpoint;
+     * then the chosen rows between x nodes at the same y */
+    size_t fy = measure ? 2 * ny - 1 : ny, nm = 0;
+    if (measure)
+        for (size_t i = 0; i + 1 < nx; i++)
+            nm += (size_t)mid_exact(i, nx - 1);
+    double *xs = malloc(nx * sizeof(double)), *ys = malloc(fy * sizeof(double));
+    double *xm = malloc((nm ? nm : 1) * sizeof(double));
+    size_t *im = malloc((nm ? nm : 1) * sizeof(size_t));
+    double *F = malloc(nx * fy * C * sizeof(double)), *Fm = malloc((nm ? nm : 1) * fy * C * sizeof(double));
+    if (!xs || !ys || !xm || !im || !F || !Fm) {
         free(xs);
         free(ys);
+        free(xm);
+        free(im);
         free(F);
+        free(Fm);
         NBT_FAIL(NBT_ENOMEM, "table: out of memory");
     }
-    for (size_t i = 0; i < fx; i++)
-        xs[i] = nbt_axis_from_unit(&t0->axis[0], (double)i / (double)(fx - 1));
+    for (size_t i = 0; i < nx; i++)
+        xs[i] = nbt_axis_from_unit(&t0->axis[0], (double)i / (double)(nx - 1));
     for (size_t j = 0; j < fy; j++)
         ys[j] = nbt_axis_from_unit(&t0->axis[1], (double)j / (double)(fy - 1));
-    double qerr = 0;
-    nbt_status st = fill(ctx, xs, fx, ys, fy, F, &qerr);
+    nm = 0;
+    if (measure)
+        for (size_t i = 0; i + 1 < nx; i++)
+            if (mid_exact(i, nx - 1)) {
+                im[nm] = i;
+                xm[nm++] = nbt_axis_from_unit(&t0->axis[0], (2.0 * (double)i + 1.0) / (2.0 * (double)(nx - 1)));
+            }
+    double qerr = 0, qerr2 = 0;
+    nbt_status st = fill(ctx, xs, nx, ys, fy, F, &qerr);
+    if (st == NBT_OK && nm)
+        st = fill(ctx, xm, nm, ys, fy, Fm, &qerr2);
+    qerr = fmax(qerr, qerr2);
     size_t off = 0, step = measure ? 2 : 1;
     for (size_t ti = 0; ti < nt && st == NBT_OK; off += ts[ti]->nch, ti++) {
         nbt_table *t = ts[ti];
         size_t nc = t->nch;
         for (size_t c = 0; c < nc; c++)
             t->max_abs[c] = t->max_err[c] = 0;
-        for (size_t j = 0; j < ny; j++)
-            for (size_t i = 0; i < nx; i++)
-                for (size_t c = 0; c < nc; c++) {
-                    double v = F[((j * step) * fx + i * step) * C + off + c];
-                    t->data[(j * nx + i) * nc + c] = (float)v;
-                    t->max_abs[c] = fmax(t->max_abs[c], fabs(v));
-                }
+        /* in tiles of 16 x rows: F is column-major, the table row-major */
+        for (size_t i0 = 0; i0 < nx; i0 += 16)
+            for (size_t j = 0; j < ny; j++)
+                for (size_t i = i0; i < nx && i < i0 + 16; i++)
+                    for (size_t c = 0; c < nc; c++) {
+                        double v = F[(i * fy + j * step) * C + off + c];
+                        t->data[(j * nx + i) * nc + c] = (float)v;
+                        if (fabs(v) > t->max_abs[c])
+                            t->max_abs[c] = fabs(v);
+                    }
         if (t->half)
             nbt_table_round_half(t);
         t->quad_err = qerr;
-        if (measure) {
-            double out[NBT_TABLE_MAX_CH];
-            for (size_t j = 0; j < fy; j++)
-                for (size_t i = 0; i < fx; i++) {
-                    if (i % 2 == 0 && j % 2 == 0)
-                        continue; /* a node */
-                    nbt_table_lookup(t, xs[i], ys[j], out);
-                    for (size_t c = 0; c < nc; c++)
-                        t->max_err[c] = fmax(t->max_err[c], fabs(out[c] - F[(j * fx + i) * C + off + c]));
-                }
-            /* what the midpoints cannot see: the quadrature error at nodes */
-            for (size_t c = 0; c < nc; c++)
-                t->max_err[c] += qerr;
-        } else {
+        if (!measure) {
             for (size_t c = 0; c < nc; c++)
                 t->max_err[c] = NAN;
+            continue;
         }
+        /* the lookup at a midpoint of the unit grid is the average of the
+         * two (edge) or four (centre) nodes around it */
+        /* the table's values column-major, as F */
+        double *DT = malloc(nx * ny * nc * sizeof(double));
+        if (!DT) {
+            st = nbt__fail(NBT_ENOMEM, "table: out of memory");
+            break;
+        }
+        for (size_t i0 = 0; i0 < nx; i0 += 16)
+            for (size_t j = 0; j < ny; j++)
+                for (size_t i = i0; i < nx && i < i0 + 16; i++)
+                    for (size_t c = 0; c < nc; c++)
+                        DT[(i * ny + j) * nc + c] = t->data[(j * nx + i) * nc + c];
+#define D(i, j, c) DT[((i) * ny + (j)) * nc + (c)]
+#define EX(i, jr, c) F[((i) * fy + (jr)) * C + off + (c)]
+#define UPD(c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; } while (0)
+        double e[NBT_TABLE_MAX_CH] = {0};
+        /* node rows, between y nodes */
+        for (size_t i = 0; i < nx; i++)
+            for (size_t j = 0; j + 1 < ny; j++)
+                for (size_t c = 0; c < nc; c++)
+                    UPD(c, fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, 2 * j + 1, c)));
+        /* rows between x nodes: exact ones */
+        for (size_t r = 0; r < nm; r++) {
+            size_t i = im[r];
+            for (size_t jr = 0; jr < fy; jr++) {
+                size_t j = jr / 2;
+                for (size_t c = 0; c < nc; c++) {
+                    double lk = jr % 2 == 0 ? 0.5 * (D(i, j, c) + D(i + 1, j, c))
+                                            : 0.25 * (D(i, j, c) + D(i + 1, j, c) + D(i, j + 1, c) + D(i + 1, j + 1, c));
+                    UPD(c, fabs(lk - Fm[(r * fy + jr) * C + off + c]));
+                }
+            }
+        }
+        /* the others: second differences in x of the exact node rows,
+         * plus the error at the nodes next to them (rounding) or, for
+         * centres, the y error there */
+        for (size_t i = 0, r = 0; i + 1 < nx; i++) {
+            if (r < nm && im[r] == i) {
+                r++;
+                continue;
+            }
+            for (size_t jr = 0; jr < fy; jr++) {
+                size_t j = jr / 2;
+                for (size_t c = 0; c < nc; c++) {
+                    double d2 = 0;
+                    if (i >= 1)
+                        d2 = fabs(EX(i - 1, jr, c) - 2.0 * EX(i, jr, c) + EX(i + 1, jr, c));
+                    if (i + 2 < nx) {
+                        double d2b = fabs(EX(i, jr, c) - 2.0 * EX(i + 1, jr, c) + EX(i + 2, jr, c));
+                        d2 = d2b > d2 ? d2b : d2;
+                    }
+                    double a0, a1;
+                    if (jr % 2 == 1) {
+                        a0 = fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, jr, c));
+                        a1 = fabs(0.5 * (D(i + 1, j, c) + D(i + 1, j + 1, c)) - EX(i + 1, jr, c));
+                    } else {
+                        a0 = fabs(D(i, j, c) - EX(i, jr, c));
+                        a1 = fabs(D(i + 1, j, c) - EX(i + 1, jr, c));
+                    }
+                    UPD(c, MID_MARGIN * d2 / 8.0 + (a0 > a1 ? a0 : a1));
+                }
+            }
+        }
+        /* what the midpoints cannot see: the quadrature error at nodes */
+        for (size_t c = 0; c < nc; c++)
+            t->max_err[c] = e[c] + qerr;
+        free(DT);
+#undef UPD
+#undef D
+#undef EX
     }
     free(xs);
     free(ys);
+    free(xm);
+    free(im);
     free(F);
+    free(Fm);
     return st;
 }
 
@@ -278,7 +387,7 @@ static nbt_status tab_fill(void *vp, const double *xs, size_t nx, const double *
     *quad_err = 0;
     for (size_t j = 0; j < ny; j++)
         for (size_t i = 0; i < nx; i++)
-            if (c->f(xs[i], ys[j], F + (j * nx + i) * c->nch, c->ctx))
+            if (c->f(xs[i], ys[j], F + (i * ny + j) * c->nch, c->ctx))
                 NBT_FAIL(NBT_EDOM, "table: the tabulated function failed");
     return NBT_OK;
 }

@@ -117,7 +117,8 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
         rv = exr_attr_set_string(ctx, part, "nbt.texcoord",
                                  "node-aligned: s = map(x) in [0,1], tex = (s*(N-1)+0.5)/N; "
                                  "scanline 0 = axis1.lo; sqrt: s = sqrt(r), log1p: s = log1p(c r)/log1p(c), "
-                                 "cos: s = acos(1-2r)/pi, r = (x-lo)/(hi-lo)");
+                                 "cos: s = acos(1-2r)/pi, log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), "
+                                 "r = (x-lo)/(hi-lo)");
     size_t off = 0;
     buf[0] = '\0';
     for (size_t c = 0; c < nc; c++)

@@ -4,16 +4,20 @@
 
 #include <nbt/table.h>
 
-/* Compute exact values at every (xs[i], ys[j]) into F[(j*nx + i)*nch + c]
- * for the nch channels of all tables together, and the largest quadrature
- * error estimate into *quad_err. */
+/* Compute exact values at every (xs[i], ys[j]) into F[(i*ny + j)*nch + c]
+ * (column-major: a builder's unit of work is one x row) for the nch
+ * channels of all tables together, and the largest quadrature error
+ * estimate into *quad_err. */
 typedef nbt_status (*nbt__grid_fill)(void *ctx, const double *xs, size_t nx, const double *ys,
                                      size_t ny, double *F, double *quad_err);
 
 /* Fill the tables (same axes; channels taken in order, table by table) at
- * their nodes via one call of fill(); with measure, evaluate on the grid
- * refined by 2 in each axis (in unit coordinates) and set max_err to the
- * largest |bilinear - exact| over all cell and edge midpoints, plus the
+ * their nodes via one call of fill() (with measure: at the y midpoints too),
+ * and with measure a second call at the x midpoints of the first 8, every
+ * 4th and the last x interval (same y); max_err is the
+ * largest |bilinear - exact| there, and on the other x intervals the
+ * second differences in x of the exact node rows / 8 (the bilinear error at
+ * a midpoint of a smooth f) plus the error next to them; plus the
  * quadrature error. Sets max_abs and quad_err. */
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx);
 

@@ -57,6 +57,13 @@ float nbt_beam_psi(vec2 ab, float r)
 // fitted range the monomials' arguments are clamped to (lo >= hi: none).
 // The coefficients are 20 vec4s, not float[80]: std140 (Vulkan) would pad each
 // float of an array to 16 bytes.
+// Without libnbt-gl's target header (the screen-space passes include this
+// module on its own): loose uniforms, as for OpenGL.
+#ifndef NBT_BLOCK_END
+#define NBT_U uniform
+#define NBT_BLOCK_BEGIN(name, b)
+#define NBT_BLOCK_END
+#endif
 NBT_BLOCK_BEGIN(nbt_beam_fit_block, 15)
 NBT_U vec4 nbt_beam_fit_c[20];
 NBT_U vec3 nbt_beam_fit_lo, nbt_beam_fit_hi; // (tau, albedo, B)

@@ -86,7 +86,7 @@ void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0
         a[i][2] = (float)t->axis[i].c;
         a[i][3] = (float)t->axis[i].n;
         *m[i] = t->axis[i].map == NBT_AXIS_SQRT ? 1 : t->axis[i].map == NBT_AXIS_LOG1P ? 2
-              : t->axis[i].map == NBT_AXIS_COS ? 3 : 0;
+              : t->axis[i].map == NBT_AXIS_COS ? 3 : t->axis[i].map == NBT_AXIS_LOG1P_CBRT ? 4 : 0;
     }
 }
 

@@ -1,6 +1,7 @@
 // shaders/nbt_table.glsl: node-aligned table lookup, exactly as libnbt writes
 // tables. An axis is vec4(lo, hi, c, n) plus a mapping code: 0 linear,
-// 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos.
+// 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
+// 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
 const float NBT_PI = 3.14159265358979;
 
@@ -13,6 +14,8 @@ float nbt_axis_unit(float x, vec4 a, int map)
         return log(1.0 + a.z * r) / log(1.0 + a.z);
     if (map == 3)
         return acos(clamp(1.0 - 2.0 * r, -1.0, 1.0)) / NBT_PI;
+    if (map == 4)
+        return pow(log(1.0 + a.z * r) / log(1.0 + a.z), 1.0 / 3.0);
     return r;
 }
 

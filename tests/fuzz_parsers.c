@@ -172,11 +172,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         break;
     }
     case 9: {
-        scene_t sc;
-        if (scene_parse(put(f_txt, d, n), &sc, err, sizeof err) == 0) {
-            if (!(sc.kt_hi > 0) || !(sc.d_hi > 0) || sc.nphong > 16 || !(sc.tol >= 1e-7 && sc.tol <= 0.5) ||
-                sc.orders_max < 1 || sc.orders_max > 512 || (sc.have_ks && sc.ks_hi > sc.kt_hi))
+        nbt_scene sc;
+        nbt_phase *ph = NULL;
+        if (scene_parse(put(f_txt, d, n), &sc, &ph, err, sizeof err) == 0) {
+            if (!(sc.kappa_t[1] > 0) || !(sc.distance[1] > 0) || sc.nphong > NBT_SCENE_MAX_PHONG ||
+                !(sc.tol >= 1e-7 && sc.tol <= 0.5) || sc.orders_max < 1 || sc.orders_max > 512 ||
+                sc.kappa_s[1] > sc.kappa_t[1] || sc.have_g == (sc.phase != NULL))
                 abort(); /* accepted, but not what the format allows */
+            nbt_phase_free(ph);
         } else if (!err[0] || strchr(err, '\n')) {
             abort(); /* a rejection has one line */
         }

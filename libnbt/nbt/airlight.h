@@ -77,11 +77,14 @@ nbt_status nbt_airlight_table(const nbt_table *const *tables, size_t ntables, co
                               size_t nterms, const nbt_airlight_geom *g, double *La);
 
 /* Fill a table whose axes, nch and k[] (or phase, with fixed != NULL) are set:
- * node values by cumulative quadrature in v, and (if measure_error) max_err
- * measured against exact values at all cell and edge midpoints. */
+ * node values by cumulative quadrature in v (Legendre channels: fixed
+ * Gauss-Legendre rules per cell, prefix-summed), and (if measure_error)
+ * max_err: |bilinear - exact| at every midpoint between v nodes, at every
+ * cell and edge midpoint of the first 8 and every 4th u interval, and from
+ * second differences in u of the exact values on the others. */
 typedef struct {
     double quad_tol;     /* relative quadrature tolerance at nodes (e.g. 1e-10) */
-    int measure_error;   /* fill max_err (costs ~3x the nodes) */
+    int measure_error;   /* fill max_err (H: about 2-3x the build time) */
     unsigned nthreads;   /* 0: all online CPUs */
 } nbt_build_opts;
 

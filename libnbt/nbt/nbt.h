@@ -8,6 +8,7 @@
 #include <nbt/table.h>
 #include <nbt/airlight.h>
 #include <nbt/surface.h>
+#include <nbt/plan.h>
 #include <nbt/beam.h>
 #include <nbt/mc.h>
 #include <nbt/screen.h>

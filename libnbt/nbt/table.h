@@ -9,7 +9,11 @@
  *   sqrt:   s = sqrt(r)
  *   log1p:  s = log1p(c r)/log1p(c), c > 0 clusters nodes at lo,
  *           -1 < c < 0 clusters them at hi
- *   cos:    s = acos(1 - 2r)/pi   (nodes clustered at both ends, Chebyshev-like) */
+ *   cos:    s = acos(1 - 2r)/pi   (nodes clustered at both ends, Chebyshev-like)
+ *   log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), c > 0: near lo, x - lo ~ s^3,
+ *           which turns the (x - lo) log(x - lo) behaviour of H and J at
+ *           u, T = 0 into a C^2 function of s: bilinear error falls as N^-2
+ *           (doc/tables.md); log-like spacing far from lo */
 #ifndef NBT_TABLE_H_INCLUDED
 #define NBT_TABLE_H_INCLUDED
 
@@ -20,12 +24,12 @@
 extern "C" {
 #endif
 
-typedef enum { NBT_AXIS_LINEAR, NBT_AXIS_SQRT, NBT_AXIS_LOG1P, NBT_AXIS_COS } nbt_axis_map;
+typedef enum { NBT_AXIS_LINEAR, NBT_AXIS_SQRT, NBT_AXIS_LOG1P, NBT_AXIS_COS, NBT_AXIS_LOG1P_CBRT } nbt_axis_map;
 
 typedef struct {
     double lo, hi;      /* range, lo < hi */
     nbt_axis_map map;
-    double c;           /* log1p strength (only for NBT_AXIS_LOG1P): c > 0 or -1 < c < 0 */
+    double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0) */
     size_t n;           /* number of nodes, >= 2 */
 } nbt_axis;
 
@@ -35,7 +39,8 @@ double nbt_axis_to_unit(const nbt_axis *a, double x);
 double nbt_axis_from_unit(const nbt_axis *a, double s);
 /* Physical value of node i. */
 double nbt_axis_node(const nbt_axis *a, size_t i);
-/* "linear", "sqrt", "log1p", "cos"; parse returns NBT_EFORMAT for other names. */
+/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt"; parse returns NBT_EFORMAT
+ * for other names (so an older reader refuses a file with a newer mapping). */
 const char *nbt_axis_map_name(nbt_axis_map m);
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
@@ -80,8 +85,8 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
 void nbt_table_round_half(nbt_table *t);
 
 /* Tabulate f(x0, x1) -> out[0..nch-1] at the table's nodes; with
- * measure_error, also on the grid refined by 2 and record max_err (largest
- * |bilinear - f| over all cell and edge midpoints) and max_abs. f returns 0,
+ * measure_error, also between nodes and record max_err (largest
+ * |bilinear - f| over the midpoints, as for H tables) and max_abs. f returns 0,
  * or non-zero to abort (NBT_EDOM). */
 typedef int (*nbt_table_fn)(double x0, double x1, double *out, void *ctx);
 nbt_status nbt_table_tabulate(nbt_table *t, nbt_table_fn f, void *ctx, int measure_error);

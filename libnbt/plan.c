@@ -1,0 +1,585 @@
+/* libnbt/plan.c: the table planner (nbt/plan.h): Legendre budget, axis
+ * mappings from a small proxy, size from the proxies' convergence rate,
+ * and execution that grows a set until it meets its target. */
+#include <config.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <nbt/airlight.h>
+#include <nbt/plan.h>
+#include <nbt/surface.h>
+#include "internal.h"
+
+struct nbt_plan {
+    nbt_plan_set *sets;
+    size_t count;
+    nbt_table **cache;    /* per set: the npacks tables built at 33^2 and 65^2 while planning (reused by execute) */
+    nbt_plan_legendre leg;
+    unsigned nthreads;
+};
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static nbt_status failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
+{
+    if (err && errlen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+    return st;
+}
+
+/* ---- scenes ---- */
+
+void nbt_scene_init(nbt_scene *s)
+{
+    memset(s, 0, sizeof *s);
+    s->kappa_s[0] = s->kappa_s[1] = -1;
+    s->airlight = s->diffuse = 1;
+    s->tol = 1e-3;
+    s->orders_max = NBT_PLAN_GL_ORDERS;
+}
+
+static int range_ok(const double r[2], double lo, double hi)
+{
+    return r[0] >= lo && r[1] >= r[0] && r[1] <= hi;
+}
+
+nbt_status nbt_scene_check(const nbt_scene *s, char *err, size_t errlen)
+{
+    if (!range_ok(s->kappa_t, 0, 1e3) || !(s->kappa_t[1] > 0))
+        return failf(err, errlen, NBT_EDOM, "kappa_t = %g:%g is not accepted: 0 <= lo <= hi <= 1000, hi > 0 "
+                     "(kappa_t and distance are required)", s->kappa_t[0], s->kappa_t[1]);
+    if (!(s->distance[1] > 0) || !(s->distance[0] >= 0 && s->distance[0] <= s->distance[1]) || !(s->distance[1] <= 1e9))
+        return failf(err, errlen, NBT_EDOM, "distance = %g:%g is not accepted: 0 <= lo <= hi <= 1e9, hi > 0 "
+                     "(kappa_t and distance are required)", s->distance[0], s->distance[1]);
+    if (!!s->have_g == !!s->phase)
+        return failf(err, errlen, NBT_EINVAL, "give exactly one of g (a value or range: Legendre tables) and "
+                     "phase (fixed phase)");
+    if (s->have_g && !range_ok(s->g, -0.99, 0.99))
+        return failf(err, errlen, NBT_EDOM, "g = %g:%g is not accepted: -0.99 <= lo <= hi <= 0.99", s->g[0], s->g[1]);
+    if (s->kappa_s[1] >= 0 && s->kappa_s[1] > s->kappa_t[1])
+        return failf(err, errlen, NBT_EDOM, "kappa_s (%g) must not exceed kappa_t (%g)", s->kappa_s[1], s->kappa_t[1]);
+    if (!s->airlight && !s->diffuse && s->nphong == 0)
+        return failf(err, errlen, NBT_EINVAL, "the scene needs no tables (airlight = no, diffuse = no, no phong)");
+    if (s->nphong > NBT_SCENE_MAX_PHONG)
+        return failf(err, errlen, NBT_EDOM, "at most %d Phong exponents", NBT_SCENE_MAX_PHONG);
+    for (size_t i = 0; i < s->nphong; i++)
+        if (s->phong[i] < 2 || s->phong[i] > 10000)
+            return failf(err, errlen, NBT_EDOM, "phong = %d is not accepted: 2 .. 10000", s->phong[i]);
+    if (!(s->tol >= 1e-7 && s->tol <= 0.5))
+        return failf(err, errlen, NBT_EDOM, "tol = %g is not accepted: 1e-7 .. 0.5", s->tol);
+    if (s->orders_max < 1 || s->orders_max > 512)
+        return failf(err, errlen, NBT_EDOM, "orders_max = %zu is not accepted: 1 .. 512", s->orders_max);
+    double xmax = s->kappa_t[1] * s->distance[1];
+    if (xmax > 1e6)
+        return failf(err, errlen, NBT_EDOM, "kappa_t * distance = %g exceeds 1e6 (the medium is opaque long before)",
+                     xmax);
+    return NBT_OK;
+}
+
+/* ---- Legendre budget ---- */
+
+/* Smallest N such that the airlight series truncated to N terms differs from
+ * the converged one by at most tol relative, for HG with |g| <= gmax, over
+ * sample rays (u up to umax, gamma from 0.05 to 2.5 rad, unobstructed).
+ * Each ray's H_k differences are integrated directly (one shifted segment
+ * from gamma - pi/2 to pi/2), never formed by subtracting H values: for
+ * large u and backward rays the difference is ~e^-40 of the H values. */
+static nbt_status choose_terms(double gmax, double umax, double tol, size_t *N, double *achieved)
+{
+    /* orders beyond K: (2k+1) g^k below 1e-3 tol, negligible for the tail */
+    size_t K = 8;
+    while (K < 512 && (2.0 * K + 1.0) * pow(gmax, (double)K) > 1e-3 * tol)
+        K *= 2;
+    static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
+    double *d = malloc(2 * (K + 1) * sizeof(double));
+    double *worst = calloc(K + 2, sizeof(double));
+    nbt_quad_ws *ws = nbt_quad_ws_alloc((unsigned)(K + 1), 2000);
+    nbt__weights w = {K, NULL, NULL};
+    nbt_status st = NBT_OK;
+    if (!d || !worst || !ws)
+        st = NBT_ENOMEM;
+    for (int iu = 0; iu < 6 && st == NBT_OK; iu++) {
+        double u = umax * pow(10.0, -iu * 0.6);
+        for (size_t ig = 0; ig < sizeof gam / sizeof gam[0] && st == NBT_OK; ig++) {
+            st = nbt__airlight_segment(ws, &w, u, gam[ig] - NBT_PI_2, NBT_PI_2, 1, 1e-10, d, d + K + 1);
+            if (st != NBT_OK)
+                break;
+            double total = 0, tail = 0, gk = 1;
+            for (size_t k = 0; k <= K; k++, gk *= gmax)
+                total += (2.0 * k + 1.0) * gk * d[k];
+            /* tail after N terms, from the top down */
+            gk = pow(gmax, (double)K);
+            for (size_t k = K + 1; k-- > 0; gk = gmax != 0 ? gk / gmax : (k == 1 ? 1 : 0)) {
+                tail += (2.0 * k + 1.0) * gk * d[k];
+                worst[k] = fmax(worst[k], fabs(tail / total));
+            }
+        }
+    }
+    if (st == NBT_OK) {
+        size_t n = 1;
+        while (n <= K && worst[n] > tol)
+            n++;
+        *N = n;
+        *achieved = n <= K ? worst[n] : worst[K];
+    }
+    nbt_quad_ws_free(ws);
+    free(d);
+    free(worst);
+    return st;
+}
+
+nbt_status nbt_plan_legendre_terms(double gmax, double xmax, double tol, size_t nmax, nbt_plan_legendre *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!(gmax >= 0 && gmax <= 0.99) || !(xmax > 0 && xmax <= 1e6) || !(tol > 0 && tol < 1) || nmax < 1 || nmax > 512)
+        NBT_FAIL(NBT_EDOM, "plan: Legendre budget needs 0 <= gmax <= 0.99, 0 < xmax <= 1e6, 0 < tol < 1, "
+                           "1 <= nmax <= 512");
+    nbt_status st = choose_terms(gmax, xmax, 0.5 * tol, &out->nterms, &out->trunc_err);
+    if (st != NBT_OK)
+        return st;
+    if (out->nterms > 512)
+        out->nterms = 513;
+    /* Interpolation gets the other half of tol. In the series each order's
+     * error is weighted by (2k+1)|g|^k, so each table must be that much
+     * better than tol/2 (relative to H_0/J_0). */
+    size_t n = out->nterms < 512 ? out->nterms : 512;
+    for (size_t k = 0; k < n; k++)
+        out->amp += (2.0 * k + 1.0) * pow(gmax, (double)k);
+    out->table_tol = 0.5 * tol / out->amp;
+    return out->nterms > nmax ? NBT_ETOL : NBT_OK;
+}
+
+/* ---- building one set ---- */
+
+static size_t npacks_of(const nbt_plan_request *r)
+{
+    return r->phase ? 1 : (r->nterms + 3) / 4;
+}
+
+/* Packs [0, count) of r on the given axes, in one pass (every order
+ * integrated once), error measured. */
+static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt_axis *a0, const nbt_axis *a1,
+                              double qtol, unsigned nthreads, nbt_table **out)
+{
+    for (size_t i = 0; i < count; i++) {
+        size_t nch = 1;
+        if (!r->phase) {
+            nch = r->nterms - 4 * i;
+            if (nch > 4)
+                nch = 4;
+        }
+        nbt_table *t = out[i] = nbt_table_alloc(r->kind, a0, a1, nch);
+        if (!t) {
+            for (size_t j = 0; j < i; j++) {
+                nbt_table_free(out[j]);
+                out[j] = NULL;
+            }
+            NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
+        }
+        for (size_t c = 0; c < nch; c++)
+            t->k[c] = r->phase ? -1 : (int)(4 * i + c);
+        t->n = r->kind == NBT_TABLE_J ? r->n : 0;
+        t->half = r->half;
+        if (r->phase)
+            snprintf(t->phase, sizeof t->phase, "%s", nbt_phase_name(r->phase));
+    }
+    nbt_build_opts o = {qtol, 1, nthreads};
+    nbt_status st = r->kind == NBT_TABLE_H ? nbt_h_table_build_set(out, count, r->phase, &o)
+                                           : nbt_j_table_build_set(out, count, r->phase, &o);
+    if (st != NBT_OK)
+        for (size_t i = 0; i < count; i++) {
+            nbt_table_free(out[i]);
+            out[i] = NULL;
+        }
+    return st;
+}
+
+static double table_scale(const nbt_table *t)
+{
+    double m = 0;
+    for (size_t c = 0; c < t->nch; c++)
+        m = fmax(m, t->max_abs[c]);
+    return m;
+}
+
+static double rel_error(const nbt_table *t, double scale)
+{
+    double e = 0;
+    for (size_t c = 0; c < t->nch; c++)
+        e = fmax(e, t->max_err[c]);
+    return scale > 0 ? e / scale : e;
+}
+
+/* worst relative error over packs, relative to the first pack's scale */
+static double set_error(nbt_table *const *t, size_t count)
+{
+    double s = table_scale(t[0]), e = 0;
+    for (size_t i = 0; i < count; i++)
+        e = fmax(e, rel_error(t[i], s));
+    return e;
+}
+
+static void free_packs(nbt_table **t, size_t count)
+{
+    for (size_t i = 0; i < count; i++) {
+        nbt_table_free(t[i]);
+        t[i] = NULL;
+    }
+}
+
+/* ---- mappings and sizes ---- */
+
+/* Quadrature tolerance of the tables built (proxies included: they are
+ * reused as tables). */
+#define QUAD_TOL 1e-10
+
+/* Sizes of the ladder a set grows on, by ~1.5. */
+static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
+#define NSIZES (sizeof SIZES / sizeof SIZES[0])
+
+static size_t grow(size_t N)
+{
+    for (size_t i = 0; i < NSIZES; i++)
+        if (SIZES[i] > N)
+            return SIZES[i];
+    return 0;
+}
+
+/* Axes by rule (measured by exhaustive builds, doc/tables.md). u/T:
+ * log1p_cbrt with c = max(xmax, 10): u ~ s^3 near 0 makes the u log u
+ * behaviour of H and J C^2 in s, so bilinear error falls as N^-2; the
+ * strength c ~ xmax was the best or within 3% for H over xmax = 1 .. 1000
+ * and for J^1, J^20 at xmax = 10. v/theta: cos for H and Phong lobes
+ * (narrow features at both ends), linear for J^1 (smooth cosine kernel). */
+static nbt_axis make_axis(const nbt_plan_request *r, int which, size_t n)
+{
+    nbt_axis a = {0, 0, NBT_AXIS_LINEAR, 0, n};
+    if (which == 0) {
+        a.hi = r->xmax;
+        a.map = NBT_AXIS_LOG1P_CBRT;
+        a.c = fmax(r->xmax, 10.0);
+    } else {
+        a.lo = r->kind == NBT_TABLE_H ? -NBT_PI_2 : 0;
+        a.hi = r->kind == NBT_TABLE_H ? NBT_PI_2 : NBT_PI;
+        a.map = r->kind == NBT_TABLE_J && r->n == 1 ? NBT_AXIS_LINEAR : NBT_AXIS_COS;
+    }
+    return a;
+}
+
+static nbt_status check_request(const nbt_plan_request *r, char *err, size_t errlen)
+{
+    if (r->kind != NBT_TABLE_H && r->kind != NBT_TABLE_J)
+        return failf(err, errlen, NBT_EINVAL, "plan: a set is of kind H or J");
+    if (r->kind == NBT_TABLE_J && (r->n < 1 || r->n > 10000))
+        return failf(err, errlen, NBT_EDOM, "plan: n = %d is not accepted: 1 .. 10000", r->n);
+    if (!r->phase && (r->nterms < 1 || r->nterms > 4 * NBT_PLAN_MAX_PACKS))
+        return failf(err, errlen, NBT_EDOM, "plan: %zu Legendre orders: 1 .. %d accepted", r->nterms,
+                     4 * NBT_PLAN_MAX_PACKS);
+    if (!(r->xmax > 0 && r->xmax <= 1e6))
+        return failf(err, errlen, NBT_EDOM, "plan: xmax = %g is not accepted: 0 < xmax <= 1e6", r->xmax);
+    if (!(r->tol >= 0 && r->tol < 1))
+        return failf(err, errlen, NBT_EDOM, "plan: tol = %g is not accepted: 0 (fixed size) or in (0, 1)", r->tol);
+    if (r->tol == 0 && (r->size[0] < 2 || r->size[1] < 2 || r->size[0] > 4096 || r->size[1] > 4096))
+        return failf(err, errlen, NBT_EDOM, "plan: size %zux%zu is not accepted: 2 .. 4096 per axis", r->size[0],
+                     r->size[1]);
+    return NBT_OK;
+}
+
+/* Convergence rate and cost exponent assumed without a 65^2 proxy: the
+ * measured rates on the rule's mappings are 1.7 (J^1, its theta) .. 2; H's
+ * cost grows with the node count, J's mostly with the rows (G and M). */
+#define P_CONSERVATIVE 1.75
+static double cost_exponent(const nbt_plan_request *r)
+{
+    return r->kind == NBT_TABLE_H ? 2.0 : 1.1;
+}
+
+/* The first ladder size where e33 (32/(N-1))^p <= tol (the last if none). */
+static size_t ladder_size(double e33, double p, double tol)
+{
+    for (size_t i = 0; i < NSIZES; i++)
+        if (e33 * pow(32.0 / (double)(SIZES[i] - 1), p) <= tol)
+            return SIZES[i];
+    return SIZES[NSIZES - 1];
+}
+
+/* Plan one set: mappings by rule; all packs at 33^2 (the final quadrature
+ * tolerance, error measured) give e33; a 65^2 build gives the convergence
+ * rate and cost exponent where the set may be 65^2 or larger (then the
+ * proxy is the set, or cheap next to it), else the conservative rate is
+ * taken. Both builds are kept for execution at those sizes (cache: 2 x
+ * NBT_PLAN_MAX_PACKS slots). */
+static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_plan_set *ps, nbt_table **cache)
+{
+    memset(ps, 0, sizeof *ps);
+    ps->req = *r;
+    ps->npacks = npacks_of(r);
+    double e[2] = {0, 0}, secs[2] = {0, 0};
+    static const size_t pn[2] = {33, 65};
+    size_t N0 = r->size[0], N1 = r->size[1];
+    double p = P_CONSERVATIVE, a = cost_exponent(r);
+    for (int q = 0; q < 2; q++) {
+        /* the 65^2 proxy only where the set may be that large (then it is
+         * the set, or cheap next to it): below, the conservative rate */
+        if (q == 1 && (r->tol > 0 ? ladder_size(e[0], P_CONSERVATIVE, r->tol) < 65 : (N0 < 129 && N1 < 129)))
+            break;
+        nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
+        nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
+        double t0 = now_s();
+        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
+        secs[q] = now_s() - t0;
+        if (st != NBT_OK)
+            return st;
+        e[q] = set_error(t, ps->npacks);
+        if (q == 1) {
+            /* err(N) = e33 (32/(N-1))^p, p in [1, 2]: at least the log
+             * singularity's first order, at most bilinear's second */
+            if (e[1] > 0 && e[0] > 0)
+                p = fmin(fmax(log(e[0] / e[1]) / log(2.0), 1.0), 2.0);
+            if (secs[0] > 0 && secs[1] > 0)
+                a = fmin(fmax(log(secs[1] / secs[0]) / log(65.0 / 33.0), 1.0), 2.0);
+        }
+    }
+    if (r->tol > 0)
+        N0 = N1 = ladder_size(e[0], p, r->tol);
+    ps->axis[0] = make_axis(r, 0, N0);
+    ps->axis[1] = make_axis(r, 1, N1);
+    double Nm = sqrt((double)(N0 - 1) * (double)(N1 - 1));
+    ps->pred_err = e[0] * pow(32.0 / Nm, p);
+    /* cost ~ N^a from the 33^2 build */
+    ps->pred_seconds = secs[0] * pow((double)N0 * (double)N1 / (33.0 * 33.0), 0.5 * a);
+    return NBT_OK;
+}
+
+static nbt_status plan_alloc(size_t n, unsigned nthreads, nbt_plan **out)
+{
+    nbt_plan *p = calloc(1, sizeof *p);
+    if (!p)
+        NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
+    p->sets = calloc(n, sizeof *p->sets);
+    p->cache = calloc(2 * n * NBT_PLAN_MAX_PACKS, sizeof *p->cache);
+    if (!p->sets || !p->cache) {
+        nbt_plan_free(p);
+        NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
+    }
+    p->nthreads = nthreads;
+    *out = p;
+    return NBT_OK;
+}
+
+nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nthreads, nbt_plan **out, char *err,
+                           size_t errlen)
+{
+    *out = NULL;
+    if (nreq < 1)
+        return failf(err, errlen, NBT_EINVAL, "plan: no table sets requested");
+    for (size_t i = 0; i < nreq; i++) {
+        nbt_status st = check_request(&req[i], err, errlen);
+        if (st != NBT_OK)
+            return st;
+    }
+    nbt_plan *p = NULL;
+    nbt_status st = plan_alloc(nreq, nthreads, &p);
+    if (st != NBT_OK)
+        return failf(err, errlen, st, "plan: out of memory");
+    for (size_t i = 0; i < nreq && st == NBT_OK; i++, p->count++)
+        st = plan_set(&req[i], nthreads, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
+    if (st != NBT_OK) {
+        nbt_plan_free(p);
+        return failf(err, errlen, st, "plan: the proxy builds failed: %s", nbt_strerror(st));
+    }
+    *out = p;
+    return NBT_OK;
+}
+
+nbt_status nbt_plan_scene(const nbt_scene *s, unsigned nthreads, nbt_plan **out, size_t *needed, char *err,
+                          size_t errlen)
+{
+    *out = NULL;
+    if (needed)
+        *needed = 0;
+    nbt_status st = nbt_scene_check(s, err, errlen);
+    if (st != NBT_OK)
+        return st;
+    double xmax = s->kappa_t[1] * s->distance[1];
+    nbt_plan_legendre leg = {1, 0, 1, s->tol};
+    if (s->have_g) {
+        double gmax = fmax(fabs(s->g[0]), fabs(s->g[1]));
+        st = nbt_plan_legendre_terms(gmax, xmax, s->tol, s->orders_max, &leg);
+        if (needed)
+            *needed = leg.nterms;
+        if (st == NBT_ETOL && leg.nterms > 512)
+            return failf(err, errlen, st, "|g| up to %g needs more than 512 Legendre orders at tol %g: use a fixed "
+                         "phase (phase = hg:g=...) or a larger tol", gmax, s->tol);
+        if (st == NBT_ETOL)
+            return failf(err, errlen, st, "|g| up to %g needs %zu Legendre orders at tol %g, more than orders_max = "
+                         "%zu%s: use a fixed phase (phase = hg:g=...), a larger tol or a smaller |g|%s", gmax,
+                         leg.nterms, s->tol, s->orders_max,
+                         s->orders_max == NBT_PLAN_GL_ORDERS ? " (libnbt-gl's shaders take at most 16: 4 packs of 4)" : "",
+                         s->orders_max == NBT_PLAN_GL_ORDERS ? ", or raise orders_max (up to 512) for tables used off the GPU" : "");
+        if (st != NBT_OK)
+            return failf(err, errlen, st, "the Legendre budget failed: %s", nbt_strerror(st));
+    }
+    nbt_plan_request rq[2 + NBT_SCENE_MAX_PHONG];
+    size_t n = 0;
+    nbt_plan_request base = {NBT_TABLE_H, 0, s->have_g ? leg.nterms : 0, s->have_g ? NULL : s->phase, xmax,
+                             s->have_g ? leg.table_tol : s->tol, {0, 0}, s->half};
+    if (s->airlight)
+        rq[n++] = base;
+    base.kind = NBT_TABLE_J;
+    if (s->diffuse) {
+        base.n = 1;
+        rq[n++] = base;
+    }
+    for (size_t i = 0; i < s->nphong; i++) {
+        base.n = s->phong[i];
+        rq[n++] = base;
+    }
+    st = nbt_plan_tables(rq, n, nthreads, out, err, errlen);
+    if (st == NBT_OK)
+        (*out)->leg = s->have_g ? leg : (nbt_plan_legendre){0, 0, 0, 0};
+    return st;
+}
+
+void nbt_plan_free(nbt_plan *p)
+{
+    if (!p)
+        return;
+    if (p->cache)
+        for (size_t i = 0; i < p->count; i++)
+            for (int q = 0; q < 2; q++)
+                free_packs(p->cache + (2 * i + (size_t)q) * NBT_PLAN_MAX_PACKS, p->sets[i].npacks);
+    free(p->cache);
+    free(p->sets);
+    free(p);
+}
+
+size_t nbt_plan_count(const nbt_plan *p)
+{
+    return p->count;
+}
+
+const nbt_plan_set *nbt_plan_get(const nbt_plan *p, size_t i)
+{
+    return i < p->count ? &p->sets[i] : NULL;
+}
+
+nbt_plan_legendre nbt_plan_legendre_budget(const nbt_plan *p)
+{
+    return p->leg;
+}
+
+/* ---- execution ---- */
+
+/* field by field: the struct has padding */
+static int same_axis(const nbt_axis *a, const nbt_axis *b)
+{
+    return a->lo == b->lo && a->hi == b->hi && a->map == b->map && a->c == b->c && a->n == b->n;
+}
+
+static nbt_table *table_copy(const nbt_table *t)
+{
+    nbt_table *c = nbt_table_alloc(t->kind, &t->axis[0], &t->axis[1], t->nch);
+    if (!c)
+        return NULL;
+    float *d = c->data;
+    *c = *t;
+    c->data = d;
+    memcpy(d, t->data, t->axis[0].n * t->axis[1].n * t->nch * sizeof(float));
+    return c;
+}
+
+void nbt_tableset_free(nbt_tableset *ts)
+{
+    free_packs(ts->t, ts->count);
+    ts->count = 0;
+}
+
+nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    if (i >= p->count)
+        return failf(err, errlen, NBT_EINVAL, "plan: set %zu of %zu", i, p->count);
+    const nbt_plan_set *ps = &p->sets[i];
+    const nbt_plan_request *r = &ps->req;
+    nbt_axis a0 = ps->axis[0], a1 = ps->axis[1];
+    double t0 = now_s();
+    for (;;) {
+        nbt_status st = NBT_OK;
+        nbt_table *const *cache = NULL;
+        for (int q = 0; q < 2; q++) {
+            nbt_table *const *c = p->cache + (2 * i + (size_t)q) * NBT_PLAN_MAX_PACKS;
+            if (c[0] && same_axis(&c[0]->axis[0], &a0) && same_axis(&c[0]->axis[1], &a1))
+                cache = c;
+        }
+        if (cache) {
+            /* a proxy is this very build: copy it */
+            for (size_t q = 0; q < ps->npacks && st == NBT_OK; q++)
+                if (!(out->t[q] = table_copy(cache[q])))
+                    st = NBT_ENOMEM;
+            if (st != NBT_OK)
+                free_packs(out->t, ps->npacks);
+        } else
+            st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, p->nthreads, out->t);
+        if (st != NBT_OK)
+            return failf(err, errlen, st, "building the %s table failed: %s", r->kind == NBT_TABLE_H ? "H" : "J",
+                         nbt_strerror(st));
+        out->count = ps->npacks;
+        out->scale = table_scale(out->t[0]);
+        out->rel_err = set_error(out->t, out->count);
+        if (r->tol <= 0 || out->rel_err <= r->tol)
+            break;
+        size_t next = grow(a0.n > a1.n ? a0.n : a1.n);
+        if (next == 0) {
+            double worst = out->rel_err;
+            nbt_tableset_free(out);
+            return failf(err, errlen, NBT_ETOL, "tol %g is not reached by every order with up to 2049x2049 nodes "
+                         "(worst %.2g): ask for a larger tolerance, fewer orders or a smaller range", r->tol, worst);
+        }
+        nbt_tableset_free(out);
+        a0.n = a1.n = next;
+    }
+    out->seconds = now_s() - t0;
+    return NBT_OK;
+}
+
+nbt_status nbt_plan_execute_all(const nbt_plan *p, nbt_tableset *out, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < p->count; i++) {
+        nbt_status st = nbt_plan_execute(p, i, &out[i], err, errlen);
+        if (st != NBT_OK) {
+            for (size_t j = 0; j < i; j++)
+                nbt_tableset_free(&out[j]);
+            return st;
+        }
+    }
+    return NBT_OK;
+}
+
+void nbt_plan_stem(const nbt_plan_request *r, char *buf, size_t n)
+{
+    char kind[16];
+    if (r->kind == NBT_TABLE_H)
+        snprintf(kind, sizeof kind, "H");
+    else
+        snprintf(kind, sizeof kind, "J%d", r->n);
+    if (r->phase)
+        snprintf(buf, n, "%s_%s", kind, nbt_phase_name(r->phase));
+    else
+        snprintf(buf, n, "%s", kind);
+    for (char *q = buf; *q; q++) /* keep file names portable */
+        if (*q == ':' || *q == '=' || *q == ' ' || *q == '/')
+            *q = '_';
+}

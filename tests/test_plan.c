@@ -1,0 +1,292 @@
+/* tests/test_plan.c: the planner (nbt/plan.h): scene checks (every error
+ * condition), the Legendre budget against independent series sums, plans'
+ * structure, execution against pointwise quadrature at random points, and
+ * predicted against measured error. */
+#include <math.h>
+#include <string.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+static nbt_scene street(void)
+{
+    /* doc/examples/default.scene */
+    nbt_scene s;
+    nbt_scene_init(&s);
+    s.kappa_t[0] = 0.05;
+    s.kappa_t[1] = 0.2;
+    s.kappa_s[0] = 0.04;
+    s.kappa_s[1] = 0.18;
+    s.distance[1] = 60;
+    s.have_g = 1;
+    s.g[1] = 0.5;
+    s.phong[0] = 20;
+    s.nphong = 1;
+    s.tol = 2e-2;
+    return s;
+}
+
+static void expect_bad(const nbt_scene *s, nbt_status want, const char *needle, const char *what)
+{
+    char err[512] = "";
+    nbt_status st = nbt_scene_check(s, err, sizeof err);
+    t_true(st == want && strstr(err, needle) != NULL, "scene check rejects %s (status %d, '%s')", what, (int)st, err);
+}
+
+static void test_scene_check(void)
+{
+    nbt_scene s = street();
+    char err[512];
+    t_true(nbt_scene_check(&s, err, sizeof err) == NBT_OK, "the example street scene is accepted");
+    nbt_scene b = s;
+    b.kappa_t[1] = 0;
+    expect_bad(&b, NBT_EDOM, "kappa_t", "kappa_t = 0");
+    b = s;
+    b.kappa_t[1] = 1001;
+    expect_bad(&b, NBT_EDOM, "kappa_t", "kappa_t > 1000");
+    b = s;
+    b.distance[1] = 0;
+    expect_bad(&b, NBT_EDOM, "distance", "no distance");
+    b = s;
+    b.phase = (const nbt_phase *)&s; /* any non-NULL: both given */
+    expect_bad(&b, NBT_EINVAL, "exactly one of g", "both g and phase");
+    b = s;
+    b.have_g = 0;
+    expect_bad(&b, NBT_EINVAL, "exactly one of g", "neither g nor phase");
+    b = s;
+    b.g[1] = 0.995;
+    expect_bad(&b, NBT_EDOM, "g =", "g > 0.99");
+    b = s;
+    b.kappa_s[1] = 0.3;
+    expect_bad(&b, NBT_EDOM, "kappa_s", "kappa_s > kappa_t");
+    b = s;
+    b.airlight = b.diffuse = 0;
+    b.nphong = 0;
+    expect_bad(&b, NBT_EINVAL, "needs no tables", "a scene without tables");
+    b = s;
+    b.phong[0] = 1;
+    expect_bad(&b, NBT_EDOM, "phong", "phong = 1");
+    b = s;
+    b.tol = 0.6;
+    expect_bad(&b, NBT_EDOM, "tol", "tol = 0.6");
+    b = s;
+    b.orders_max = 513;
+    expect_bad(&b, NBT_EDOM, "orders_max", "orders_max = 513");
+    b = s;
+    b.kappa_t[1] = 1000;
+    b.distance[1] = 2000;
+    expect_bad(&b, NBT_EDOM, "exceeds 1e6", "kappa_t * distance > 1e6");
+}
+
+/* The budget's claim against an independent reference: on the sample rays
+ * (u = kappa_t h from xmax down by 10^0.6, gamma in {0.05 .. 2.5}, no
+ * surface) the N-term Legendre series of HG (nbt_airlight_series) differs
+ * from Nishita's integral of the exact HG phase along the ray
+ * (nbt_airlight_direct) by <= tol/2 relative, and N - 1 terms exceed tol/2
+ * on at least one ray; A is the closed-form sum. Both integrals to 1e-10. */
+static void test_legendre(void)
+{
+    double g = 0.5, xmax = 12, tol = 2e-2;
+    nbt_plan_legendre l;
+    nbt_status st = nbt_plan_legendre_terms(g, xmax, tol, 512, &l);
+    t_true(st == NBT_OK && l.nterms >= 2 && l.nterms < 64, "budget for |g| <= 0.5 at 2e-2: %zu terms", l.nterms);
+    /* sum_{k<N} (2k+1) g^k = (1 + g - (2N+1) g^N + (2N-1) g^{N+1}) / (1-g)^2 */
+    double N = (double)l.nterms;
+    double A = (1 + g - (2 * N + 1) * pow(g, N) + (2 * N - 1) * pow(g, N + 1)) / ((1 - g) * (1 - g));
+    t_rel(l.amp, A, 1e-12, "amplification = closed-form sum (2k+1) g^k");
+    t_rel(l.table_tol, 0.5 * tol / A, 1e-12, "table target = tol/2 / A");
+    double b[64], worstN = 0, worstN1 = 0;
+    for (int k = 0; k < 64; k++)
+        b[k] = pow(g, k);
+    nbt_phase *hg = NULL;
+    char err[128];
+    nbt_phase_parse("hg:g=0.5", &hg, err, sizeof err);
+    static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
+    for (int iu = 0; iu < 6; iu++) {
+        double u = xmax * pow(10.0, -iu * 0.6);
+        for (int ig = 0; ig < 6; ig++) {
+            nbt_airlight_geom geo = {1.0, 1.0, 1.0, u / sin(gam[ig]), gam[ig], INFINITY};
+            double d, de, sN, sNe, s1, s1e;
+            nbt_airlight_direct(hg, &geo, 1e-10, &d, &de);
+            nbt_airlight_series(b, l.nterms, &geo, 1e-10, &sN, &sNe);
+            nbt_airlight_series(b, l.nterms - 1, &geo, 1e-10, &s1, &s1e);
+            worstN = fmax(worstN, (fabs(sN - d) - de - sNe) / d);
+            worstN1 = fmax(worstN1, (fabs(s1 - d) - de - s1e) / d);
+        }
+    }
+    nbt_phase_free(hg);
+    t_true(worstN <= 0.5 * tol, "N = %zu terms: truncation %.3g <= tol/2 on the sample rays", l.nterms, worstN);
+    t_true(worstN1 > 0.5 * tol, "N - 1 terms: truncation %.3g > tol/2 (N is the smallest)", worstN1);
+    t_true(fabs(l.trunc_err - worstN) <= 1e-6 + 1e-3 * worstN, "recorded truncation error %.6g = ray reference %.6g",
+           l.trunc_err, worstN);
+    /* too few orders allowed: NBT_ETOL with the need */
+    st = nbt_plan_legendre_terms(0.8, 10, 1e-2, 16, &l);
+    t_true(st == NBT_ETOL && l.nterms > 16, "|g| 0.8 at 1e-2 with 16 orders: ETOL, needs %zu", l.nterms);
+    t_true(nbt_plan_legendre_terms(1.2, 10, 1e-2, 16, &l) == NBT_EDOM, "gmax 1.2 rejected");
+}
+
+/* max over random points of |lookup - exact| / recorded max_err, per channel */
+static double worst_ratio(const nbt_tableset *ts, int npts)
+{
+    double ratio = 0;
+    for (size_t p = 0; p < ts->count; p++) {
+        const nbt_table *t = ts->t[p];
+        int kmax = t->k[t->nch - 1];
+        double ex[64], ee[64], lk[4];
+        for (int i = 0; i < npts; i++) {
+            double x = nbt_axis_from_unit(&t->axis[0], t_uniform());
+            double y = nbt_axis_from_unit(&t->axis[1], t_uniform());
+            if (t->kind == NBT_TABLE_H)
+                nbt_hk((size_t)kmax, x, y, 1e-12, ex, ee);
+            else
+                nbt_jk((size_t)kmax, t->n, x, y, 1e-10, ex, ee);
+            nbt_table_lookup(t, x, y, lk);
+            for (size_t c = 0; c < t->nch; c++)
+                ratio = fmax(ratio, (fabs(lk[c] - ex[t->k[c]]) - ee[t->k[c]]) / t->max_err[c]);
+        }
+    }
+    return ratio;
+}
+
+static void test_plan_tables(void)
+{
+    /* H with 6 orders (two packs) to 5e-3, and J^1 at a fixed 40x24 */
+    nbt_plan_request rq[2] = {{NBT_TABLE_H, 0, 6, NULL, 7.5, 5e-3, {0, 0}, 0},
+                              {NBT_TABLE_J, 1, 3, NULL, 4.25, 0, {40, 24}, 0}};
+    nbt_plan *p = NULL;
+    char err[512];
+    nbt_status st = nbt_plan_tables(rq, 2, 2, &p, err, sizeof err);
+    t_true(st == NBT_OK && p && nbt_plan_count(p) == 2, "plan of two sets (%s)", st ? err : "ok");
+    if (!p)
+        return;
+    const nbt_plan_set *h = nbt_plan_get(p, 0), *j = nbt_plan_get(p, 1);
+    t_true(nbt_plan_get(p, 2) == NULL, "no third set");
+    t_true(h->npacks == 2 && j->npacks == 1, "packs: ceil(6/4) = 2, ceil(3/4) = 1");
+    t_true(h->axis[0].lo == 0 && h->axis[0].hi == 7.5 && h->axis[1].lo == -M_PI_2 && h->axis[1].hi == M_PI_2,
+           "H axes: u in [0, 7.5], v in [-pi/2, pi/2]");
+    t_true(h->axis[0].n == h->axis[1].n && h->axis[1].map == NBT_AXIS_COS, "H: square, v cos-mapped");
+    t_true(j->axis[0].n == 40 && j->axis[1].n == 24 && j->axis[0].hi == 4.25 && j->axis[1].hi == M_PI,
+           "J^1 at the fixed size 40x24 over T in [0, 4.25], theta in [0, pi]");
+    t_true(j->axis[1].map == NBT_AXIS_LINEAR, "J^1: theta linear (the rule)");
+    t_true(h->pred_err <= 5e-3 && h->pred_err > 0 && h->pred_seconds > 0 && j->pred_seconds > 0,
+           "predictions: H error %.3g <= tol, costs %.3g s and %.3g s", h->pred_err, h->pred_seconds,
+           j->pred_seconds);
+    nbt_tableset ts[2];
+    st = nbt_plan_execute_all(p, ts, err, sizeof err);
+    t_true(st == NBT_OK, "execute all (%s)", st ? err : "ok");
+    if (st == NBT_OK) {
+        t_true(ts[0].count == 2 && ts[0].t[1]->nch == 2 && ts[0].t[1]->k[1] == 5, "H packs k0-3, k4-5");
+        t_true(ts[0].rel_err <= 5e-3, "H set meets tol: %.3g", ts[0].rel_err);
+        /* the measured error is the maximum at cell/edge midpoints: the
+         * prediction (a two-point rate fit) lands within a factor of 3 */
+        t_true(h->pred_err <= 3 * ts[0].rel_err && ts[0].rel_err <= 3 * h->pred_err,
+               "H predicted error %.3g vs measured %.3g within 3x", h->pred_err, ts[0].rel_err);
+        t_true(j->pred_err <= 3 * ts[1].rel_err && ts[1].rel_err <= 3 * j->pred_err,
+               "J predicted error %.3g vs measured %.3g within 3x", j->pred_err, ts[1].rel_err);
+        /* recorded errors bound the true error at random points (bilinear
+         * error peaks at the midpoints where it was measured: 1.25x slack,
+         * as in test_table) */
+        double r0 = worst_ratio(&ts[0], 150), r1 = worst_ratio(&ts[1], 40);
+        t_true(r0 <= 1.25, "H: random points within 1.25x the recorded error (worst %.2f)", r0);
+        t_true(r1 <= 1.25, "J^1: random points within 1.25x the recorded error (worst %.2f)", r1);
+        nbt_tableset_free(&ts[0]);
+        nbt_tableset_free(&ts[1]);
+    }
+    t_true(nbt_plan_execute(p, 2, &ts[0], err, sizeof err) == NBT_EINVAL, "execute of a missing set: EINVAL");
+    nbt_plan_free(p);
+
+    /* bad requests */
+    nbt_plan_request bad = rq[0];
+    bad.xmax = 0;
+    t_true(nbt_plan_tables(&bad, 1, 1, &p, err, sizeof err) == NBT_EDOM && strstr(err, "xmax") && !p,
+           "xmax = 0 rejected (%s)", err);
+    bad = rq[1];
+    bad.n = 0;
+    t_true(nbt_plan_tables(&bad, 1, 1, &p, err, sizeof err) == NBT_EDOM && strstr(err, "n = 0"), "n = 0 rejected");
+    bad.n = 1;
+    bad.size[1] = 1;
+    t_true(nbt_plan_tables(&bad, 1, 1, &p, err, sizeof err) == NBT_EDOM && strstr(err, "size"), "size 40x1 rejected");
+    bad = rq[0];
+    bad.nterms = 0;
+    t_true(nbt_plan_tables(&bad, 1, 1, &p, err, sizeof err) == NBT_EDOM, "0 Legendre orders rejected");
+    t_true(nbt_plan_tables(rq, 0, 1, &p, err, sizeof err) == NBT_EINVAL, "no requests rejected");
+}
+
+static void test_plan_scene(void)
+{
+    nbt_scene s = street();
+    s.diffuse = 0; /* H and J^20 */
+    nbt_plan *p = NULL;
+    char err[512];
+    size_t need = 0;
+    nbt_status st = nbt_plan_scene(&s, 2, &p, &need, err, sizeof err);
+    t_true(st == NBT_OK && p && nbt_plan_count(p) == 2, "street scene without diffuse: 2 sets (%s)", st ? err : "ok");
+    if (p) {
+        nbt_plan_legendre l = nbt_plan_legendre_budget(p), l2;
+        nbt_plan_legendre_terms(0.5, 0.2 * 60, 2e-2, 16, &l2);
+        t_true(l.nterms == l2.nterms && need == l.nterms && l.table_tol == l2.table_tol,
+               "scene budget = nbt_plan_legendre_terms(0.5, 12, 2e-2): %zu terms", l.nterms);
+        const nbt_plan_set *a = nbt_plan_get(p, 0), *b = nbt_plan_get(p, 1);
+        t_true(a->req.kind == NBT_TABLE_H && b->req.kind == NBT_TABLE_J && b->req.n == 20,
+               "sets: H, then J^20 (phong = 20)");
+        t_rel(a->axis[0].hi, 12.0, 1e-15, "u range = max kappa_t x max distance");
+        t_true(a->req.tol == l.table_tol && a->req.nterms == l.nterms && a->npacks == (l.nterms + 3) / 4,
+               "H set: the budget's orders and target");
+        char stem[64];
+        nbt_plan_stem(&b->req, stem, sizeof stem);
+        t_true(!strcmp(stem, "J20"), "stem of J^20: %s", stem);
+        nbt_plan_free(p);
+    }
+    /* more orders than the shaders take */
+    s.g[1] = 0.8;
+    s.tol = 1e-2;
+    p = NULL;
+    st = nbt_plan_scene(&s, 2, &p, &need, err, sizeof err);
+    t_true(st == NBT_ETOL && !p && need > 16 && strstr(err, "orders_max = 16") && strstr(err, "at most 16"),
+           "|g| 0.8: ETOL naming orders_max and the shaders' 16 (%zu needed: %s)", need, err);
+    /* fixed phase: one channel per set at the scene's tol */
+    nbt_phase *hg = NULL;
+    nbt_phase_parse("hg:g=0.8", &hg, err, sizeof err);
+    s.have_g = 0;
+    s.phase = hg;
+    s.nphong = 0;
+    s.distance[1] = 20;
+    st = nbt_plan_scene(&s, 2, &p, NULL, err, sizeof err);
+    t_true(st == NBT_OK && nbt_plan_count(p) == 1, "fixed-phase scene, airlight only: 1 set");
+    if (st == NBT_OK) {
+        const nbt_plan_set *a = nbt_plan_get(p, 0);
+        char stem[64];
+        nbt_plan_stem(&a->req, stem, sizeof stem);
+        t_true(a->npacks == 1 && a->req.phase == hg && a->req.tol == 1e-2 && !strcmp(stem, "H_hg_g_0.8"),
+               "fixed phase: one pack at tol 1e-2, stem %s", stem);
+        nbt_tableset ts;
+        st = nbt_plan_execute(p, 0, &ts, err, sizeof err);
+        t_true(st == NBT_OK && ts.count == 1 && ts.t[0]->k[0] == -1 && ts.rel_err <= 1e-2,
+               "fixed-phase H built to %.3g", ts.rel_err);
+        if (st == NBT_OK) {
+            /* against the fixed-phase integral at random points */
+            double r = 0;
+            const nbt_table *t = ts.t[0];
+            for (int i = 0; i < 60; i++) {
+                double x = nbt_axis_from_unit(&t->axis[0], t_uniform());
+                double y = nbt_axis_from_unit(&t->axis[1], t_uniform());
+                double v, e, lk;
+                nbt_h_phase(hg, x, y, 1e-12, &v, &e);
+                nbt_table_lookup(t, x, y, &lk);
+                r = fmax(r, (fabs(lk - v) - e) / t->max_err[0]);
+            }
+            t_true(r <= 1.25, "fixed-phase H: random points within 1.25x the recorded error (worst %.2f)", r);
+            nbt_tableset_free(&ts);
+        }
+        nbt_plan_free(p);
+    }
+    nbt_phase_free(hg);
+}
+
+int main(void)
+{
+    test_scene_check();
+    test_legendre();
+    test_plan_tables();
+    test_plan_scene();
+    return t_done();
+}
