@@ -910,7 +910,7 @@ nbt_status nbt_h_table_build_set(nbt_table *const *ts, size_t nt, const nbt_phas
     if (st == NBT_OK && hrules_alloc(&c.R))
         st = NBT_ENOMEM;
     if (st == NBT_OK)
-        st = nbt__table_fill(ts, nt, o->measure_error, h_fill, &c);
+        st = nbt__table_fill(ts, nt, o->measure_error ? NBT__MEASURE_SPARSE : 0, h_fill, &c);
     hrules_free(&c.R);
     for (unsigned i = 0; i < nthr; i++) {
         nbt_quad_ws_free(ws[i]);

@@ -577,7 +577,7 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         c.ws = ws;
         c.buf = buf;
         c.tol = 0.1 * o->quad_tol;
-        st = nbt__table_fill(ts, ntab, o->measure_error, j_fill, &c);
+        st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
     }
     for (unsigned i = 0; i < c.nt; i++) {
         nbt_quad_ws_free(ws[i]);

@@ -19,6 +19,10 @@ typedef nbt_status (*nbt__grid_fill)(void *ctx, const double *xs, size_t nx, con
  * second differences in x of the exact node rows / 8 (the bilinear error at
  * a midpoint of a smooth f) plus the error next to them; plus the
  * quadrature error. Sets max_abs and quad_err. */
+/* measure: 0 none; NBT__MEASURE_SPARSE the scheme above (H and J, whose
+ * smoothness on the planner's mappings was measured); NBT__MEASURE_FULL every
+ * x midpoint exact (nbt_table_tabulate's arbitrary functions). */
+enum { NBT__MEASURE_SPARSE = 1, NBT__MEASURE_FULL = 2 };
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx);
 
 /* Validate a set of tables to be filled together (nt >= 1; same kind, n and

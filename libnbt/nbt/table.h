@@ -85,8 +85,8 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
 void nbt_table_round_half(nbt_table *t);
 
 /* Tabulate f(x0, x1) -> out[0..nch-1] at the table's nodes; with
- * measure_error, also between nodes and record max_err (largest
- * |bilinear - f| over the midpoints, as for H tables) and max_abs. f returns 0,
+ * measure_error, also at every edge and cell midpoint and record max_err
+ * (largest |bilinear - f| there; no smoothness is assumed) and max_abs. f returns 0,
  * or non-zero to abort (NBT_EDOM). */
 typedef int (*nbt_table_fn)(double x0, double x1, double *out, void *ctx);
 nbt_status nbt_table_tabulate(nbt_table *t, nbt_table_fn f, void *ctx, int measure_error);
