@@ -399,6 +399,28 @@ static void test_rod(void)
         t_abs(r->T, l / (l * ch + sh), 4 * r->T_se, "rod model T (se %.1e)", r->T_se);
     }
     nbt_mc_result_free(r);
+
+    /* the same rod in a half-space with tally planes (the full direction
+     * update): forward flux F+ = e^{-l z}, so scattered photons cross plane z
+     * forward M0 = e^{-l z} - e^{-z} times per launched photon */
+    double planes[2] = {1.0, 2.0};
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 0.8;
+    c.phase = back;
+    c.nplanes = 2;
+    c.z_planes = planes;
+    c.r_bins = 4;
+    c.r_max_scale = 1;
+    c.photons = 200000;
+    c.seed = 2386;
+    t_true(nbt_mc_run(&c, &r) == NBT_OK, "rod half-space run");
+    if (r)
+        for (int j = 0; j < 2; j++) {
+            double l = sqrt(1 - 0.8 * 0.8), want = exp(-l * planes[j]) - exp(-planes[j]);
+            t_abs(r->M0[j], want, 4 * r->M0_se[j], "rod model M0 at z = %g (se %.1e)", planes[j], r->M0_se[j]);
+        }
+    nbt_mc_result_free(r);
     nbt_phase_free(back);
 }
 
