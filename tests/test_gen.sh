@@ -197,7 +197,17 @@ expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
 [ -z "$(ls "$tmp" | grep -v '^out$\|^err$')" ] && ok || bad "no output files left by rejected commands: $(ls "$tmp")"
 
 # tables: write, read back, info
-"$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >/dev/null 2>&1 && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+"$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >"$tmp/hout" 2>"$tmp/herr" && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+# progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
+# end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
+grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-9.e+-]* s' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: set 1/1 H: built 33x17 in [0-9.]* s (predicted ' "$tmp/herr" && ok ||
+  bad "airlight progress lines: $(cat "$tmp/herr")"
+tr -d '\n' <"$tmp/herr" | grep -q "$(printf '\r')" && bad "airlight progress: carriage return off a terminal" || ok
+"$NBT_GEN" airlight -o "$tmp/hq.exr" --size 33x17 --quiet >"$tmp/hqout" 2>"$tmp/hqerr" && [ ! -s "$tmp/hqerr" ] && ok ||
+  bad "airlight --quiet: stderr $(cat "$tmp/hqerr")"
+cmp -s "$tmp/h.exr" "$tmp/hq.exr" && cmp -s "$tmp/h.png" "$tmp/hq.png" && [ "$(awk '{ $1 = ""; print }' "$tmp/hqout")" = "$(awk '{ $1 = ""; print }' "$tmp/hout")" ] &&
+  ok || bad "airlight output differs with --quiet"
 "$NBT_GEN" info "$tmp/h.exr" >"$tmp/info" && grep -q "kind        H" "$tmp/info" && grep -q "33 nodes" "$tmp/info" &&
   grep -q "17 nodes" "$tmp/info" && grep -q "max interp err" "$tmp/info" && ok || bad "info on an H table"
 # info --at a node on the u = 0 column returns H_0(0, -pi/2 + ...) ; at v = pi/2, u = 0: H_0 = pi
@@ -282,9 +292,14 @@ rm -f "$tmp"/gj.exr "$tmp"/sh.exr "$tmp"/sj.exr "$tmp/hand.sog" "$tmp/err"
 
 # scene files
 srcdir=${top_srcdir:-.}
-"$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>/dev/null &&
+"$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>"$tmp/serr" &&
   [ -s "$tmp/scene/H_k0-3.exr" ] && [ -s "$tmp/scene/J1_k0-3.exr" ] && [ -s "$tmp/scene/J20_k0-3.exr" ] &&
   grep -q "Legendre terms" "$tmp/out" && ok || bad "example scene: $(cat "$tmp/out")"
+# progress: the plan's predicted time, then a start and an end line per set
+grep -q '^nbt-gen: scene: planned 3 table set(s) in .*, predicted build time ' "$tmp/serr" &&
+  [ "$(grep -c '^nbt-gen: scene: set [123]/3 .*: building .* predicted .* (ETA all sets ' "$tmp/serr")" -eq 3 ] &&
+  [ "$(grep -c '^nbt-gen: scene: set [123]/3 .*: built .* in [0-9.]* s (predicted ' "$tmp/serr")" -eq 3 ] && ok ||
+  bad "scene progress: $(cat "$tmp/serr")"
 # the example scene fits libnbt-gl: at most 16 orders (4 packs of 4)
 nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 [ -n "$nt" ] && [ "$nt" -le 16 ] && [ "$(ls "$tmp/scene"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
