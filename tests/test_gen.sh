@@ -198,6 +198,17 @@ expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
 
 # tables: write, read back, info
 "$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >"$tmp/hout" 2>"$tmp/herr" && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+# previews (tests/pngcheck reads them with libpng): the size of gen/preview.h's layout, 384x288
+# pixels per channel panel plus margins (124 + 4 x 384 + 3 x 40 + 176 = 1956 wide for 4 channels,
+# 96 + 288 + 56 = 440 high), a colour bar whose luma falls monotonically from the ramp's top to
+# its bottom, and one colour scale for all channels: H_3 stays well below H_0's maximum, so its
+# panel (the 4th, from x = 124 + 3 x 424) never reaches the bright end that H_0's panel reaches
+# (luma > 200); per-channel scaling would take every panel to it.
+PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
+[ "$("$PNGCHECK" "$tmp/h.png")" = "1956 440" ] && ok || bad "h.png size: $("$PNGCHECK" "$tmp/h.png")"
+"$PNGCHECK" --bar "$tmp/h.png" >"$tmp/bar" && ok || bad "h.png colour bar: $(cat "$tmp/bar")"
+l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
+awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
 # end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
 grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-9.e+-]* s' "$tmp/herr" &&
@@ -218,6 +229,8 @@ close "$1" 3.141592653589793 1e-6 "table H_0(0, pi/2) = pi (float)"
 "$NBT_GEN" info "$tmp/j_k4-5.exr" | grep -q "channel G   k=5" && ok || bad "second pack holds k = 5"
 "$NBT_GEN" airlight -o "$tmp/p.exr" --phase hg:g=0.8 --size 17x17 --half >/dev/null 2>&1 &&
   "$NBT_GEN" info "$tmp/p.exr" | grep -q "hg:g=0.8" && ok || bad "fixed-phase half table"
+[ "$("$PNGCHECK" "$tmp/p.png")" = "684 440" ] && "$PNGCHECK" --bar "$tmp/p.png" >"$tmp/bar" && ok ||
+  bad "p.png (one channel): size 684x440 and colour bar: $("$PNGCHECK" "$tmp/p.png") $(cat "$tmp/bar")"
 # --g: the number of orders follows from the g range and tol
 "$NBT_GEN" airlight -o "$tmp/g.exr" --g 0:0.5 --tol 0.02 >"$tmp/out" 2>/dev/null; rc=$?
 nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
