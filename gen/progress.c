@@ -26,6 +26,10 @@ void progress_init(progress *p, const char *what, int quiet)
     double v;
     if (e && parse_double(e, 0, 0, 3600, 0, &v) == 0)
         p->interval = v;
+    p->long_s = PROGRESS_LONG_SECONDS;
+    e = getenv("NBT_PROGRESS_WARN_SECONDS");
+    if (e && parse_double(e, 0, 0, 1e9, 0, &v) == 0)
+        p->long_s = v;
 }
 
 /* "1.2 s", "3 min 20 s", "2 h 05 min": durations a reader takes in at a glance */
@@ -70,7 +74,7 @@ void progress_note(progress *p, const char *fmt, ...)
 
 void progress_warn_long(progress *p, double predicted, const char *basis)
 {
-    if (p->quiet || p->warned || !(predicted > PROGRESS_LONG_SECONDS))
+    if (p->quiet || p->warned || !(predicted > p->long_s))
         return;
     char d[32];
     duration(predicted, d, sizeof d);

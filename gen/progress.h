@@ -8,13 +8,15 @@
 #ifndef NBT_GEN_PROGRESS_H
 #define NBT_GEN_PROGRESS_H
 
-/* Runs predicted to take longer than this get one early warning line. */
+/* Runs predicted to take longer than this get one early warning line
+ * (NBT_PROGRESS_WARN_SECONDS changes it; the tests use a tiny value). */
 #define PROGRESS_LONG_SECONDS 60.0
 
 typedef struct {
     const char *what;   /* label, e.g. "mc" */
     double t0, last;    /* start, last line printed (monotonic seconds) */
     double interval;    /* least seconds between lines when not a terminal */
+    double long_s;      /* warn when a run is predicted to take longer */
     int quiet, tty;
     int open;           /* a terminal line is shown and not yet ended */
     int warned;         /* the long-run warning was given */
@@ -26,9 +28,9 @@ void progress_init(progress *p, const char *what, int quiet);
 void progress_note(progress *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Fraction f in [0, 1] of the work done: percent, elapsed time and ETA
  * (elapsed (1 - f)/f), rate-limited; the first update with f > 0 also
- * checks the predicted total against PROGRESS_LONG_SECONDS. */
+ * checks the predicted total against long_s. */
 void progress_fraction(progress *p, double f);
-/* The early warning, once, when predicted > PROGRESS_LONG_SECONDS; basis says
+/* The early warning, once, when predicted > long_s; basis says
  * where the prediction comes from. */
 void progress_warn_long(progress *p, double predicted, const char *basis);
 /* Ends a terminal line left open. */

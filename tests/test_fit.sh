@@ -54,6 +54,11 @@ NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 1 -o "$tmp/p.csv" >"$tmp/mp" 2
 sed -n 's/^nbt-fit: mc: *\([0-9]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 < p { exit 1 } { p = $1 } END { exit NR != 64 }' &&
   ok || bad "mc progress: percent not rising"
 tr -d '\n' <"$tmp/perr" | grep -q "$(printf '\r')" && bad "mc progress: carriage return off a terminal" || ok
+# no warning at the default 60 s; exactly one (before any progress line) when the limit is tiny
+grep -q "warning" "$tmp/perr" && bad "mc: a long-run warning for a short run" || ok
+NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_FIT" mc $M --threads 1 -o "$tmp/w.csv" >/dev/null 2>"$tmp/werr"
+[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (estimated from the first ' "$tmp/werr")" -eq 1 ] &&
+  head -1 "$tmp/werr" | grep -q warning && ok || bad "mc long-run warning: $(cat "$tmp/werr")"
 "$NBT_FIT" mc $M --threads 1 --quiet -o "$tmp/q.csv" >"$tmp/mq" 2>"$tmp/qerr" && [ ! -s "$tmp/qerr" ] && ok ||
   bad "mc --quiet: stderr $(cat "$tmp/qerr")"
 cmp -s "$tmp/p.csv" "$tmp/a.csv" && cmp -s "$tmp/q.csv" "$tmp/a.csv" && cmp -s "$tmp/mp" "$tmp/m1" && cmp -s "$tmp/mq" "$tmp/m1" &&

@@ -215,6 +215,11 @@ grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-
   grep -q '^nbt-gen: airlight: set 1/1 H: built 33x17 in [0-9.]* s (predicted ' "$tmp/herr" && ok ||
   bad "airlight progress lines: $(cat "$tmp/herr")"
 tr -d '\n' <"$tmp/herr" | grep -q "$(printf '\r')" && bad "airlight progress: carriage return off a terminal" || ok
+# the long-run warning: none by default (60 s), one line when the limit is tiny, before the build starts
+grep -q "warning" "$tmp/herr" && bad "airlight: a long-run warning for a short build" || ok
+NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_GEN" airlight -o "$tmp/hw.exr" --size 33x17 --no-preview >/dev/null 2>"$tmp/hwerr"
+[ "$(grep -c "^nbt-gen: airlight: warning: this run will take about .* (the planner's prediction)" "$tmp/hwerr")" -eq 1 ] &&
+  sed -n 2p "$tmp/hwerr" | grep -q warning && ok || bad "airlight long-run warning: $(cat "$tmp/hwerr")"
 "$NBT_GEN" airlight -o "$tmp/hq.exr" --size 33x17 --quiet >"$tmp/hqout" 2>"$tmp/hqerr" && [ ! -s "$tmp/hqerr" ] && ok ||
   bad "airlight --quiet: stderr $(cat "$tmp/hqerr")"
 cmp -s "$tmp/h.exr" "$tmp/hq.exr" && cmp -s "$tmp/h.png" "$tmp/hq.png" && [ "$(awk '{ $1 = ""; print }' "$tmp/hqout")" = "$(awk '{ $1 = ""; print }' "$tmp/hout")" ] &&
