@@ -7,6 +7,7 @@
  * kernel of a Gaussian lobe of the same mean cosine, depth in 64 layers).
  * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel) */
 #include <config.h>
+#include <ctype.h>
 #include <math.h>
 #include <png.h>
 #include <stdio.h>
@@ -19,6 +20,7 @@
 #include <nbt/nbt.h>
 #include <nbt/gl.h>
 #include "egl_headless.h"
+#include "../gen/font5x7.h"
 
 static const char *SCENE =
     "uniform vec2 res;\n"
@@ -128,6 +130,26 @@ static int multiple_scattering(float *px, int pw, int ph, double kappa, double a
     return rc;
 }
 
+/* A panel label at the top-left of panel (col, row) of the strip, white on
+ * a black box, in the 5x7 font of nbt-gen's previews (scaled by fs). img
+ * holds GL rows (bottom-up) of an image H rows high. */
+static void label(unsigned char *img, int W, int H, int pw, int ph, int col, int row, int fs, const char *s)
+{
+    int n = (int)strlen(s), bw = (6 * n + 3) * fs, bh = 11 * fs;
+    for (int ry = 0; ry < bh && ry < ph; ry++)
+        for (int rx = 0; rx < bw && rx < pw; rx++) {
+            int tx = rx / fs - 2, ty = ry / fs - 2, on = 0;
+            if (ty >= 0 && ty < 7 && tx >= 0 && tx / 6 < n && tx % 6 < 5) {
+                char ch = (char)toupper((unsigned char)s[tx / 6]);
+                for (size_t g = 0; g < sizeof font5x7 / sizeof font5x7[0]; g++)
+                    if (font5x7[g].c == ch)
+                        on = (font5x7[g].row[ty] >> (4 - tx % 6)) & 1;
+            }
+            int X = col * pw + rx, Y = H - 1 - (row * ph + ry);
+            memset(img + ((size_t)Y * (size_t)W + (size_t)X) * 3, on ? 255 : 0, 3);
+        }
+}
+
 int main(int argc, char **argv)
 {
     const char *out = "nbt-demo.png";
@@ -140,7 +162,7 @@ int main(int argc, char **argv)
             return 0;
         } else if (!strcmp(argv[i], "--help")) {
             puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 and 0.9 with multiple scattering (columns)\n"
-                 "x kappa = 0.05, 0.2 (rows).");
+                 "x kappa = 0.05, 0.2 (rows); each panel labelled with its g and kappa.");
             return 0;
         } else
             out = argv[i];
@@ -215,6 +237,12 @@ int main(int argc, char **argv)
                         }
             }
         }
+        for (int ki = 0; ki < 2; ki++)
+            for (int ms = 0; ms < 1 + (gi == 2); ms++) {
+                char lab[64];
+                snprintf(lab, sizeof lab, "g=%g kappa=%g%s", gs[gi], ks[ki], ms ? " +multiple" : "");
+                label(img, W, H, pw, ph, gi + ms, ki, pw >= 400 ? 2 : 1, lab);
+            }
         glDeleteTextures(3, tex);
         nbt_table_free(Ht);
         nbt_table_free(J1);

@@ -10,6 +10,7 @@
 #include <unistd.h>
 #include <nbt/nbt.h>
 #include "../gen/cli.h"
+#include "../gen/progress.h"
 #include "commands.h"
 #ifdef HAVE_MPI
 #include "mc_mpi.h"
@@ -43,7 +44,7 @@ static void help(void)
     puts("Usage: nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N -o OUT.csv|OUT.exr\n"
          "                  [--seed S] [--threads T] [--z-planes FROM:TO:COUNT] [--r-bins N]\n"
          "                  [--r-max-scale F] [--density FILE] [--z-cut Z] [--infinite] [--order-max N]\n"
-         "                  [--estimator analog|weighted] [--gpu]\n"
+         "                  [--estimator analog|weighted] [--gpu] [--quiet]\n"
          "       nbt-fit mc --albedo W --sigma-t ST (--B B | --phase SPEC) --photons N --slab TAU [-o OUT.csv]\n\n"
          "A pencil beam enters at the origin along +z; every forward crossing of a plane z by a\n"
          "scattered photon is counted, per unit area per launched photon, in radial bins over\n"
@@ -65,7 +66,11 @@ static void help(void)
          "--gpu: the GLSL compute counter (OpenGL 4.3 through EGL; Mesa's llvmpipe on a machine\n"
          "without a GPU): a homogeneous slab or half-space, HG/iso/Gaussian phase, analog; its own\n"
          "random numbers (Philox), identical on every run; one process.\n"
-         "Results are identical for any --threads; standard errors from 64 batches.\n\n"
+         "Results are identical for any --threads; standard errors from 64 batches.\n"
+         "Progress goes to stderr as batches finish: percent done, elapsed time and ETA (a line\n"
+         "rewritten in place on a terminal; otherwise one line at most every 2 s,\n"
+         "NBT_PROGRESS_SECONDS changes that), with one warning line as soon as the first\n"
+         "batches predict more than 60 s. --quiet: no progress and no timing line.\n\n"
          "mpirun -np N nbt-fit mc ... splits the 64 photon batches over N processes (on one or\n"
          "many machines; --threads counts per process) and writes, from rank 0, output identical\n"
          "byte for byte to a one-process run with the same seed (ranks beyond 64 get no photons).\n"
@@ -82,14 +87,10 @@ static void on_gpu_error(const char *reason, nbt_status st)
 }
 #endif
 
-static void bar(double f, void *data)
+/* the library calls this from the calling thread as batches finish */
+static void on_progress(double f, void *data)
 {
-    (void)data;
-    int n = (int)(f * 40);
-    fprintf(stderr, "\r%s: mc [%.*s%*s] %3.0f%%", cli_prog, n, "########################################", 40 - n, "",
-            100 * f);
-    if (f >= 1)
-        fputc('\n', stderr);
+    progress_fraction(data, f);
 }
 
 static int write_csv(const char *out, const nbt_mc_config *c, const nbt_mc_result *r)
@@ -172,6 +173,7 @@ int cmd_mc(int argc, char **argv)
         {"z-cut", required_argument, 0, 'c'},   {"output", required_argument, 0, 'o'},
         {"infinite", no_argument, 0, 'I'},      {"order-max", required_argument, 0, 'O'},
         {"estimator", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'G'},
+        {"quiet", no_argument, 0, 'q'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     int rank, size, launched = launcher_env(&rank, &size);
     if (rank != 0 && !freopen("/dev/null", "w", stderr)) /* one message per run: rank 0 speaks */
@@ -188,7 +190,7 @@ int cmd_mc(int argc, char **argv)
     c.seed = 1;
     const char *out = NULL, *phase = NULL, *density = NULL, *planes = "1:10:10";
     double B = 0, tau = 0;
-    int have[4] = {0}, gpu = 0;
+    int have[4] = {0}, gpu = 0, quiet = 0;
     int o;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
@@ -217,6 +219,7 @@ int cmd_mc(int argc, char **argv)
                 die_usage("--estimator: '%s' is not accepted: analog or weighted", optarg);
             break;
         case 'G': gpu = 1; break;
+        case 'q': quiet = 1; break;
         case 'o': out = optarg; break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit mc --help'");
@@ -285,9 +288,10 @@ int cmd_mc(int argc, char **argv)
     }
     if (tau > 0)
         c.slab = tau / c.sigma_t;
-    if (rank == 0 && isatty(fileno(stderr))) {
-        c.progress = bar;
-    }
+    progress prog;
+    progress_init(&prog, "mc", quiet || rank != 0);
+    c.progress = on_progress;
+    c.progress_data = &prog;
     nbt_mc_result *r = NULL;
     nbt_status st;
 #ifdef HAVE_GL
@@ -328,6 +332,7 @@ int cmd_mc(int argc, char **argv)
         if (st != NBT_OK)
             die("photon counting failed: %s", nbt_strerror(st));
     }
+    progress_end(&prog);
     int rc = 0;
     if (out && exr)
         rc = write_exr(out, &c, r, phase ? phase : NULL, B, tau, gpu);
@@ -339,7 +344,8 @@ int cmd_mc(int argc, char **argv)
         printf("R %.17g %.17g\n", r->R, r->R_se);
         printf("T %.17g %.17g\n", r->T, r->T_se);
     }
-    fprintf(stderr, "%s: %llu photons in %.3f s (%.3g photons/s%s)\n", cli_prog, (unsigned long long)c.photons,
+    if (!quiet)
+        fprintf(stderr, "%s: %llu photons in %.3f s (%.3g photons/s%s)\n", cli_prog, (unsigned long long)c.photons,
             r->seconds, (double)c.photons / r->seconds, size > 1 ? ", all ranks" : "");
     nbt_mc_result_free(r);
     nbt_phase_free(ph);

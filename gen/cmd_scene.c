@@ -17,21 +17,26 @@ int cmd_scene(int argc, char **argv)
 {
     static const struct option opts[] = {{"output", required_argument, 0, 'o'},
                                          {"threads", required_argument, 0, 'j'},
+                                         {"quiet", no_argument, 0, 'q'},
                                          {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     const char *dir = "nbt-tables";
     unsigned threads = 0;
-    int c;
+    int c, quiet = 0;
     optind = 1;
     while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
         if (c == 'o')
             dir = optarg;
+        else if (c == 'q')
+            quiet = 1;
         else if (c == 'j')
             threads = (unsigned)opt_long("--threads", optarg, 1, 64);
         else if (c == 'h') {
-            puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T]\n"
+            puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet]\n"
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"
-                 "each with the smallest size and Legendre order count meeting its tol.");
+                 "each with the smallest size and Legendre order count meeting its tol.\n"
+                 "Progress on stderr: each set's start with its predicted time, its end with the\n"
+                 "actual time, one warning line when the plan predicts more than 60 s; --quiet: none.");
             return 0;
         } else
             die_usage("see 'nbt-gen scene --help'");
@@ -46,7 +51,9 @@ int cmd_scene(int argc, char **argv)
     check_writable_dir("-o", dir);
     char err[1024];
     nbt_plan *plan = NULL;
-    double t0 = now_seconds();
+    progress prog;
+    progress_init(&prog, "scene", quiet);
+    double t0 = prog.t0;
     nbt_status st = nbt_plan_scene(&s, threads, &plan, NULL, err, sizeof err);
     if (st != NBT_OK) {
         nbt_phase_free(ph);
@@ -60,10 +67,11 @@ int cmd_scene(int argc, char **argv)
         die("cannot create the directory '%s': %s", dir, strerror(errno));
     int rc = 0;
     size_t ns = nbt_plan_count(plan);
+    double left = plan_announce(plan, &prog);
     for (size_t i = 0; i < ns && rc == 0; i++) {
         nbt_tableset ts;
         const nbt_plan_set *ps = nbt_plan_get(plan, i);
-        if (nbt_plan_execute(plan, i, &ts, err, sizeof err) != NBT_OK) {
+        if (build_set(plan, i, &prog, &left, &ts, err, sizeof err) != NBT_OK) {
             fprintf(stderr, "nbt-gen: %s\n", err);
             rc = 1;
             break;
@@ -74,7 +82,7 @@ int cmd_scene(int argc, char **argv)
         rc = tableset_write(&ts, stem, 1);
         nbt_tableset_free(&ts);
     }
-    if (rc == 0)
+    if (rc == 0 && !quiet)
         fprintf(stderr, "nbt-gen: scene: %zu table set(s) in %s/ in %.3f s\n", ns, dir, now_seconds() - t0);
     nbt_plan_free(plan);
     nbt_phase_free(ph);

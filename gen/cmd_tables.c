@@ -13,12 +13,44 @@
 #include "cli.h"
 #include "commands.h"
 #include "preview.h"
+#include "progress.h"
 
 double now_seconds(void)
 {
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+    return progress_clock();
+}
+
+double plan_announce(const nbt_plan *plan, progress *p)
+{
+    double total = 0;
+    size_t n = nbt_plan_count(plan);
+    for (size_t i = 0; i < n; i++)
+        total += nbt_plan_get(plan, i)->pred_seconds;
+    progress_note(p, "planned %zu table set(s) in %.2g s, predicted build time %.2g s", n, now_seconds() - p->t0,
+                  total);
+    progress_warn_long(p, total, "the planner's prediction");
+    return total;
+}
+
+nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_left, nbt_tableset *ts, char *err,
+                     size_t errlen)
+{
+    const nbt_plan_set *ps = nbt_plan_get(plan, i);
+    char name[128];
+    nbt_plan_stem(&ps->req, name, sizeof name);
+    progress_note(p, "set %zu/%zu %s: building %zux%zu, %zu pack(s), predicted %.2g s (ETA all sets %.2g s)", i + 1,
+                  nbt_plan_count(plan), name, ps->axis[0].n, ps->axis[1].n, ps->npacks, ps->pred_seconds,
+                  *pred_left);
+    double t0 = now_seconds();
+    nbt_status st = nbt_plan_execute(plan, i, ts, err, errlen);
+    *pred_left -= ps->pred_seconds;
+    if (*pred_left < 0)
+        *pred_left = 0;
+    if (st == NBT_OK)
+        progress_note(p, "set %zu/%zu %s: built %zux%zu in %.2f s (predicted %.2g s), %.1f s elapsed", i + 1,
+                      nbt_plan_count(plan), name, ts->t[0]->axis[0].n, ts->t[0]->axis[1].n, now_seconds() - t0,
+                      ps->pred_seconds, now_seconds() - p->t0);
+    return st;
 }
 
 static double rel_error(const nbt_table *t, double scale)
@@ -103,31 +135,20 @@ void print_legendre(const nbt_plan_legendre *l, double gmax)
 
 /* Plan the requests, build and write each set under stems[i]; 0 or 1. */
 static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threads, char stems[][1024], int preview,
-                            double *seconds)
+                            progress *prog)
 {
     char err[512];
     nbt_plan *plan = NULL;
-    double t0 = now_seconds();
-    if (stderr_is_tty())
-        fprintf(stderr, "\r\033[Knbt-gen: planning");
     nbt_status st = nbt_plan_tables(rq, n, threads, &plan, err, sizeof err);
     int rc = 0;
     if (st != NBT_OK) {
-        if (stderr_is_tty())
-            fprintf(stderr, "\r\033[K");
         fprintf(stderr, "nbt-gen: %s\n", err);
         return 1;
     }
+    double left = plan_announce(plan, prog);
     for (size_t i = 0; i < n && rc == 0; i++) {
-        const nbt_plan_set *ps = nbt_plan_get(plan, i);
-        if (stderr_is_tty())
-            fprintf(stderr, "\r\033[Knbt-gen: %s%s: building %zux%zu (predicted %.2g s, error %.2g)",
-                    rq[i].kind == NBT_TABLE_H ? "H" : "J", rq[i].kind == NBT_TABLE_J ? (rq[i].n == 1 ? "1" : "n") : "",
-                    ps->axis[0].n, ps->axis[1].n, ps->pred_seconds, ps->pred_err);
         nbt_tableset ts;
-        st = nbt_plan_execute(plan, i, &ts, err, sizeof err);
-        if (stderr_is_tty())
-            fprintf(stderr, "\r\033[K");
+        st = build_set(plan, i, prog, &left, &ts, err, sizeof err);
         if (st != NBT_OK) {
             fprintf(stderr, "nbt-gen: %s\n", err);
             rc = 1;
@@ -137,7 +158,6 @@ static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threa
         nbt_tableset_free(&ts);
     }
     nbt_plan_free(plan);
-    *seconds = now_seconds() - t0;
     return rc;
 }
 
@@ -146,7 +166,7 @@ static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threa
 static void tables_help(const char *cmd)
 {
     printf("Usage: nbt-gen %s [-o FILE.exr] [--size WxH | --tol EPS] [--kmax K | --g LO:HI | --phase SPEC]\n"
-           "       %*s [--max X] [--half] [--threads T] [--no-preview]%s\n\n"
+           "       %*s [--max X] [--half] [--threads T] [--no-preview] [--quiet]%s\n\n"
            "Tabulates %s on a node-aligned grid and writes OpenEXR (+ PNG preview).\n"
            "  -o FILE.exr    output (default ./%s.exr; more than 4 orders: FILE_k0-3.exr, ...)\n"
            "  --size WxH     nodes per axis (2..4096); mappings by the planner's rule: log1p_cbrt (u/T),\n"
@@ -162,7 +182,11 @@ static void tables_help(const char *cmd)
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
            "  --half         store half floats\n"
-           "  --threads T    worker threads (default: all CPUs)\n",
+           "  --threads T    worker threads (default: all CPUs)\n"
+           "  --no-preview   no PNG preview\n"
+           "  --quiet        no progress lines on stderr (by default: the plan's predicted time, each set's\n"
+           "                 start with its predicted time and its end with the actual time, and\n"
+           "                 one warning line when the plan predicts more than 60 s)\n",
            cmd, (int)strlen(cmd), "", strcmp(cmd, "surface") ? "" : " [--n N]",
            strcmp(cmd, "surface") ? "H_k(u, v), u in [0, X], v in [-pi/2, pi/2]"
                                   : "J_k^n(T, theta), T in [0, X], theta in [0, pi]",
@@ -190,7 +214,7 @@ int cmd_tables(int argc, char **argv)
     nbt_plan_request s = {surface ? NBT_TABLE_J : NBT_TABLE_H, surface ? 1 : 0, 4, NULL, 10.0, 0, {0, 0}, 0};
     unsigned threads = 0;
     const char *out = NULL, *phase_spec = NULL;
-    int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1;
+    int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1, quiet = 0;
     double g_lo = 0, g_hi = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"size", required_argument, 0, 's'},
@@ -199,6 +223,7 @@ int cmd_tables(int argc, char **argv)
         {"g", required_argument, 0, 'g'},
         {"max", required_argument, 0, 'm'},    {"half", no_argument, 0, 'H'},
         {"threads", required_argument, 0, 'j'}, {"no-preview", no_argument, 0, 'P'},
+        {"quiet", no_argument, 0, 'q'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     int c;
     optind = 1;
@@ -219,6 +244,7 @@ int cmd_tables(int argc, char **argv)
         case 'H': s.half = 1; break;
         case 'j': threads = (unsigned)opt_long("--threads", optarg, 1, 64); break;
         case 'P': preview = 0; break;
+        case 'q': quiet = 1; break;
         case 'h': tables_help(cmd); return 0;
         default: die_usage("see 'nbt-gen %s --help'", cmd);
         }
@@ -266,10 +292,12 @@ int cmd_tables(int argc, char **argv)
         stem[0][n - 4] = '\0';
     } else
         nbt_plan_stem(&s, stem[0], sizeof stem[0]);
-    double secs;
-    int rc = plan_build_write(&s, 1, threads, stem, preview, &secs);
-    if (rc == 0)
-        fprintf(stderr, "nbt-gen: %zu table(s) in %.3f s\n", s.phase ? (size_t)1 : (s.nterms + 3) / 4, secs);
+    progress prog;
+    progress_init(&prog, cmd, quiet);
+    int rc = plan_build_write(&s, 1, threads, stem, preview, &prog);
+    if (rc == 0 && !quiet)
+        fprintf(stderr, "nbt-gen: %zu table(s) in %.3f s\n", s.phase ? (size_t)1 : (s.nterms + 3) / 4,
+                now_seconds() - prog.t0);
     nbt_phase_free(ph);
     return rc;
 }
@@ -278,8 +306,9 @@ int cmd_tables(int argc, char **argv)
 
 int cmd_default(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
+    int quiet = argc == 2 && (!strcmp(argv[1], "--quiet") || !strcmp(argv[1], "-q"));
+    if (argc > 1 && !quiet)
+        die_usage("unknown option '%s' (see 'nbt-gen --help')", argv[1]);
     const char *dir = "nbt-tables";
     check_writable_dir("nbt-gen", dir);
     if (mkdir(dir, 0777) != 0 && errno != EEXIST)
@@ -297,22 +326,32 @@ int cmd_default(int argc, char **argv)
         nbt_plan_stem(&rq[i], name, sizeof name);
         snprintf(stems[i], sizeof stems[i], "%s/%s", dir, name);
     }
-    double t0 = now_seconds();
+    progress prog;
+    progress_init(&prog, "default scene", quiet);
+    double t0 = prog.t0;
     nbt_plan *plan = NULL;
     nbt_tableset ts[3];
     nbt_status st = nbt_plan_tables(rq, 3, 0, &plan, err, sizeof err);
-    if (st == NBT_OK)
-        st = nbt_plan_execute_all(plan, ts, err, sizeof err);
+    size_t built = 0;
+    if (st == NBT_OK) { /* all sets built before any is written: all or nothing */
+        double left = plan_announce(plan, &prog);
+        for (; built < 3 && st == NBT_OK; built++)
+            if ((st = build_set(plan, built, &prog, &left, &ts[built], err, sizeof err)) != NBT_OK)
+                break;
+    }
     nbt_plan_free(plan);
-    if (st != NBT_OK)
+    if (st != NBT_OK) {
+        for (size_t i = 0; i < built; i++)
+            nbt_tableset_free(&ts[i]);
         die("%s", err);
+    }
     double tb = now_seconds() - t0;
     int rc = 0;
     for (int i = 0; i < 3 && rc == 0; i++)
         rc = tableset_write(&ts[i], stems[i], 1);
     for (int i = 0; i < 3; i++)
         nbt_tableset_free(&ts[i]);
-    if (rc == 0)
+    if (rc == 0 && !quiet)
         fprintf(stderr, "nbt-gen: default scene: 3 tables in %s/, built in %.3f s (incl. planning "
                 "and error measurement)\n", dir, tb);
     return rc;

@@ -19,6 +19,15 @@ int tableset_write(const nbt_tableset *ts, const char *path_stem, int preview);
 
 double now_seconds(void);
 
+/* Progress of planned builds (gen/progress.h): plan_announce notes the plan's
+ * predicted build time (warning when long) and returns it; build_set builds
+ * set i with a line at its start (size, predicted time, ETA of the sets
+ * left, *pred_left, which it then lowers) and one at its end (actual time). */
+#include "progress.h"
+double plan_announce(const nbt_plan *plan, progress *p);
+nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_left, nbt_tableset *ts, char *err,
+                     size_t errlen);
+
 /* The planner's Legendre budget as two '#' lines on stdout. */
 void print_legendre(const nbt_plan_legendre *l, double gmax);
 

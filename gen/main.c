@@ -7,7 +7,8 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-gen                 build the default scene into ./nbt-tables/\n"
+    puts("Usage: nbt-gen [--quiet]       build the default scene into ./nbt-tables/ (--quiet: no\n"
+         "                               progress lines on stderr)\n"
          "       nbt-gen airlight [...]  H_k(u, v) tables (airlight)\n"
          "       nbt-gen surface [...]   J_k^n(T, theta) tables (surface radiance)\n"
          "       nbt-gen scene FILE      only the tables a scene needs\n"
@@ -23,7 +24,7 @@ static void help(void)
 int main(int argc, char **argv)
 {
     cli_prog = "nbt-gen";
-    if (argc < 2)
+    if (argc < 2 || !strcmp(argv[1], "--quiet") || !strcmp(argv[1], "-q"))
         return cmd_default(argc, argv);
     const char *c = argv[1];
     if (!strcmp(c, "--help") || !strcmp(c, "-h")) {

@@ -1,4 +1,6 @@
-/* gen/preview.c: false-colour PNG previews (libpng). */
+/* gen/preview.c: false-colour PNG previews (libpng): the table sampled by its
+ * own lookup on a readable grid, physical axes with ticks, one colour scale
+ * per table with a colour bar, a caption with the kind and recorded error. */
 #include <config.h>
 #include <math.h>
 #include <png.h>
@@ -6,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <ctype.h>
+#include "font5x7.h"
 #include "preview.h"
 
 /* A perceptually ordered dark-blue -> teal -> yellow ramp (viridis-like
@@ -71,27 +75,210 @@ int preview_write_rgb8(const char *path, const unsigned char *img, size_t W, siz
     return rc;
 }
 
+/* ---- drawing on an 8-bit RGB canvas ---- */
+
+typedef struct {
+    unsigned char *px;
+    int w, h;
+} canvas;
+
+static void put(canvas *c, int x, int y, const unsigned char *rgb)
+{
+    if (x >= 0 && y >= 0 && x < c->w && y < c->h)
+        memcpy(c->px + ((size_t)y * (size_t)c->w + (size_t)x) * 3, rgb, 3);
+}
+
+static void rect(canvas *c, int x0, int y0, int w, int h, const unsigned char *rgb)
+{
+    for (int y = y0; y < y0 + h; y++)
+        for (int x = x0; x < x0 + w; x++)
+            put(c, x, y, rgb);
+}
+
+static const unsigned char BLACK[3] = {0, 0, 0}, GREY[3] = {160, 160, 160};
+
+/* text in the 5x7 font scaled by FS: a glyph cell is CW x LH pixels */
+#define FS 2
+#define CW (6 * FS)
+#define LH (9 * FS)
+
+static const unsigned char *glyph(char ch)
+{
+    ch = (char)toupper((unsigned char)ch);
+    for (size_t i = 0; i < sizeof font5x7 / sizeof font5x7[0]; i++)
+        if (font5x7[i].c == ch)
+            return font5x7[i].row;
+    return NULL;
+}
+
+/* align: 0 left at x, 1 centred on x, 2 right-aligned ending at x; y is the top */
+static void text(canvas *c, int x, int y, int align, const char *s)
+{
+    int n = (int)strlen(s);
+    if (align == 1)
+        x -= (n * CW - FS) / 2;
+    else if (align == 2)
+        x -= n * CW - FS;
+    for (int i = 0; i < n; i++, x += CW) {
+        const unsigned char *g = s[i] == ' ' ? NULL : glyph(s[i]);
+        if (!g && s[i] != ' ')
+            g = glyph('?');
+        for (int r = 0; g && r < 7; r++)
+            for (int b = 0; b < 5; b++)
+                if (g[r] & (0x10 >> b))
+                    rect(c, x + b * FS, y + r * FS, FS, FS, BLACK);
+    }
+}
+
+/* a tick step of 1, 2 or 5 times a power of ten giving about `target` intervals */
+static double nice_step(double range, double target)
+{
+    double raw = range / target, p = pow(10, floor(log10(raw))), f = raw / p;
+    return (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * p;
+}
+
+static void number(char *buf, size_t n, double v, double step)
+{
+    if (fabs(v) < 1e-9 * step)
+        v = 0;
+    snprintf(buf, n, "%.4g", v);
+}
+
+/* Layout (pixels): see preview.h. */
+#define PW PREVIEW_PANEL_W
+#define PH PREVIEW_PANEL_H
+
 int preview_write_png(const nbt_table *t, const char *path)
 {
-    size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch, gap = 4;
-    size_t W = nc * nx + (nc - 1) * gap, H = ny;
-    unsigned char *img = calloc(W * H * 3, 1);
-    if (!img)
+    int nc = (int)t->nch;
+    canvas c = {NULL, PREVIEW_W(nc), PREVIEW_H};
+    c.px = malloc((size_t)c.w * (size_t)c.h * 3);
+    float *val = malloc((size_t)nc * PW * PH * sizeof(float));
+    if (!c.px || !val) {
+        free(c.px);
+        free(val);
         return -1;
-    memset(img, 255, W * H * 3);
-    for (size_t c = 0; c < nc; c++) {
-        double lo = INFINITY, hi = -INFINITY;
-        for (size_t i = 0; i < nx * ny; i++) {
-            lo = fmin(lo, t->data[i * nc + c]);
-            hi = fmax(hi, t->data[i * nc + c]);
-        }
-        double span = hi > lo ? hi - lo : 1.0;
-        for (size_t j = 0; j < ny; j++)
-            for (size_t i = 0; i < nx; i++)
-                ramp((t->data[(j * nx + i) * nc + c] - lo) / span,
-                     img + ((H - 1 - j) * W + c * (nx + gap) + i) * 3);
     }
-    int rc = preview_write_rgb8(path, img, W, H);
-    free(img);
+    memset(c.px, 255, (size_t)c.w * (size_t)c.h * 3);
+    const nbt_axis *ax = &t->axis[0], *ay = &t->axis[1];
+    /* the table's own bilinear lookup at each pixel centre, pixels linear in the physical
+     * coordinates (the table's mapping only decides where its nodes sit) */
+    double lo = INFINITY, hi = -INFINITY, v[NBT_TABLE_MAX_CH];
+    for (int j = 0; j < PH; j++) {
+        double y = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
+        for (int i = 0; i < PW; i++) {
+            double x = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
+            nbt_table_lookup(t, x, y, v);
+            for (int k = 0; k < nc; k++) {
+                val[((size_t)k * PH + (size_t)j) * PW + (size_t)i] = (float)v[k];
+                if (isfinite(v[k])) {
+                    lo = fmin(lo, v[k]);
+                    hi = fmax(hi, v[k]);
+                }
+            }
+        }
+    }
+    if (!(lo <= hi))
+        lo = hi = 0;
+    double span = hi > lo ? hi - lo : 1.0;
+    int y0 = PREVIEW_TOP;
+    for (int k = 0; k < nc; k++) {
+        int x0 = PREVIEW_LEFT + k * (PW + PREVIEW_GAP);
+        for (int j = 0; j < PH; j++)
+            for (int i = 0; i < PW; i++) {
+                double f = val[((size_t)k * PH + (size_t)j) * PW + (size_t)i];
+                unsigned char rgb[3];
+                if (isfinite(f))
+                    ramp((f - lo) / span, rgb);
+                else
+                    memcpy(rgb, GREY, 3);
+                put(&c, x0 + i, y0 + j, rgb);
+            }
+        /* frame, panel title */
+        rect(&c, x0 - 1, y0 - 1, PW + 2, 1, BLACK);
+        rect(&c, x0 - 1, y0 + PH, PW + 2, 1, BLACK);
+        rect(&c, x0 - 1, y0 - 1, 1, PH + 2, BLACK);
+        rect(&c, x0 + PW, y0 - 1, 1, PH + 2, BLACK);
+        char title[64];
+        if (t->kind == NBT_TABLE_PSI)
+            snprintf(title, sizeof title, "%s", k == 0 ? "psi" : "psi stderr");
+        else if (t->k[k] >= 0)
+            snprintf(title, sizeof title, "k = %d", t->k[k]);
+        else if (nc == 1)
+            snprintf(title, sizeof title, "fixed phase");
+        else
+            snprintf(title, sizeof title, "channel %d", k);
+        text(&c, x0 + PW / 2, y0 - LH - 4, 1, title);
+        /* x ticks and labels under every panel */
+        double st = nice_step(ax->hi - ax->lo, 4);
+        for (double xv = ceil(ax->lo / st - 1e-9) * st; xv <= ax->hi + 1e-9 * st; xv += st) {
+            int px = x0 + (int)lround((xv - ax->lo) / (ax->hi - ax->lo) * (PW - 1));
+            char lab[32];
+            rect(&c, px, y0 + PH + 1, 1, 6, BLACK);
+            number(lab, sizeof lab, xv, st);
+            text(&c, px, y0 + PH + 10, 1, lab);
+        }
+        text(&c, x0 + PW / 2, y0 + PH + 10 + LH + 2, 1, nbt_table_axis_name(t->kind, 0));
+    }
+    /* y ticks and labels left of the first panel, the axis name above them */
+    double st = nice_step(ay->hi - ay->lo, 4);
+    for (double yv = ceil(ay->lo / st - 1e-9) * st; yv <= ay->hi + 1e-9 * st; yv += st) {
+        int py = y0 + PH - 1 - (int)lround((yv - ay->lo) / (ay->hi - ay->lo) * (PH - 1));
+        char lab[32];
+        rect(&c, PREVIEW_LEFT - 8, py, 6, 1, BLACK);
+        number(lab, sizeof lab, yv, st);
+        text(&c, PREVIEW_LEFT - 12, py - 7 * FS / 2, 2, lab);
+    }
+    text(&c, PREVIEW_LEFT - 12, y0 - LH - 4, 2, nbt_table_axis_name(t->kind, 1));
+    /* colour bar: the ramp from max (top) to min (bottom), labelled */
+    int bx = PREVIEW_LEFT + nc * PW + (nc - 1) * PREVIEW_GAP + PREVIEW_BAR_GAP;
+    for (int j = 0; j < PH; j++) {
+        unsigned char rgb[3];
+        ramp(1.0 - (j + 0.5) / PH, rgb);
+        rect(&c, bx, y0 + j, PREVIEW_BAR_W, 1, rgb);
+    }
+    rect(&c, bx - 1, y0 - 1, PREVIEW_BAR_W + 2, 1, BLACK);
+    rect(&c, bx - 1, y0 + PH, PREVIEW_BAR_W + 2, 1, BLACK);
+    rect(&c, bx - 1, y0 - 1, 1, PH + 2, BLACK);
+    rect(&c, bx + PREVIEW_BAR_W, y0 - 1, 1, PH + 2, BLACK);
+    char lab[64];
+    snprintf(lab, sizeof lab, "%.4g", hi);
+    text(&c, bx + PREVIEW_BAR_W + 6, y0, 0, lab);
+    snprintf(lab, sizeof lab, "%.4g", 0.5 * (lo + hi));
+    text(&c, bx + PREVIEW_BAR_W + 6, y0 + PH / 2 - 7 * FS / 2, 0, lab);
+    snprintf(lab, sizeof lab, "%.4g", lo);
+    text(&c, bx + PREVIEW_BAR_W + 6, y0 + PH - 7 * FS, 0, lab);
+    text(&c, bx + PREVIEW_BAR_W / 2, y0 - LH - 4, 1, "value");
+    /* caption: kind, size, recorded interpolation error; then axes and phase */
+    double e = 0, m = 0;
+    int have_err = 0;
+    for (int k = 0; k < nc; k++) {
+        if (isfinite(t->max_err[k])) {
+            e = fmax(e, t->max_err[k]);
+            have_err = 1;
+        }
+        m = fmax(m, t->max_abs[k]);
+    }
+    static const char *what[4] = {"airlight H_k(u,v)", "surface J_k^n(T,theta)", "photon counts psi(r/z,z)",
+                                  "narrow-beam kernel"};
+    char cap[256], err[96];
+    if (have_err)
+        snprintf(err, sizeof err, "max interp err %.2e (%.2e of max)", e, m > 0 ? e / m : 0.0);
+    else
+        snprintf(err, sizeof err, "data, no interpolation error recorded");
+    char nn[16] = "";
+    if (t->kind == NBT_TABLE_J)
+        snprintf(nn, sizeof nn, " n=%d", t->n);
+    snprintf(cap, sizeof cap, "%s table%s: %s  %zux%zu nodes", nbt_table_kind_name(t->kind), nn,
+             what[t->kind >= 0 && (int)t->kind < 4 ? (int)t->kind : 0], ax->n, ay->n);
+    text(&c, 10, 8, 0, cap);
+    text(&c, 10, 8 + LH, 0, err);
+    snprintf(cap, sizeof cap, "nodes: %s %s, %s %s%s%.80s", nbt_table_axis_name(t->kind, 0),
+             nbt_axis_map_name(ax->map), nbt_table_axis_name(t->kind, 1), nbt_axis_map_name(ay->map),
+             t->phase[0] ? "  phase " : "", t->phase);
+    text(&c, 10, 8 + 2 * LH, 0, cap);
+    int rc = preview_write_rgb8(path, c.px, (size_t)c.w, (size_t)c.h);
+    free(c.px);
+    free(val);
     return rc;
 }

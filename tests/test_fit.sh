@@ -45,6 +45,24 @@ M="--albedo 0.7 --sigma-t 1.3 --B 0.0685 --photons 20000 --z-planes 1:4:4 --r-bi
   bad "CSV header and 4 x 7 rows"
 cmp -s "$tmp/a.csv" "$tmp/b.csv" && cmp -s "$tmp/m1" "$tmp/m2" && ok || bad "output differs between 1 and 2 threads"
 [ "$(grep -c '^M ' "$tmp/m1")" -eq 4 ] && ok || bad "one moment line per plane"
+# progress: with one thread every batch is an update; NBT_PROGRESS_SECONDS=0 prints each one as
+# a line of its own (stderr is a file here, not a terminal): 63 with an ETA, then 100%; percent
+# rising; no carriage returns. --quiet: nothing on stderr. Output identical either way.
+NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 1 -o "$tmp/p.csv" >"$tmp/mp" 2>"$tmp/perr" && ok || bad "mc with progress"
+[ "$(grep -c '^nbt-fit: mc: .*% done, .* elapsed, ETA ' "$tmp/perr")" -eq 63 ] &&
+  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/perr")" -eq 1 ] && ok || bad "mc progress: 63 ETA lines and 100%: $(cat "$tmp/perr")"
+sed -n 's/^nbt-fit: mc: *\([0-9]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 < p { exit 1 } { p = $1 } END { exit NR != 64 }' &&
+  ok || bad "mc progress: percent not rising"
+tr -d '\n' <"$tmp/perr" | grep -q "$(printf '\r')" && bad "mc progress: carriage return off a terminal" || ok
+# no warning at the default 60 s; exactly one (before any progress line) when the limit is tiny
+grep -q "warning" "$tmp/perr" && bad "mc: a long-run warning for a short run" || ok
+NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_FIT" mc $M --threads 1 -o "$tmp/w.csv" >/dev/null 2>"$tmp/werr"
+[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (estimated from the first ' "$tmp/werr")" -eq 1 ] &&
+  head -1 "$tmp/werr" | grep -q warning && ok || bad "mc long-run warning: $(cat "$tmp/werr")"
+"$NBT_FIT" mc $M --threads 1 --quiet -o "$tmp/q.csv" >"$tmp/mq" 2>"$tmp/qerr" && [ ! -s "$tmp/qerr" ] && ok ||
+  bad "mc --quiet: stderr $(cat "$tmp/qerr")"
+cmp -s "$tmp/p.csv" "$tmp/a.csv" && cmp -s "$tmp/q.csv" "$tmp/a.csv" && cmp -s "$tmp/mp" "$tmp/m1" && cmp -s "$tmp/mq" "$tmp/m1" &&
+  ok || bad "mc output differs with progress or --quiet"
 # Psi is per unit area: sum psi * annulus area over bins <= M0 of the plane (bins cover r < z only)
 awk -F, 'NR > 1 && $1 == 2 { s += $4 * 3.141592653589793 * ($3 * $3 - $2 * $2) } END { print s }' "$tmp/a.csv" >"$tmp/s"
 m0=$(awk '$2 == 2 { print $3 }' "$tmp/m1")

@@ -197,7 +197,33 @@ expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
 [ -z "$(ls "$tmp" | grep -v '^out$\|^err$')" ] && ok || bad "no output files left by rejected commands: $(ls "$tmp")"
 
 # tables: write, read back, info
-"$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >/dev/null 2>&1 && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+"$NBT_GEN" airlight -o "$tmp/h.exr" --size 33x17 >"$tmp/hout" 2>"$tmp/herr" && [ -s "$tmp/h.exr" ] && [ -s "$tmp/h.png" ] && ok || bad "airlight --size"
+# previews (tests/pngcheck reads them with libpng): the size of gen/preview.h's layout, 384x288
+# pixels per channel panel plus margins (124 + 4 x 384 + 3 x 40 + 176 = 1956 wide for 4 channels,
+# 96 + 288 + 56 = 440 high), a colour bar whose luma falls monotonically from the ramp's top to
+# its bottom, and one colour scale for all channels: H_3 stays well below H_0's maximum, so its
+# panel (the 4th, from x = 124 + 3 x 424) never reaches the bright end that H_0's panel reaches
+# (luma > 200); per-channel scaling would take every panel to it.
+PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
+[ "$("$PNGCHECK" "$tmp/h.png")" = "1956 440" ] && ok || bad "h.png size: $("$PNGCHECK" "$tmp/h.png")"
+"$PNGCHECK" --bar "$tmp/h.png" >"$tmp/bar" && ok || bad "h.png colour bar: $(cat "$tmp/bar")"
+l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
+awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
+# progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
+# end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
+grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-9.e+-]* s' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: set 1/1 H: built 33x17 in [0-9.]* s (predicted ' "$tmp/herr" && ok ||
+  bad "airlight progress lines: $(cat "$tmp/herr")"
+tr -d '\n' <"$tmp/herr" | grep -q "$(printf '\r')" && bad "airlight progress: carriage return off a terminal" || ok
+# the long-run warning: none by default (60 s), one line when the limit is tiny, before the build starts
+grep -q "warning" "$tmp/herr" && bad "airlight: a long-run warning for a short build" || ok
+NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_GEN" airlight -o "$tmp/hw.exr" --size 33x17 --no-preview >/dev/null 2>"$tmp/hwerr"
+[ "$(grep -c "^nbt-gen: airlight: warning: this run will take about .* (the planner's prediction)" "$tmp/hwerr")" -eq 1 ] &&
+  sed -n 2p "$tmp/hwerr" | grep -q warning && ok || bad "airlight long-run warning: $(cat "$tmp/hwerr")"
+"$NBT_GEN" airlight -o "$tmp/hq.exr" --size 33x17 --quiet >"$tmp/hqout" 2>"$tmp/hqerr" && [ ! -s "$tmp/hqerr" ] && ok ||
+  bad "airlight --quiet: stderr $(cat "$tmp/hqerr")"
+cmp -s "$tmp/h.exr" "$tmp/hq.exr" && cmp -s "$tmp/h.png" "$tmp/hq.png" && [ "$(awk '{ $1 = ""; print }' "$tmp/hqout")" = "$(awk '{ $1 = ""; print }' "$tmp/hout")" ] &&
+  ok || bad "airlight output differs with --quiet"
 "$NBT_GEN" info "$tmp/h.exr" >"$tmp/info" && grep -q "kind        H" "$tmp/info" && grep -q "33 nodes" "$tmp/info" &&
   grep -q "17 nodes" "$tmp/info" && grep -q "max interp err" "$tmp/info" && ok || bad "info on an H table"
 # info --at a node on the u = 0 column returns H_0(0, -pi/2 + ...) ; at v = pi/2, u = 0: H_0 = pi
@@ -208,6 +234,8 @@ close "$1" 3.141592653589793 1e-6 "table H_0(0, pi/2) = pi (float)"
 "$NBT_GEN" info "$tmp/j_k4-5.exr" | grep -q "channel G   k=5" && ok || bad "second pack holds k = 5"
 "$NBT_GEN" airlight -o "$tmp/p.exr" --phase hg:g=0.8 --size 17x17 --half >/dev/null 2>&1 &&
   "$NBT_GEN" info "$tmp/p.exr" | grep -q "hg:g=0.8" && ok || bad "fixed-phase half table"
+[ "$("$PNGCHECK" "$tmp/p.png")" = "684 440" ] && "$PNGCHECK" --bar "$tmp/p.png" >"$tmp/bar" && ok ||
+  bad "p.png (one channel): size 684x440 and colour bar: $("$PNGCHECK" "$tmp/p.png") $(cat "$tmp/bar")"
 # --g: the number of orders follows from the g range and tol
 "$NBT_GEN" airlight -o "$tmp/g.exr" --g 0:0.5 --tol 0.02 >"$tmp/out" 2>/dev/null; rc=$?
 nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
@@ -282,9 +310,14 @@ rm -f "$tmp"/gj.exr "$tmp"/sh.exr "$tmp"/sj.exr "$tmp/hand.sog" "$tmp/err"
 
 # scene files
 srcdir=${top_srcdir:-.}
-"$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>/dev/null &&
+"$NBT_GEN" scene "$srcdir/doc/examples/default.scene" -o "$tmp/scene" >"$tmp/out" 2>"$tmp/serr" &&
   [ -s "$tmp/scene/H_k0-3.exr" ] && [ -s "$tmp/scene/J1_k0-3.exr" ] && [ -s "$tmp/scene/J20_k0-3.exr" ] &&
   grep -q "Legendre terms" "$tmp/out" && ok || bad "example scene: $(cat "$tmp/out")"
+# progress: the plan's predicted time, then a start and an end line per set
+grep -q '^nbt-gen: scene: planned 3 table set(s) in .*, predicted build time ' "$tmp/serr" &&
+  [ "$(grep -c '^nbt-gen: scene: set [123]/3 .*: building .* predicted .* (ETA all sets ' "$tmp/serr")" -eq 3 ] &&
+  [ "$(grep -c '^nbt-gen: scene: set [123]/3 .*: built .* in [0-9.]* s (predicted ' "$tmp/serr")" -eq 3 ] && ok ||
+  bad "scene progress: $(cat "$tmp/serr")"
 # the example scene fits libnbt-gl: at most 16 orders (4 packs of 4)
 nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 [ -n "$nt" ] && [ "$nt" -le 16 ] && [ "$(ls "$tmp/scene"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
