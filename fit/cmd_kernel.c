@@ -244,16 +244,8 @@ int cmd_kernel(int argc, char **argv)
     char err[512];
     for (size_t q = 0; q < nruns; q++) {
         psi_data *d = &runs[q];
-        if (psi_data_read(argv[optind + q], d, err, sizeof err))
+        if (psi_data_read_medium(argv[optind + q], d, albedo, sigma_t, B, err, sizeof err))
             die_usage("%s", err);
-        if (!isnan(albedo))
-            d->albedo = albedo;
-        if (!isnan(sigma_t))
-            d->sigma_t = sigma_t;
-        if (!isnan(B))
-            d->B = B;
-        if (isnan(d->albedo) || isnan(d->sigma_t) || isnan(d->B))
-            die_usage("%s: the medium is unknown: give --albedo, --sigma-t and --B", d->name);
         if (d->nbins < (size_t)(shape_params(ncomp) + 1))
             die_usage("%s: %zu bins per plane: this shape needs at least %d", d->name, d->nbins, shape_params(ncomp) + 1);
     }

@@ -353,18 +353,10 @@ int cmd_model(int argc, char **argv)
         die("out of memory");
     for (size_t q = 0; q < nruns; q++) {
         psi_data *d = &runs[q];
-        if (psi_data_read(argv[optind + q], d, err, sizeof err))
+        if (psi_data_read_medium(argv[optind + q], d, albedo, sigma_t, B, err, sizeof err))
             die_usage("%s", err);
-        if (!isnan(albedo))
-            d->albedo = albedo;
-        if (!isnan(sigma_t))
-            d->sigma_t = sigma_t;
-        if (!isnan(B))
-            d->B = B;
         if (infinite)
             d->infinite = 1;
-        if (isnan(d->albedo) || isnan(d->sigma_t) || isnan(d->B))
-            die_usage("%s: the medium is unknown: give --albedo, --sigma-t and --B", d->name);
         if (apply && !applied.have[d->infinite])
             die_usage("%s: the model '%s' holds no coefficients for the %s geometry", d->name, apply,
                       geo_word[d->infinite]);

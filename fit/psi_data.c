@@ -161,3 +161,22 @@ int psi_data_read(const char *path, psi_data *d, char *err, size_t errlen)
         psi_data_free(d);
     return rc;
 }
+
+int psi_data_read_medium(const char *path, psi_data *d, double albedo, double sigma_t, double B, char *err,
+                         size_t errlen)
+{
+    if (psi_data_read(path, d, err, errlen))
+        return 1;
+    if (!isnan(albedo))
+        d->albedo = albedo;
+    if (!isnan(sigma_t))
+        d->sigma_t = sigma_t;
+    if (!isnan(B))
+        d->B = B;
+    if (isnan(d->albedo) || isnan(d->sigma_t) || isnan(d->B)) {
+        snprintf(err, errlen, "%s: the medium is unknown: give --albedo, --sigma-t and --B", d->name);
+        psi_data_free(d);
+        return 1;
+    }
+    return 0;
+}

@@ -16,6 +16,11 @@ typedef struct {
 /* Read FILE.csv (z,r_lo,r_hi,psi,psi_stderr) or FILE.exr (a PSI table).
  * Returns 0, or 1 with a one-line reason in err. */
 int psi_data_read(const char *path, psi_data *d, char *err, size_t errlen);
+/* psi_data_read, then the medium from albedo, sigma_t and B where they are not
+ * NaN (the command line overrides the file); 1 with a one-line reason in err
+ * also when the medium stays unknown. */
+int psi_data_read_medium(const char *path, psi_data *d, double albedo, double sigma_t, double B, char *err,
+                         size_t errlen);
 void psi_data_free(psi_data *d);
 
 #endif
