@@ -53,14 +53,6 @@ nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_l
     return st;
 }
 
-static double rel_error(const nbt_table *t, double scale)
-{
-    double e = 0;
-    for (size_t c = 0; c < t->nch; c++)
-        e = fmax(e, t->max_err[c]);
-    return scale > 0 ? e / scale : e;
-}
-
 static void axis_desc(const nbt_axis *a, const char *name, char *buf, size_t n)
 {
     if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT)
@@ -113,10 +105,9 @@ int tableset_write(const nbt_tableset *ts, const char *stem, int preview)
             char d0[96], d1[96];
             axis_desc(&t->axis[0], nbt_table_axis_name(t->kind, 0), d0, sizeof d0);
             axis_desc(&t->axis[1], nbt_table_axis_name(t->kind, 1), d1, sizeof d1);
+            double e = nbt_table_max_err(t);
             printf("%-22s %4zux%-4zu %s %s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
-                   t->axis[0].n, t->axis[1].n, d0, d1, fmax(fmax(t->max_err[0], t->nch > 1 ? t->max_err[1] : 0),
-                   fmax(t->nch > 2 ? t->max_err[2] : 0, t->nch > 3 ? t->max_err[3] : 0)),
-                   rel_error(t, ts->scale), t->quad_err);
+                   t->axis[0].n, t->axis[1].n, d0, d1, e, ts->scale > 0 ? e / ts->scale : e, t->quad_err);
         }
     }
     for (size_t i = 0; i < 2 * ts->count; i++)

@@ -250,15 +250,10 @@ int preview_write_png(const nbt_table *t, const char *path)
     text(&c, bx + PREVIEW_BAR_W + 6, y0 + PH - 7 * FS, 0, lab);
     text(&c, bx + PREVIEW_BAR_W / 2, y0 - LH - 4, 1, "value");
     /* caption: kind, size, recorded interpolation error; then axes and phase */
-    double e = 0, m = 0;
+    double e = nbt_table_max_err(t), m = nbt_table_max_abs(t);
     int have_err = 0;
-    for (int k = 0; k < nc; k++) {
-        if (isfinite(t->max_err[k])) {
-            e = fmax(e, t->max_err[k]);
-            have_err = 1;
-        }
-        m = fmax(m, t->max_abs[k]);
-    }
+    for (int k = 0; k < nc; k++)
+        have_err |= isfinite(t->max_err[k]) != 0;
     static const char *what[4] = {"airlight H_k(u,v)", "surface J_k^n(T,theta)", "photon counts psi(r/z,z)",
                                   "narrow-beam kernel"};
     char cap[256], err[96];

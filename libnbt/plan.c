@@ -206,26 +206,16 @@ static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt
     return st;
 }
 
-static double table_scale(const nbt_table *t)
-{
-    double m = 0;
-    for (size_t c = 0; c < t->nch; c++)
-        m = fmax(m, t->max_abs[c]);
-    return m;
-}
-
 static double rel_error(const nbt_table *t, double scale)
 {
-    double e = 0;
-    for (size_t c = 0; c < t->nch; c++)
-        e = fmax(e, t->max_err[c]);
+    double e = nbt_table_max_err(t);
     return scale > 0 ? e / scale : e;
 }
 
 /* worst relative error over packs, relative to the first pack's scale */
 static double set_error(nbt_table *const *t, size_t count)
 {
-    double s = table_scale(t[0]), e = 0;
+    double s = nbt_table_max_abs(t[0]), e = 0;
     for (size_t i = 0; i < count; i++)
         e = fmax(e, rel_error(t[i], s));
     return e;
@@ -537,7 +527,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
             return failf(err, errlen, st, "building the %s table failed: %s", r->kind == NBT_TABLE_H ? "H" : "J",
                          nbt_strerror(st));
         out->count = ps->npacks;
-        out->scale = table_scale(out->t[0]);
+        out->scale = nbt_table_max_abs(out->t[0]);
         out->rel_err = set_error(out->t, out->count);
         if (r->tol <= 0 || out->rel_err <= r->tol)
             break;

@@ -170,6 +170,22 @@ static float to_half_and_back(float v)
     return copysignf(nearbyintf(a / step) * step, v);
 }
 
+double nbt_table_max_err(const nbt_table *t)
+{
+    double e = 0;
+    for (size_t c = 0; c < t->nch; c++)
+        e = fmax(e, t->max_err[c]);
+    return e;
+}
+
+double nbt_table_max_abs(const nbt_table *t)
+{
+    double m = 0;
+    for (size_t c = 0; c < t->nch; c++)
+        m = fmax(m, t->max_abs[c]);
+    return m;
+}
+
 void nbt_table_round_half(nbt_table *t)
 {
     size_t n = t->axis[0].n * t->axis[1].n * t->nch;

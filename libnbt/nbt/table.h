@@ -84,6 +84,12 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);
 
+/* The largest recorded interpolation error (max_err) and the largest |value|
+ * (max_abs) over the table's channels; channels never measured (NaN) are
+ * skipped. */
+double nbt_table_max_err(const nbt_table *t);
+double nbt_table_max_abs(const nbt_table *t);
+
 /* Tabulate f(x0, x1) -> out[0..nch-1] at the table's nodes; with
  * measure_error, also at every edge and cell midpoint and record max_err
  * (largest |bilinear - f| there; no smoothness is assumed) and max_abs. f returns 0,
