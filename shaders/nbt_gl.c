@@ -8,6 +8,7 @@
 #include <string.h>
 #include <nbt/beam.h>
 #include "nbt/gl.h"
+#include "gl_internal.h"
 
 /* generated from the GLSL modules at build time (nbt_glsl.c) */
 extern const char nbt_glsl_nbt_table[], nbt_glsl_nbt_weights[], nbt_glsl_nbt_airlight[], nbt_glsl_nbt_surface[],
@@ -147,4 +148,34 @@ int nbt_gl_set_beam_fit(unsigned program, const nbt_beam_fit *f, int infinite)
     glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_lo"), 1, lo);
     glUniform3fv(glGetUniformLocation(program, "nbt_beam_fit_hi"), 1, hi);
     return 0;
+}
+
+GLuint nbt__gl_compute_program(const char *src, const char *what)
+{
+    GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
+    glShaderSource(sh, 1, &src, NULL);
+    glCompileShader(sh);
+    GLint ok = 0;
+    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    char log[1024], msg[1200];
+    if (!ok) {
+        glGetShaderInfoLog(sh, sizeof log, NULL, log);
+        glDeleteShader(sh);
+        snprintf(msg, sizeof msg, "%s does not compile: %s", what, log);
+        nbt__fail(NBT_EIO, msg);
+        return 0;
+    }
+    GLuint p = glCreateProgram();
+    glAttachShader(p, sh);
+    glLinkProgram(p);
+    glDeleteShader(sh);
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, sizeof log, NULL, log);
+        glDeleteProgram(p);
+        snprintf(msg, sizeof msg, "%s does not link: %s", what, log);
+        nbt__fail(NBT_EIO, msg);
+        return 0;
+    }
+    return p;
 }

@@ -9,9 +9,9 @@
 #include <string.h>
 #include <time.h>
 #include "nbt/gl_mc.h"
+#include "gl_internal.h"
 
 /* from libnbt (not in its public headers) */
-nbt_status nbt__fail(nbt_status s, const char *reason);
 int nbt__phase_sample_param(const nbt_phase *p, nbt_phase_kind *kind, double *param);
 extern const char nbt_glsl_nbt_mc[];
 
@@ -25,29 +25,13 @@ static GLuint build(unsigned wg)
 {
     size_t n = strlen(nbt_glsl_nbt_mc) + 64;
     char *src = malloc(n);
-    if (!src)
+    if (!src) {
+        nbt__fail(NBT_ENOMEM, "gl_mc: out of memory");
         return 0;
+    }
     snprintf(src, n, "#version 430\n#define NBT_MC_WG %u\n%s", wg, nbt_glsl_nbt_mc);
-    GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
-    const char *s = src;
-    glShaderSource(sh, 1, &s, NULL);
-    glCompileShader(sh);
+    GLuint p = nbt__gl_compute_program(src, "gl_mc: the compute shader (OpenGL 4.3 needed)");
     free(src);
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        glDeleteShader(sh);
-        return 0;
-    }
-    GLuint p = glCreateProgram();
-    glAttachShader(p, sh);
-    glLinkProgram(p);
-    glDeleteShader(sh);
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        glDeleteProgram(p);
-        return 0;
-    }
     return p;
 }
 
@@ -84,7 +68,7 @@ nbt_status nbt_gl_mc_run(const nbt_mc_config *cf, unsigned wg, uint64_t max_disp
     size_t np = cf->nplanes, nb = cf->r_bins, stride = np * (nb + 2) + 3, len = nbt_mc_tally_len(cf);
     GLuint prog = build(wg);
     if (!prog)
-        return nbt__fail(NBT_EIO, "gl_mc: the compute shader does not compile (OpenGL 4.3 needed)");
+        return NBT_EIO; /* the reason is set */
     double last = np ? cf->z_planes[np - 1] : 0;
     double zc = cf->z_cut > 0 ? cf->z_cut : 2.0 * last + 20.0 / cf->sigma_t;
     double top = cf->slab > 0 ? cf->slab : zc, bottom = cf->infinite ? -zc : 0.0;

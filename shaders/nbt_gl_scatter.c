@@ -11,10 +11,10 @@
 #include <string.h>
 #include <nbt/screen.h>
 #include "nbt/gl_scatter.h"
+#include "gl_internal.h"
 
 /* libnbt's error reporting (libnbt/internal.h): the reason goes to the
  * caller's handler (nbt_set_error_handler) */
-nbt_status nbt__fail(nbt_status s, const char *reason);
 
 /* generated from the GLSL modules at build time (nbt_glsl.c) */
 extern const char nbt_glsl_nbt_beam[], nbt_glsl_nbt_scatter_common[], nbt_glsl_nbt_scatter_near[],
@@ -315,33 +315,10 @@ static GLuint compile_pass(unsigned i)
         nbt__fail(NBT_ENOMEM, "gl_scatter: out of memory");
         return 0;
     }
-    GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
-    const char *s = src;
-    glShaderSource(sh, 1, &s, NULL);
-    glCompileShader(sh);
+    char what[64];
+    snprintf(what, sizeof what, "gl_scatter: pass %s", PASSES[i].name);
+    GLuint p = nbt__gl_compute_program(src, what);
     free(src);
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    char log[1024], msg[1200];
-    if (!ok) {
-        glGetShaderInfoLog(sh, sizeof log, NULL, log);
-        glDeleteShader(sh);
-        snprintf(msg, sizeof msg, "gl_scatter: pass %s does not compile: %s", PASSES[i].name, log);
-        nbt__fail(NBT_EIO, msg);
-        return 0;
-    }
-    GLuint p = glCreateProgram();
-    glAttachShader(p, sh);
-    glLinkProgram(p);
-    glDeleteShader(sh);
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        glGetProgramInfoLog(p, sizeof log, NULL, log);
-        glDeleteProgram(p);
-        snprintf(msg, sizeof msg, "gl_scatter: pass %s does not link: %s", PASSES[i].name, log);
-        nbt__fail(NBT_EIO, msg);
-        return 0;
-    }
     return p;
 }
 
