@@ -222,6 +222,40 @@ static void mcml_like(long n, double mua, double mus, double g, double d, double
 
 /* the machine may be shared: the fastest of three identical runs (same
  * seed, same tallies) is the time the estimator needs */
+/* the two benchmark cases, one thread, analog: a slab of optical thickness 2
+ * (van de Hulst's case with HG g = 0.75 and albedo 0.9), and ten tally planes
+ * z = 1..10 in a half-space (Gaussian phase, B = 0.274: 60 degrees) */
+static nbt_mc_config slab_case(const nbt_phase *p, double albedo, uint64_t photons)
+{
+    nbt_mc_config c;
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = albedo;
+    c.phase = p;
+    c.slab = 2;
+    c.photons = photons;
+    c.seed = 1;
+    c.threads = 1;
+    return c;
+}
+
+static nbt_mc_config planes_case(const nbt_phase *p, const double *z10, uint64_t photons)
+{
+    nbt_mc_config c;
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 0.9;
+    c.phase = p;
+    c.nplanes = 10;
+    c.z_planes = z10;
+    c.r_bins = 50;
+    c.r_max_scale = 1;
+    c.photons = photons;
+    c.seed = 1;
+    c.threads = 1;
+    return c;
+}
+
 static nbt_mc_result *best_of_3(const nbt_mc_config *c)
 {
     nbt_mc_result *best = NULL, *r;
@@ -255,14 +289,7 @@ int main(int argc, char **argv)
     cb = cpu() - c0;
     printf("%-34s %8d %10.5f %10s %10.5f %14.3g %14.3g\n", "baseline: lean analog loop", 1, R, "", T, n / tb, n / cb);
     for (unsigned th = 1; th <= 2; th++) {
-        nbt_mc_config c;
-        memset(&c, 0, sizeof c);
-        c.sigma_t = 1;
-        c.albedo = 0.9;
-        c.phase = hg;
-        c.slab = 2;
-        c.photons = (uint64_t)n;
-        c.seed = 1;
+        nbt_mc_config c = slab_case(hg, 0.9, (uint64_t)n);
         c.threads = th;
         nbt_mc_result *r;
         c0 = cpu();
@@ -280,14 +307,8 @@ int main(int argc, char **argv)
         if (egl_headless_open(err, sizeof err))
             printf("%-34s %s\n", "GLSL compute (nbt_gl_mc_run)", err);
         else {
-            nbt_mc_config c;
-            memset(&c, 0, sizeof c);
-            c.sigma_t = 1;
-            c.albedo = 0.9;
-            c.phase = hg;
-            c.slab = 2;
-            c.photons = 100000;
-            c.seed = 1;
+            nbt_mc_config c = slab_case(hg, 0.9, 100000);
+            c.threads = 0;
             nbt_mc_result *r;
             if (nbt_gl_mc_run(&c, 0, 0, &r) == NBT_OK) /* compiles the shader */
                 nbt_mc_result_free(r);
@@ -320,17 +341,7 @@ int main(int argc, char **argv)
     printf("%-34s %8d %10.5f %10s %14.3g %14.3g\n", "baseline: lean analog loop", 1, m0, "", np / tb, np / cb);
     nbt_phase *ga = nbt_phase_gauss(0.274);
     for (unsigned th = 1; th <= 2; th++) {
-        nbt_mc_config c;
-        memset(&c, 0, sizeof c);
-        c.sigma_t = 1;
-        c.albedo = 0.9;
-        c.phase = ga;
-        c.nplanes = 10;
-        c.z_planes = pl;
-        c.r_bins = 50;
-        c.r_max_scale = 1;
-        c.photons = (uint64_t)np;
-        c.seed = 1;
+        nbt_mc_config c = planes_case(ga, pl, (uint64_t)np);
         c.threads = th;
         nbt_mc_result *r;
         c0 = cpu();
@@ -354,15 +365,7 @@ int main(int argc, char **argv)
         nbt_mc_result *res[2];
         nbt_phase *h = nbt_phase_hg(0.75);
         for (int e = 0; e < 2; e++) {
-            nbt_mc_config c;
-            memset(&c, 0, sizeof c);
-            c.sigma_t = 1;
-            c.albedo = alb[k];
-            c.phase = h;
-            c.slab = 2;
-            c.photons = (uint64_t)n;
-            c.seed = 1;
-            c.threads = 1;
+            nbt_mc_config c = slab_case(h, alb[k], (uint64_t)n);
             c.estimator = e ? NBT_MC_WEIGHTED : NBT_MC_ANALOG;
             res[e] = best_of_3(&c);
         }
@@ -388,18 +391,7 @@ int main(int argc, char **argv)
         nbt_mc_result *res[2];
         ga = nbt_phase_gauss(0.274);
         for (int e = 0; e < 2; e++) {
-            nbt_mc_config c;
-            memset(&c, 0, sizeof c);
-            c.sigma_t = 1;
-            c.albedo = 0.9;
-            c.phase = ga;
-            c.nplanes = 10;
-            c.z_planes = pl;
-            c.r_bins = 50;
-            c.r_max_scale = 1;
-            c.photons = (uint64_t)np;
-            c.seed = 1;
-            c.threads = 1;
+            nbt_mc_config c = planes_case(ga, pl, (uint64_t)np);
             c.estimator = e ? NBT_MC_WEIGHTED : NBT_MC_ANALOG;
             res[e] = best_of_3(&c);
         }
