@@ -487,7 +487,7 @@ static nbt_table *table_copy(const nbt_table *t)
     float *d = c->data;
     *c = *t;
     c->data = d;
-    memcpy(d, t->data, t->axis[0].n * t->axis[1].n * t->nch * sizeof(float));
+    memcpy(d, t->data, nbt_table_size(t) * sizeof(float));
     return c;
 }
 

@@ -90,8 +90,9 @@ const char *nbt_table_kind_name(nbt_table_kind k)
 
 const char *nbt_table_axis_name(nbt_table_kind k, int axis)
 {
-    static const char *n[4][2] = {{"u", "v"}, {"T", "theta"}, {"r/z", "z"}, {"tau", "albedo"}};
-    return n[(int)k >= 0 && (int)k < 4 ? (int)k : 0][axis ? 1 : 0];
+    static const char *n[4][3] = {{"u", "v", "g"}, {"T", "theta", "g"}, {"r/z", "z", "slice"},
+                                  {"tau", "albedo", "slice"}};
+    return n[(int)k >= 0 && (int)k < 4 ? (int)k : 0][axis < 0 ? 0 : axis > 2 ? 2 : axis];
 }
 
 static int axis_ok(const nbt_axis *a)
@@ -101,9 +102,11 @@ static int axis_ok(const nbt_axis *a)
            (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c)));
 }
 
-nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
+nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,
+                            size_t nch)
 {
-    if (!axis_ok(ax0) || !axis_ok(ax1) || nch < 1 || nch > NBT_TABLE_MAX_CH)
+    if (!axis_ok(ax0) || !axis_ok(ax1) || !(ax2->n == 1 || axis_ok(ax2)) || nch < 1 || nch > NBT_TABLE_MAX_CH ||
+        (double)ax0->n * (double)ax1->n * (double)ax2->n * (double)nch > 2147483648.0)
         return NULL;
     nbt_table *t = calloc(1, sizeof *t);
     if (!t)
@@ -111,13 +114,25 @@ nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_a
     t->kind = kind;
     t->axis[0] = *ax0;
     t->axis[1] = *ax1;
+    t->axis[2] = *ax2;
     t->nch = nch;
-    t->data = calloc(ax0->n * ax1->n * nch, sizeof(float));
+    t->data = calloc(nbt_table_size(t), sizeof(float));
     if (!t->data) {
         free(t);
         return NULL;
     }
     return t;
+}
+
+nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
+{
+    const nbt_axis one = {0.0, 1.0, NBT_AXIS_LINEAR, 0.0, 1};
+    return nbt_table_alloc3(kind, ax0, ax1, &one, nch);
+}
+
+size_t nbt_table_size(const nbt_table *t)
+{
+    return t->axis[0].n * t->axis[1].n * t->axis[2].n * t->nch;
 }
 
 void nbt_table_free(nbt_table *t)
@@ -139,18 +154,42 @@ static void cell(const nbt_axis *a, double x, size_t *i0, double *f)
     *f = p - fl;
 }
 
-void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
+/* bilinear in slice m */
+static void lookup_slice(const nbt_table *t, size_t m, size_t i, double fx, size_t j, double fy, double *out)
 {
-    size_t i, j, nx = t->axis[0].n, nc = t->nch;
-    double fx, fy;
-    cell(&t->axis[0], x0, &i, &fx);
-    cell(&t->axis[1], x1, &j, &fy);
-    const float *a = t->data + (j * nx + i) * nc, *b = a + nx * nc;
+    size_t nx = t->axis[0].n, nc = t->nch;
+    const float *a = t->data + ((m * t->axis[1].n + j) * nx + i) * nc, *b = a + nx * nc;
     for (size_t c = 0; c < nc; c++) {
         double lo = (1.0 - fx) * a[c] + fx * a[nc + c];
         double hi = (1.0 - fx) * b[c] + fx * b[nc + c];
         out[c] = (1.0 - fy) * lo + fy * hi;
     }
+}
+
+void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
+{
+    size_t i, j;
+    double fx, fy;
+    cell(&t->axis[0], x0, &i, &fx);
+    cell(&t->axis[1], x1, &j, &fy);
+    lookup_slice(t, 0, i, fx, j, fy, out);
+}
+
+void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out)
+{
+    size_t i, j, m;
+    double fx, fy, fz, hi[NBT_TABLE_MAX_CH];
+    cell(&t->axis[0], x0, &i, &fx);
+    cell(&t->axis[1], x1, &j, &fy);
+    if (t->axis[2].n < 2) {
+        lookup_slice(t, 0, i, fx, j, fy, out);
+        return;
+    }
+    cell(&t->axis[2], x2, &m, &fz);
+    lookup_slice(t, m, i, fx, j, fy, out);
+    lookup_slice(t, m + 1, i, fx, j, fy, hi);
+    for (size_t c = 0; c < t->nch; c++)
+        out[c] = (1.0 - fz) * out[c] + fz * hi[c];
 }
 
 /* float -> nearest IEEE half -> float (round to nearest even) */
@@ -188,7 +227,7 @@ double nbt_table_max_abs(const nbt_table *t)
 
 void nbt_table_round_half(nbt_table *t)
 {
-    size_t n = t->axis[0].n * t->axis[1].n * t->nch;
+    size_t n = nbt_table_size(t);
     for (size_t i = 0; i < n; i++)
         t->data[i] = to_half_and_back(t->data[i]);
     t->half = 1;

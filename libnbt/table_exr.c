@@ -1,7 +1,8 @@
 /* libnbt/table_exr.c: tables as OpenEXR files (C core API).
  *
  * Scan line y holds node y of axis 1 (y = 0 is axis[1].lo), pixel x node x
- * of axis 0. Channels R, G, B, A carry consecutive table channels. Only
+ * of axis 0; a 3-D table stacks its slices: scan line m ny + y is node y of
+ * slice m. Channels R, G, B, A carry consecutive table channels. Only
  * NONE and ZIP compression are written (ZIPS has an encoder bug in 3.1.5). */
 #include <config.h>
 #include <errno.h>
@@ -64,7 +65,9 @@ static const char *axis_attr(int a, const char *what, char *buf, size_t n)
 
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp)
 {
-    size_t nx = t->axis[0].n, ny = t->axis[1].n, nc = t->nch, plen = strlen(path);
+    /* a 3-D table: its slices are scan lines one after another */
+    size_t nx = t->axis[0].n, ny = t->axis[1].n * t->axis[2].n, nc = t->nch, plen = strlen(path);
+    int nax = t->axis[2].n > 1 ? 3 : 2;
     char *tmp = malloc(plen + 32);
     if (!tmp)
         NBT_FAIL(NBT_ENOMEM, "EXR: out of memory");
@@ -101,9 +104,11 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
     /* metadata: enough to use the file alone */
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.kind", nbt_table_kind_name(t->kind));
-    for (int a = 0; a < 2 && rv == EXR_ERR_SUCCESS; a++) {
+    for (int a = 0; a < nax && rv == EXR_ERR_SUCCESS; a++) {
         const nbt_axis *ax = &t->axis[a];
         rv = exr_attr_set_string(ctx, part, axis_attr(a, "name", an, sizeof an), nbt_table_axis_name(t->kind, a));
+        if (rv == EXR_ERR_SUCCESS && a == 2)
+            rv = exr_attr_set_int(ctx, part, axis_attr(a, "n", an, sizeof an), (int32_t)ax->n);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
         if (rv == EXR_ERR_SUCCESS)
@@ -116,7 +121,8 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.texcoord",
                                  "node-aligned: s = map(x) in [0,1], tex = (s*(N-1)+0.5)/N; "
-                                 "scanline 0 = axis1.lo; sqrt: s = sqrt(r), log1p: s = log1p(c r)/log1p(c), "
+                                 "scanline 0 = axis1.lo; 3-D (nbt.axis2.n slices): scanline m*axis1.n + y "
+                                 "= node y of slice m; sqrt: s = sqrt(r), log1p: s = log1p(c r)/log1p(c), "
                                  "cos: s = acos(1-2r)/pi, log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), "
                                  "r = (x-lo)/(hi-lo)");
     size_t off = 0;
@@ -220,7 +226,7 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
     int32_t len;
     exr_attr_box2i_t dw;
     const exr_attr_chlist_t *cl;
-    nbt_axis ax[2];
+    nbt_axis ax[3] = {{0, 0, NBT_AXIS_LINEAR, 0, 0}, {0, 0, NBT_AXIS_LINEAR, 0, 0}, {0, 1, NBT_AXIS_LINEAR, 0, 1}};
     nbt_table_kind kind = NBT_TABLE_H;
     char an[64];
     if (exr_attr_get_string(ctx, 0, "nbt.kind", &len, &s) != EXR_ERR_SUCCESS ||
@@ -233,8 +239,22 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         st = rd_fail(err, errlen, path, "unreadable data window or channel list");
         goto done;
     }
-    for (int a = 0; a < 2; a++) {
-        int64_t na = a == 0 ? (int64_t)dw.max.x - dw.min.x + 1 : (int64_t)dw.max.y - dw.min.y + 1;
+    int32_t nslices = 1;
+    int nax = exr_attr_get_int(ctx, 0, axis_attr(2, "n", an, sizeof an), &nslices) == EXR_ERR_SUCCESS ? 3 : 2;
+    if (nax == 3 && nslices < 2) {
+        st = rd_fail(err, errlen, path, "nbt.axis2.n must be at least 2");
+        goto done;
+    }
+    for (int a = 0; a < nax; a++) {
+        int64_t na = a == 0 ? (int64_t)dw.max.x - dw.min.x + 1
+                   : a == 2 ? nslices : ((int64_t)dw.max.y - dw.min.y + 1);
+        if (a == 1 && nax == 3) { /* slices stacked in y */
+            if (na % nslices) {
+                st = rd_fail(err, errlen, path, "the image height is not a multiple of nbt.axis2.n");
+                goto done;
+            }
+            na /= nslices;
+        }
         ax[a].n = na > 0 ? (size_t)na : 0; /* 0: rejected by nbt_table_alloc */
         if (exr_attr_get_string(ctx, 0, axis_attr(a, "map", an, sizeof an), &len, &s) != EXR_ERR_SUCCESS ||
             nbt_axis_map_parse(s, &ax[a].map) != NBT_OK ||
@@ -253,11 +273,12 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
             st = rd_fail(err, errlen, path, "channels must be 1-4 of R, G, B, A, all FLOAT or all HALF");
             goto done;
         }
-    if (!nbt__exr_raw_plausible(path, (double)ax[0].n * (double)ax[1].n * (double)(nc ? nc : 1) * (half ? 2.0 : 4.0))) {
+    if (!nbt__exr_raw_plausible(path, (double)ax[0].n * (double)ax[1].n * (double)ax[2].n * (double)(nc ? nc : 1) *
+                                          (half ? 2.0 : 4.0))) {
         st = rd_fail(err, errlen, path, "the data window is more than the file can hold: corrupt header");
         goto done;
     }
-    t = nbt_table_alloc(kind, &ax[0], &ax[1], nc);
+    t = nbt_table_alloc3(kind, &ax[0], &ax[1], &ax[2], nc);
     if (!t) {
         st = rd_fail(err, errlen, path, "bad table axes or size");
         goto done;
@@ -287,7 +308,7 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         snprintf(an, sizeof an, "nbt.max_abs.%s", CH[c]);
         exr_attr_get_double(ctx, 0, an, &t->max_abs[c]);
     }
-    size_t nx = ax[0].n, ny = ax[1].n, bpe = half ? 2 : 4;
+    size_t nx = ax[0].n, ny = ax[1].n * ax[2].n, bpe = half ? 2 : 4;
     pix = malloc(nx * ny * nc * bpe);
     if (!pix) {
         st = NBT_ENOMEM;

@@ -1,5 +1,6 @@
-/* nbt/table.h: node-aligned 2-D lookup tables, their axis mappings, the
- * bilinear lookup a GPU sampler performs on them, and OpenEXR I/O.
+/* nbt/table.h: node-aligned 2-D and 3-D lookup tables, their axis mappings,
+ * the bilinear/trilinear lookup a GPU sampler performs on them, and OpenEXR
+ * I/O.
  *
  * Axis convention: node i of n sits at unit coordinate s_i = i/(n-1); the
  * physical value is x_i = from_unit(s_i), so the first and last nodes are
@@ -13,7 +14,15 @@
  *   log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), c > 0: near lo, x - lo ~ s^3,
  *           which turns the (x - lo) log(x - lo) behaviour of H and J at
  *           u, T = 0 into a C^2 function of s: bilinear error falls as N^-2
- *           (doc/tables.md); log-like spacing far from lo */
+ *           (doc/tables.md); log-like spacing far from lo
+ *
+ * 3-D tables (g-sliced): a third axis (axis[2]) holds slices, e.g. the HG
+ * asymmetry g of H_p and J_p^n tables that serve a phase chosen at run time.
+ * Slice m is a 2-D table at x2 = node m of axis[2]; the data are slices one
+ * after another, exactly the layout glTexImage3D takes (x fastest, then y,
+ * then slice), and the lookup is the trilinear one of a sampler3D with the
+ * same node-aligned texture coordinates on all three axes. A 2-D table has
+ * axis[2].n == 1. */
 #ifndef NBT_TABLE_H_INCLUDED
 #define NBT_TABLE_H_INCLUDED
 
@@ -52,34 +61,47 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
  * optical depth tau = sigma_t z and albedo (nbt-gen kernel). */
 typedef enum { NBT_TABLE_H, NBT_TABLE_J, NBT_TABLE_PSI, NBT_TABLE_KERNEL } nbt_table_kind;
 
-/* "H", "J", "PSI", "KERNEL"; the names of the two axes ("u", "v"; "T",
- * "theta"; "r/z", "z"; "tau", "albedo"). */
+/* "H", "J", "PSI", "KERNEL"; the names of the axes ("u", "v"; "T",
+ * "theta"; "r/z", "z"; "tau", "albedo"; axis 2: "g" for H and J, else
+ * "slice"). */
 const char *nbt_table_kind_name(nbt_table_kind k);
 const char *nbt_table_axis_name(nbt_table_kind k, int axis);
 
 typedef struct {
     nbt_table_kind kind;
-    nbt_axis axis[2];      /* H: u, v;  J: T, theta;  PSI: r/z, z */
+    nbt_axis axis[3];      /* H: u, v;  J: T, theta;  PSI: r/z, z;  axis[2]: slices
+                              (g for H and J), n == 1 for a 2-D table */
     size_t nch;            /* channels, 1..4 (RGBA) */
     int k[NBT_TABLE_MAX_CH];     /* Legendre order per channel; -1: fixed phase (see phase) */
     int n;                 /* J: cosine exponent (1 = Lambert, >1 Phong); H: 0 */
-    char phase[128];       /* fixed-phase channels: the phase SPEC; PSI: the run; else "" */
+    char phase[128];       /* fixed-phase channels: the phase SPEC (g-sliced: the
+                              family, e.g. "hg", its parameter on axis[2]);
+                              PSI: the run; else "" */
     double quad_tol;       /* relative tolerance of the quadrature at the nodes */
     double quad_err;       /* largest estimated quadrature error at a node (absolute) */
     double max_err[NBT_TABLE_MAX_CH];  /* estimated max |bilinear - exact| per channel */
     double max_abs[NBT_TABLE_MAX_CH];  /* max |value| per channel (scale for max_err) */
     int half;              /* values rounded to half precision (written as HALF) */
-    float *data;           /* data[(iy * axis[0].n + ix) * nch + c] */
+    float *data;           /* data[((ig * axis[1].n + iy) * axis[0].n + ix) * nch + c] */
 } nbt_table;
 
 /* Allocates the data for the axes' sizes; axes and channels must be set.
- * Returns NULL on bad sizes or no memory. */
+ * Returns NULL on bad sizes or no memory. alloc: a 2-D table (axis[2] gets
+ * n = 1); alloc3: a 3-D table, ax2->n >= 2, at most 2^31 values. */
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch);
+nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,
+                            size_t nch);
 void nbt_table_free(nbt_table *t);
+/* Values in the table: axis[0].n axis[1].n axis[2].n nch. */
+size_t nbt_table_size(const nbt_table *t);
 
 /* Bilinear interpolation at physical (x0, x1), as a GPU sampler with
- * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch values. */
+ * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch
+ * values. On a 3-D table: slice 0 (x2 = axis[2].lo). */
 void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
+/* Trilinear interpolation at (x0, x1, x2), as a sampler3D with CLAMP_TO_EDGE
+ * does (x2 clamps to axis[2]'s range); on a 2-D table x2 is ignored. */
+void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out);
 
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);
@@ -101,7 +123,9 @@ typedef enum { NBT_EXR_ZIP, NBT_EXR_NONE } nbt_exr_compression;
 
 /* Write as a scan-line OpenEXR file (32-bit float, or HALF when t->half),
  * channels R, G, B, A in order, with nbt.* header attributes describing the
- * table completely. Writes to a temporary file and renames it, so a failed
+ * table completely. A 3-D table is one image axis[1].n axis[2].n scan lines
+ * high, its slices one above the other (scan line m axis[1].n + y), with
+ * nbt.axis2.* attributes (name, map, lo, hi, c, n) naming the slice axis. Writes to a temporary file and renames it, so a failed
  * write leaves nothing behind. */
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp);
 
