@@ -338,14 +338,33 @@ nbt_status nbt_surface_table(const nbt_table *const *diffuse, size_t ndiffuse,
 
 /* ---- J tables: J(T_i, theta_j) = sum_q G(T_i, g_q) M(theta_j, q) ----
  *
- * G is smooth in g, so it is sampled once on Gauss-Legendre nodes of fixed
- * panels (graded towards g = 0, where G varies on a scale ~ 1/sqrt(T)).
- * M(theta, q) = int K_n(theta, g) l_q(g) dg, l_q the Lagrange basis of the
- * panel's nodes, integrated per theta between the kernel's own kinks with a
- * smoothstep change of variable that makes the (g - g_kink)^{n+1/2} endpoint
- * behaviour analytic. */
+ * G is smooth in g on (0, pi], so it is sampled once on Gauss-Legendre nodes
+ * of fixed panels (graded towards g = 0, where G varies on a scale
+ * ~ 1/sqrt(T)). At g = 0 it is not smooth: u = T sin g, and H(u, pi/2) has
+ * u^j log u terms, so G ~ smooth + T g log g. A polynomial in g on the first
+ * panel [0, h0] leaves ~T e^-T h0 / m^2 (3.5e-9 at T = 5, 1.5e-7 on T in
+ * [0, 1]); there the nodes and the basis live in y with
+ * g = h0 ((1 + y)/2)^J_FIRST_POW, where g log g becomes y^P log y and the
+ * interpolation error falls like m^-2P. M(theta, q) = int K_n(theta, g)
+ * l_q(y(g)) dg, l_q the Lagrange basis of the panel's nodes in y, is
+ * integrated per theta in y between the kernel's own kinks, with a
+ * smoothstep change of variable that makes the (g - g_kink)^{n+1/2}
+ * endpoint behaviour analytic.
+ *
+ * The error of the product (interpolation of G, the rule for M) is measured:
+ * on the first 3, every J_CHECK_STRIDE-th and the last T row it is rebuilt
+ * with every panel halved, and twice the largest difference over all theta
+ * is added to the G quadrature error. */
 
 #define J_PANEL_NODES 16
+#define J_FIRST_POW 4
+#define J_CHECK_STRIDE 8
+
+typedef struct {
+    size_t npanel, Q;
+    double *pb; /* panel boundaries, npanel + 1, pb[0] = 0 */
+    double *gq; /* nodes in g, Q = npanel * J_PANEL_NODES */
+} jpanels;
 
 typedef struct {
     size_t nch;
@@ -354,10 +373,10 @@ typedef struct {
     nbt__weights w;
     unsigned fdim, nt;
     double tol;
-    size_t npanel, Q;
-    double *pb;                 /* panel boundaries, npanel + 1 */
-    double *gq;                 /* nodes, Q */
-    double *lam;                /* barycentric weights per node within its panel */
+    const jpanels *P;           /* the panels of the current pass */
+    jpanels coarse, fine;       /* the table's, and each halved (the check) */
+    const nbt_gl_rule *rp;      /* the panel rule, nodes y in [-1, 1] */
+    double lam[J_PANEL_NODES];  /* its barycentric weights */
     const double *xs, *ys;
     size_t nx, ny;
     double *G, *M, *F;
@@ -365,16 +384,69 @@ typedef struct {
     nbt_quad_ws **ws;
     double **buf;
     nbt_gl_rule *rk, *rm;       /* kernel rule; integration rule for M */
-    int checked;                /* the adaptive check below ran (once per build) */
+    int checked;                /* the check ran (on the node rows, once per build) */
+    double check_err;           /* its result, added to later passes */
 } jfill_ctx;
+
+/* g(y) on panel p, dg/dy, and the inverse */
+static double panel_g(const jpanels *P, size_t p, double y)
+{
+    double a = P->pb[p], b = P->pb[p + 1], r = 0.5 * (1.0 + y);
+    return p == 0 ? b * pow(r, J_FIRST_POW) : a + (b - a) * r;
+}
+
+static double panel_dg(const jpanels *P, size_t p, double y)
+{
+    double a = P->pb[p], b = P->pb[p + 1], r = 0.5 * (1.0 + y);
+    return p == 0 ? 0.5 * J_FIRST_POW * b * pow(r, J_FIRST_POW - 1) : 0.5 * (b - a);
+}
+
+static double panel_y(const jpanels *P, size_t p, double g)
+{
+    double a = P->pb[p], b = P->pb[p + 1];
+    return p == 0 ? 2.0 * pow(g / b, 1.0 / J_FIRST_POW) - 1.0 : (2.0 * g - a - b) / (b - a);
+}
+
+static void jpanels_free(jpanels *P)
+{
+    free(P->pb);
+    free(P->gq);
+}
+
+/* geometric below pi/8 (ngeo panels), 8 uniform above; split: each halved */
+static nbt_status jpanels_init(jpanels *P, size_t ngeo, int split, const nbt_gl_rule *rp)
+{
+    size_t nb = ngeo + 8, f = split ? 2 : 1, m = J_PANEL_NODES;
+    P->npanel = nb * f;
+    P->Q = P->npanel * m;
+    P->pb = malloc((P->npanel + 1) * sizeof(double));
+    P->gq = malloc(P->Q * sizeof(double));
+    if (!P->pb || !P->gq)
+        return NBT_ENOMEM;
+    double base[64];
+    size_t p = 0;
+    base[p++] = 0.0;
+    for (size_t j = ngeo; j >= 1; j--)
+        base[p++] = NBT_PI / 8 * ldexp(1.0, -(int)j);
+    for (int j = 1; j <= 8; j++)
+        base[p++] = NBT_PI / 8 * j;
+    for (size_t q = 0; q < nb; q++)
+        for (size_t s = 0; s < f; s++)
+            P->pb[q * f + s] = base[q] + (base[q + 1] - base[q]) * (double)s / (double)f;
+    P->pb[P->npanel] = NBT_PI;
+    for (size_t q = 0; q < P->npanel; q++)
+        for (size_t r = 0; r < m; r++)
+            P->gq[q * m + r] = panel_g(P, q, rp->x[r]);
+    return NBT_OK;
+}
 
 static nbt_status j_grow(size_t i, unsigned thread, void *vp)
 {
     jfill_ctx *c = vp;
     double e = 0, *err = c->buf[thread];
-    for (size_t q = 0; q < c->Q; q++) {
-        double *G = c->G + (i * c->Q + q) * c->fdim;
-        nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->gq[q], c->tol, G, err);
+    for (size_t q = 0; q < c->P->Q; q++) {
+        double *G = c->G + (i * c->P->Q + q) * c->fdim;
+        nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->P->gq[q], c->tol, G, err);
         if (st != NBT_OK)
             return st;
         for (unsigned k = 0; k < c->fdim; k++)
@@ -388,49 +460,51 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
 {
     (void)thread;
     jfill_ctx *c = vp;
+    const jpanels *P = c->P;
     double theta = c->ys[j], kinks[4], lo, hi;
     size_t nk = kernel_kinks(theta, kinks, &lo, &hi);
-    double *M = c->M + j * c->Q;
-    for (size_t q = 0; q < c->Q; q++)
+    double *M = c->M + j * P->Q;
+    for (size_t q = 0; q < P->Q; q++)
         M[q] = 0;
     size_t m = J_PANEL_NODES;
-    for (size_t p = 0; p < c->npanel; p++) {
-        double a = fmax(c->pb[p], lo), b = fmin(c->pb[p + 1], hi);
+    const double *x = c->rp->x, *lam = c->lam;
+    for (size_t p = 0; p < P->npanel; p++) {
+        double a = fmax(P->pb[p], lo), b = fmin(P->pb[p + 1], hi);
         if (!(b > a))
             continue;
-        const double *x = c->gq + p * m, *lam = c->lam + p * m;
+        /* the pieces between kinks, in the panel's variable y */
         double cuts[6];
         size_t nc = 0;
-        cuts[nc++] = a;
+        cuts[nc++] = panel_y(P, p, a);
         for (size_t k = 0; k < nk; k++)
             if (kinks[k] > a && kinks[k] < b)
-                cuts[nc++] = kinks[k];
-        cuts[nc++] = b;
+                cuts[nc++] = panel_y(P, p, kinks[k]);
+        cuts[nc++] = panel_y(P, p, b);
         for (size_t s = 0; s + 1 < nc; s++) {
             double c0 = cuts[s], w0 = cuts[s + 1] - cuts[s];
             for (size_t r = 0; r < c->rm->n; r++) {
-                double y = 0.5 * (1.0 + c->rm->x[r]);
-                double g = c0 + w0 * y * y * (3.0 - 2.0 * y);
-                double wt = 0.5 * c->rm->w[r] * w0 * 6.0 * y * (1.0 - y);
-                double Kw = wt * kernel_eval(c->rk, c->n, theta, g);
+                double z = 0.5 * (1.0 + c->rm->x[r]);
+                double y = c0 + w0 * z * z * (3.0 - 2.0 * z);
+                double wt = 0.5 * c->rm->w[r] * w0 * 6.0 * z * (1.0 - z) * panel_dg(P, p, y);
+                double Kw = wt * kernel_eval(c->rk, c->n, theta, panel_g(P, p, y));
                 if (Kw == 0)
                     continue;
-                /* barycentric Lagrange basis at g */
+                /* barycentric Lagrange basis at y */
                 double den = 0;
                 size_t hit = m;
                 for (size_t q = 0; q < m; q++) {
-                    if (g == x[q]) {
+                    if (y == x[q]) {
                         hit = q;
                         break;
                     }
-                    den += lam[q] / (g - x[q]);
+                    den += lam[q] / (y - x[q]);
                 }
                 if (hit < m) {
                     M[p * m + hit] += Kw;
                     continue;
                 }
                 for (size_t q = 0; q < m; q++)
-                    M[p * m + q] += Kw * lam[q] / (g - x[q]) / den;
+                    M[p * m + q] += Kw * lam[q] / (y - x[q]) / den;
             }
         }
     }
@@ -441,14 +515,14 @@ static nbt_status j_product(size_t i, unsigned thread, void *vp)
 {
     (void)thread;
     jfill_ctx *c = vp;
-    size_t nch = c->nch;
+    size_t nch = c->nch, Q = c->P->Q;
     for (size_t j = 0; j < c->ny; j++) {
-        const double *M = c->M + j * c->Q;
+        const double *M = c->M + j * Q;
         for (size_t ch = 0; ch < nch; ch++) {
             unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-            const double *G = c->G + i * c->Q * c->fdim + k;
+            const double *G = c->G + i * Q * c->fdim + k;
             double s = 0;
-            for (size_t q = 0; q < c->Q; q++)
+            for (size_t q = 0; q < Q; q++)
                 s += G[q * c->fdim] * M[q];
             c->F[(i * c->ny + j) * nch + ch] = s;
         }
@@ -456,17 +530,19 @@ static nbt_status j_product(size_t i, unsigned thread, void *vp)
     return NBT_OK;
 }
 
-static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny,
-                         double *F, double *quad_err)
+/* J at (xs[i], ys[j]) on the panels P; *gerr: G's quadrature error times
+ * int K dg <= 2 pi */
+static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, size_t nx, const double *ys,
+                            size_t ny, double *F, double *gerr)
 {
-    jfill_ctx *c = vp;
+    c->P = P;
     c->xs = xs;
     c->ys = ys;
     c->nx = nx;
     c->ny = ny;
     c->F = F;
-    c->G = malloc(nx * c->Q * c->fdim * sizeof(double));
-    c->M = malloc(ny * c->Q * sizeof(double));
+    c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
+    c->M = malloc(ny * P->Q * sizeof(double));
     c->rowerr = calloc(nx, sizeof(double));
     nbt_status st = NBT_ENOMEM;
     if (c->G && c->M && c->rowerr) {
@@ -476,37 +552,55 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
     }
-    /* error of the g quadrature: check against adaptive J at the corners
-     * and the centre (to 1e-8: this bounds an error far below any table's) */
-    double qerr = 0;
-    for (size_t i = 0; i < nx; i++)
-        qerr = fmax(qerr, c->rowerr[i]) ; /* G's own error, times int K <= 2 pi */
-    qerr *= 2.0 * NBT_PI;
-    if (st == NBT_OK && !c->checked) {
-        c->checked = 1;
-        size_t si[5] = {0, nx - 1, 0, nx - 1, nx / 2}, sj[5] = {0, 0, ny - 1, ny - 1, ny / 2};
-        double J[256], E[256];
-        for (int a = 0; a < 5 && st == NBT_OK; a++) {
-            size_t i = si[a], j = sj[a];
-            unsigned fd = c->fdim;
-            double *Jv = fd <= 256 ? J : malloc(2 * fd * sizeof(double)), *Ev = fd <= 256 ? E : Jv + fd;
-            if (!Jv) {
-                st = NBT_ENOMEM;
-                break;
-            }
-            st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-8), Jv, Ev);
-            for (size_t ch = 0; ch < c->nch && st == NBT_OK; ch++) {
-                unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-                qerr = fmax(qerr, fabs(F[(i * ny + j) * c->nch + ch] - Jv[k]) + Ev[k]);
-            }
-            if (Jv != J)
-                free(Jv);
-        }
-    }
-    *quad_err = qerr;
+    double e = 0;
+    for (size_t i = 0; i < nx && c->rowerr; i++)
+        e = fmax(e, c->rowerr[i]);
+    *gerr = 2.0 * NBT_PI * e;
     free(c->G);
     free(c->M);
     free(c->rowerr);
+    return st;
+}
+
+static int j_check_row(size_t i, size_t nx)
+{
+    return i < 3 || i % J_CHECK_STRIDE == 0 || i + 1 == nx;
+}
+
+static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny,
+                         double *F, double *quad_err)
+{
+    jfill_ctx *c = vp;
+    double qerr = 0;
+    nbt_status st = j_compute(c, &c->coarse, xs, nx, ys, ny, F, &qerr);
+    if (st == NBT_OK && !c->checked) {
+        c->checked = 1;
+        size_t ns = 0;
+        for (size_t i = 0; i < nx; i++)
+            ns += (size_t)j_check_row(i, nx);
+        double *xc = malloc(ns * sizeof(double)), *Fc = malloc(ns * ny * c->nch * sizeof(double));
+        size_t *ic = malloc(ns * sizeof(size_t));
+        double qf = 0, d = 0;
+        st = NBT_ENOMEM;
+        if (xc && Fc && ic) {
+            ns = 0;
+            for (size_t i = 0; i < nx; i++)
+                if (j_check_row(i, nx)) {
+                    ic[ns] = i;
+                    xc[ns++] = xs[i];
+                }
+            st = j_compute(c, &c->fine, xc, ns, ys, ny, Fc, &qf);
+            for (size_t s = 0; s < ns && st == NBT_OK; s++)
+                for (size_t j = 0; j < ny * c->nch; j++)
+                    d = fmax(d, fabs(F[ic[s] * ny * c->nch + j] - Fc[s * ny * c->nch + j]));
+        }
+        free(xc);
+        free(Fc);
+        free(ic);
+        /* twice: the rows between the checked ones, and the halved panels' own error */
+        c->check_err = 2.0 * d + qf;
+    }
+    *quad_err = qerr + c->check_err;
     return st;
 }
 
@@ -540,12 +634,7 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     size_t ngeo = 0;
     while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > 0.2 / sqrt(1.0 + t->axis[0].hi))
         ngeo++;
-    c.npanel = ngeo + 8;
     size_t m = J_PANEL_NODES;
-    c.Q = c.npanel * m;
-    c.pb = malloc((c.npanel + 1) * sizeof(double));
-    c.gq = malloc(c.Q * sizeof(double));
-    c.lam = malloc(c.Q * sizeof(double));
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
     c.rk = nbt_gl_rule_alloc(kernel_nodes(c.n));
     c.rm = nbt_gl_rule_alloc(2 * m + 8);
@@ -558,22 +647,17 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         if (!ws[i] || !buf[i])
             st = NBT_ENOMEM;
     }
-    if (!c.pb || !c.gq || !c.lam || !rp || !c.rk || !c.rm)
+    if (!rp || !c.rk || !c.rm)
         st = NBT_ENOMEM;
     if (st == NBT_OK) {
-        size_t p = 0;
-        c.pb[p++] = 0.0;
-        for (size_t j = ngeo; j >= 1; j--)
-            c.pb[p++] = NBT_PI / 8 * ldexp(1.0, -(int)j);
-        for (int j = 1; j <= 8; j++)
-            c.pb[p++] = NBT_PI / 8 * j;
-        c.pb[c.npanel] = NBT_PI;
-        for (size_t q = 0; q < c.npanel; q++)
-            for (size_t r = 0; r < m; r++) {
-                double a = c.pb[q], b = c.pb[q + 1];
-                c.gq[q * m + r] = 0.5 * (a + b) + 0.5 * (b - a) * rp->x[r];
-                c.lam[q * m + r] = ((r % 2) ? -1.0 : 1.0) * sqrt((1.0 - rp->x[r] * rp->x[r]) * rp->w[r]);
-            }
+        c.rp = rp;
+        for (size_t r = 0; r < m; r++)
+            c.lam[r] = ((r % 2) ? -1.0 : 1.0) * sqrt((1.0 - rp->x[r] * rp->x[r]) * rp->w[r]);
+        st = jpanels_init(&c.coarse, ngeo, 0, rp);
+        if (st == NBT_OK)
+            st = jpanels_init(&c.fine, ngeo, 1, rp);
+    }
+    if (st == NBT_OK) {
         c.ws = ws;
         c.buf = buf;
         c.tol = 0.1 * o->quad_tol;
@@ -583,9 +667,8 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         nbt_quad_ws_free(ws[i]);
         free(buf[i]);
     }
-    free(c.pb);
-    free(c.gq);
-    free(c.lam);
+    jpanels_free(&c.coarse);
+    jpanels_free(&c.fine);
     nbt_gl_rule_free(rp);
     nbt_gl_rule_free(c.rk);
     nbt_gl_rule_free(c.rm);
