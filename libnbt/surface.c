@@ -13,40 +13,72 @@
 
 /* ---- the azimuthal kernel K_n(theta, g) ---- */
 
+static double ipow_d(double x, int n)
+{
+    double r = 1;
+    for (; n > 0; n >>= 1, x *= x)
+        if (n & 1)
+            r *= x;
+    return r;
+}
+
 static size_t kernel_nodes(int n)
 {
     size_t m = 48 + (size_t)n;
     return m > 600 ? 600 : m;
 }
 
-/* rule: Gauss-Legendre with kernel_nodes(n) nodes. */
-static double kernel_eval(const nbt_gl_rule *rule, int n, double theta, double g)
+/* K_n from cos/sin of theta and g (both in [0, pi]). With a = cos theta
+ * cos g, b = sin theta sin g: a + b = cos(theta - g), a - b = cos(theta + g),
+ * so |a| + b <= 1 and every sum below loses at most ~n DBL_EPSILON absolute,
+ * which is all J's weights need (rule = NULL). Relative accuracy where the
+ * horizon cuts the lobe and a < 0 (K tiny next to those sums) takes a
+ * Gauss-Legendre rule of kernel_nodes(n) nodes: the point evaluations. */
+static double kernel_cs(const nbt_gl_rule *rule, int n, double ct, double st, double cg, double sg)
 {
-    double a = cos(theta) * cos(g), b = fabs(sin(theta) * sin(g));
+    double a = ct * cg, b = fabs(st * sg);
     if (a >= b) {
-        /* the whole cone is above the horizon: 2 pi sum_{j even} C(n,j) a^{n-j} b^j (j-1)!!/j!! */
-        double s = 0, binom = 1, dfr = 1;
-        for (int j = 0; j <= n; j++) {
-            if (j > 0)
-                binom *= (double)(n - j + 1) / j;
-            if (j % 2 == 0) {
-                if (j > 0)
-                    dfr *= (double)(j - 1) / j;
-                s += binom * pow(a, n - j) * pow(b, j) * dfr;
-            }
+        /* the whole cone is above the horizon: 2 pi sum_{j even} C(n,j) a^{n-j} b^j (j-1)!!/j!!
+         * = 2 pi a^n sum_j ... (b/a)^j */
+        if (a == 0)
+            return 0.0;
+        double x = b / a, x2 = x * x, s = 1, binom = 1, dfr = 1, xp = 1;
+        for (int j = 2; j <= n; j += 2) {
+            binom *= (double)(n - j + 2) * (double)(n - j + 1) / ((double)(j - 1) * (double)j);
+            dfr *= (double)(j - 1) / j;
+            xp *= x2;
+            s += binom * xp * dfr;
         }
-        return 2.0 * NBT_PI * s;
+        return 2.0 * NBT_PI * (n <= 16 ? ipow_d(a, n) : pow(a, n)) * s;
     }
     if (a <= -b)
         return 0.0;
-    /* cut by the horizon: 2 int_0^{phi0} (a + b cos phi)^n dphi, analytic on [0, phi0] */
-    double phi0 = acos(-a / b), s = 0;
-    for (size_t i = 0; i < rule->n; i++) {
-        double phi = 0.5 * phi0 * (1.0 + rule->x[i]);
-        double v = a + b * cos(phi);
-        s += rule->w[i] * (v > 0 ? pow(v, n) : 0.0);
+    /* cut by the horizon: 2 I_n, I_m = int_0^{phi0} (a + b cos phi)^m dphi,
+     * cos phi0 = -a/b. The reduction formula's boundary term
+     * b sin phi (a + b cos phi)^{m-1} vanishes at 0 and phi0 for m >= 2:
+     * m I_m = (2m - 1) a I_{m-1} - (m - 1)(a^2 - b^2) I_{m-2}. Its two
+     * solutions grow like (a + b)^m and (a - b)^m, both <= 1 in size. */
+    double c0 = -a / b, phi0 = acos(c0), s0 = sqrt(fmax(0.0, 1.0 - c0 * c0));
+    if (rule && a < 0 && n > 1) {
+        double s = 0;
+        for (size_t i = 0; i < rule->n; i++) {
+            double v = a + b * cos(0.5 * phi0 * (1.0 + rule->x[i]));
+            s += rule->w[i] * (v > 0 ? ipow_d(v, n) : 0.0);
+        }
+        return phi0 * s;
     }
-    return phi0 * s;
+    double I0 = phi0, I1 = a * phi0 + b * s0, d = a * a - b * b;
+    for (int m = 2; m <= n; m++) {
+        double I2 = ((2.0 * m - 1.0) * a * I1 - (m - 1.0) * d * I0) / m;
+        I0 = I1;
+        I1 = I2;
+    }
+    return 2.0 * (n == 0 ? I0 : I1);
+}
+
+static double kernel_eval(const nbt_gl_rule *rule, int n, double theta, double g)
+{
+    return kernel_cs(rule, n, cos(theta), sin(theta), cos(g), sin(g));
 }
 
 double nbt_surface_kernel(int n, double theta, double g)
@@ -383,8 +415,9 @@ typedef struct {
     double *rowerr;
     nbt_quad_ws **ws;
     double **buf;
-    nbt_gl_rule *rk, *rm;       /* kernel rule; integration rule for M */
+    nbt_gl_rule *rm;            /* integration rule for M */
     int checked;                /* the check ran (on the node rows, once per build) */
+    nbt__segfix *sf;            /* fixed rules for G (Legendre channels), or NULL */
     double check_err;           /* its result, added to later passes */
 } jfill_ctx;
 
@@ -446,6 +479,15 @@ static nbt_status j_grow(size_t i, unsigned thread, void *vp)
     double e = 0, *err = c->buf[thread];
     for (size_t q = 0; q < c->P->Q; q++) {
         double *G = c->G + (i * c->P->Q + q) * c->fdim;
+        if (c->sf) {
+            /* Legendre channels: fixed rules, one a-priori bound for all orders */
+            double T = c->xs[i], g = c->P->gq[q], b = 0, ex = exp(-T);
+            nbt__segfix_eval(c->sf, &c->w, T * sin(g), g - NBT_PI_2, NBT_PI_2, 1, G, err, &b);
+            for (unsigned k = 0; k < c->fdim; k++)
+                G[k] *= ex;
+            e = fmax(e, b * ex);
+            continue;
+        }
         nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->P->gq[q], c->tol, G, err);
         if (st != NBT_OK)
             return st;
@@ -461,7 +503,7 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
     (void)thread;
     jfill_ctx *c = vp;
     const jpanels *P = c->P;
-    double theta = c->ys[j], kinks[4], lo, hi;
+    double theta = c->ys[j], kinks[4], lo, hi, ct = cos(theta), st = sin(theta);
     size_t nk = kernel_kinks(theta, kinks, &lo, &hi);
     double *M = c->M + j * P->Q;
     for (size_t q = 0; q < P->Q; q++)
@@ -486,7 +528,8 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
                 double z = 0.5 * (1.0 + c->rm->x[r]);
                 double y = c0 + w0 * z * z * (3.0 - 2.0 * z);
                 double wt = 0.5 * c->rm->w[r] * w0 * 6.0 * z * (1.0 - z) * panel_dg(P, p, y);
-                double Kw = wt * kernel_eval(c->rk, c->n, theta, panel_g(P, p, y));
+                double g = panel_g(P, p, y);
+                double Kw = wt * kernel_cs(NULL, c->n, ct, st, cos(g), sin(g));
                 if (Kw == 0)
                     continue;
                 /* barycentric Lagrange basis at y */
@@ -511,21 +554,59 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
     return NBT_OK;
 }
 
+/* row i of F = G_i M^T, all orders of a G node in one pass (the inner loop
+ * runs over the fdim contiguous orders) */
 static nbt_status j_product(size_t i, unsigned thread, void *vp)
 {
-    (void)thread;
     jfill_ctx *c = vp;
-    size_t nch = c->nch, Q = c->P->Q;
-    for (size_t j = 0; j < c->ny; j++) {
-        const double *M = c->M + j * Q;
-        for (size_t ch = 0; ch < nch; ch++) {
-            unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-            const double *G = c->G + i * Q * c->fdim + k;
-            double s = 0;
-            for (size_t q = 0; q < Q; q++)
-                s += G[q * c->fdim] * M[q];
-            c->F[(i * c->ny + j) * nch + ch] = s;
+    size_t nch = c->nch, Q = c->P->Q, fd = c->fdim;
+    double *acc = c->buf[thread];
+    const double *G = c->G + i * Q * fd;
+    size_t j0 = 0;
+    if (fd % 4 == 0) /* whole packs: two theta rows and four orders at a time, in registers */
+        for (; j0 + 2 <= c->ny; j0 += 2) {
+            const double *M0 = c->M + j0 * Q, *M1 = M0 + Q;
+            for (size_t kb = 0; kb < fd; kb += 4) {
+                double a0 = 0, a1 = 0, a2 = 0, a3 = 0, b0 = 0, b1 = 0, b2 = 0, b3 = 0;
+                for (size_t q = 0; q < Q; q++) {
+                    const double *Gq = G + q * fd + kb;
+                    double m0 = M0[q], m1 = M1[q];
+                    a0 += Gq[0] * m0;
+                    a1 += Gq[1] * m0;
+                    a2 += Gq[2] * m0;
+                    a3 += Gq[3] * m0;
+                    b0 += Gq[0] * m1;
+                    b1 += Gq[1] * m1;
+                    b2 += Gq[2] * m1;
+                    b3 += Gq[3] * m1;
+                }
+                acc[kb] = a0;
+                acc[kb + 1] = a1;
+                acc[kb + 2] = a2;
+                acc[kb + 3] = a3;
+                acc[fd + kb] = b0;
+                acc[fd + kb + 1] = b1;
+                acc[fd + kb + 2] = b2;
+                acc[fd + kb + 3] = b3;
+            }
+            for (size_t jj = 0; jj < 2; jj++)
+                for (size_t ch = 0; ch < nch; ch++)
+                    c->F[(i * c->ny + j0 + jj) * nch + ch] = acc[jj * fd + (unsigned)c->kmap[ch]];
         }
+    for (size_t j = j0; j < c->ny; j++) {
+        const double *M = c->M + j * Q;
+        for (size_t k = 0; k < fd; k++)
+            acc[k] = 0;
+        for (size_t q = 0; q < Q; q++) {
+            double m = M[q];
+            if (m == 0)
+                continue;
+            const double *Gq = G + q * fd;
+            for (size_t k = 0; k < fd; k++)
+                acc[k] += Gq[k] * m;
+        }
+        for (size_t ch = 0; ch < nch; ch++)
+            c->F[(i * c->ny + j) * nch + ch] = acc[c->w.phase ? 0u : (unsigned)c->kmap[ch]];
     }
     return NBT_OK;
 }
@@ -636,18 +717,17 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         ngeo++;
     size_t m = J_PANEL_NODES;
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
-    c.rk = nbt_gl_rule_alloc(kernel_nodes(c.n));
     c.rm = nbt_gl_rule_alloc(2 * m + 8);
     c.nt = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
     nbt_quad_ws *ws[64] = {0};
     double *buf[64] = {0};
     for (unsigned i = 0; i < c.nt; i++) {
         ws[i] = nbt_quad_ws_alloc(c.fdim, SEG_MAX_INTERVALS);
-        buf[i] = malloc(c.fdim * sizeof(double));
+        buf[i] = malloc(2 * c.fdim * sizeof(double)); /* j_product: two rows */
         if (!ws[i] || !buf[i])
             st = NBT_ENOMEM;
     }
-    if (!rp || !c.rk || !c.rm)
+    if (!rp || !c.rm)
         st = NBT_ENOMEM;
     if (st == NBT_OK) {
         c.rp = rp;
@@ -661,7 +741,11 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         c.ws = ws;
         c.buf = buf;
         c.tol = 0.1 * o->quad_tol;
-        st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
+        if (!fixed && !(c.sf = nbt__segfix_alloc(c.tol)))
+            st = NBT_ENOMEM;
+        if (st == NBT_OK)
+            st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
+        nbt__segfix_free(c.sf);
     }
     for (unsigned i = 0; i < c.nt; i++) {
         nbt_quad_ws_free(ws[i]);
@@ -670,7 +754,6 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     jpanels_free(&c.coarse);
     jpanels_free(&c.fine);
     nbt_gl_rule_free(rp);
-    nbt_gl_rule_free(c.rk);
     nbt_gl_rule_free(c.rm);
     free(kmap);
     if (st == NBT_ENOMEM)

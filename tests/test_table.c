@@ -435,14 +435,19 @@ int main(void)
      * width ~1 - g at g = 0 that the fixed panels do not resolve: ~2e-5) must
      * be bounded by the halved-panel check alone. ---- */
     {
+        /* and the fixed-rule G rows at the edges of T: T -> 0 (G's w -> 0
+         * layer), large T, order 11 on [0.1, 3] */
         struct {
             int n, K;
-            double g, Thi;
+            double g, Tlo, Thi;
             size_t nx, ny;
-        } jc[4] = {{1, 11, 0, 10, 3, 4}, {20, 3, 0, 10, 3, 4}, {1, 3, 0, 1, 5, 5}, {1, 0, 0.99, 1, 5, 5}};
+        } jc[7] = {{1, 11, 0, 0, 10, 3, 4},   {20, 3, 0, 0, 10, 3, 4}, {1, 3, 0, 0, 1, 5, 5},
+                   {1, 0, 0.99, 0, 1, 5, 5},  {1, 3, 0, 0, 1e-5, 3, 4}, {1, 3, 0, 2, 60, 3, 4},
+                   {1, 11, 0, 0.1, 3, 3, 4}};
         double eworst = 0, qleg = 0;
-        for (int q = 0; q < 4; q++) {
-            nbt_axis ax = {0, jc[q].Thi, NBT_AXIS_LINEAR, 0, jc[q].nx}, ay = {0, M_PI, NBT_AXIS_LINEAR, 0, jc[q].ny};
+        for (int q = 0; q < 7; q++) {
+            nbt_axis ax = {jc[q].Tlo, jc[q].Thi, NBT_AXIS_LINEAR, 0, jc[q].nx};
+            nbt_axis ay = {0, M_PI, NBT_AXIS_LINEAR, 0, jc[q].ny};
             nbt_phase *ph = jc[q].g > 0 ? nbt_phase_hg(jc[q].g) : NULL;
             size_t np = ph ? 1 : (size_t)(jc[q].K + 4) / 4;
             nbt_table *js[3];
