@@ -446,10 +446,11 @@ static void jpanels_free(jpanels *P)
     free(P->gq);
 }
 
-/* geometric below pi/8 (ngeo panels), 8 uniform above; split: each halved */
-static nbt_status jpanels_init(jpanels *P, size_t ngeo, int split, const nbt_gl_rule *rp)
+/* geometric below pi/8 (ngeo panels), 8 uniform above, the last of them
+ * geometric towards pi (nhi more panels); split: each halved */
+static nbt_status jpanels_init(jpanels *P, size_t ngeo, size_t nhi, int split, const nbt_gl_rule *rp)
 {
-    size_t nb = ngeo + 8, f = split ? 2 : 1, m = J_PANEL_NODES;
+    size_t nb = ngeo + 8 + nhi, f = split ? 2 : 1, m = J_PANEL_NODES;
     P->npanel = nb * f;
     P->Q = P->npanel * m;
     P->pb = malloc((P->npanel + 1) * sizeof(double));
@@ -461,8 +462,11 @@ static nbt_status jpanels_init(jpanels *P, size_t ngeo, int split, const nbt_gl_
     base[p++] = 0.0;
     for (size_t j = ngeo; j >= 1; j--)
         base[p++] = NBT_PI / 8 * ldexp(1.0, -(int)j);
-    for (int j = 1; j <= 8; j++)
+    for (int j = 1; j <= 7; j++)
         base[p++] = NBT_PI / 8 * j;
+    for (size_t j = 1; j <= nhi; j++)
+        base[p++] = NBT_PI - NBT_PI / 8 * ldexp(1.0, -(int)j);
+    base[p++] = NBT_PI;
     for (size_t q = 0; q < nb; q++)
         for (size_t s = 0; s < f; s++)
             P->pb[q * f + s] = base[q] + (base[q + 1] - base[q]) * (double)s / (double)f;
@@ -713,8 +717,19 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         ts[i]->quad_tol = o->quad_tol;
     /* panels: geometric below pi/8 down to ~0.2/sqrt(1 + T_max), uniform above */
     size_t ngeo = 0;
-    while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > 0.2 / sqrt(1.0 + t->axis[0].hi))
+    /* a peaked fixed phase p(cos g) puts a feature of width ~1 - |mean
+     * cosine| where the segment's lower end t = g - pi/2 crosses its peak:
+     * at g = 0 (forward), g = pi (backward): panels graded to it */
+    double hmin = 0.2 / sqrt(1.0 + t->axis[0].hi), hpk = 1.0, mc = fixed ? nbt_phase_mean_cosine(fixed) : 0;
+    if (fixed)
+        hpk = 0.5 * (1.0 - fabs(mc));
+    if (mc > 0)
+        hmin = fmin(hmin, hpk);
+    while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > hmin)
         ngeo++;
+    size_t nhi = 0;
+    while (mc < 0 && nhi < 20 && NBT_PI / 8 * ldexp(1.0, -(int)nhi) > hpk)
+        nhi++;
     size_t m = J_PANEL_NODES;
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
     c.rm = nbt_gl_rule_alloc(2 * m + 8);
@@ -733,9 +748,9 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         c.rp = rp;
         for (size_t r = 0; r < m; r++)
             c.lam[r] = ((r % 2) ? -1.0 : 1.0) * sqrt((1.0 - rp->x[r] * rp->x[r]) * rp->w[r]);
-        st = jpanels_init(&c.coarse, ngeo, 0, rp);
+        st = jpanels_init(&c.coarse, ngeo, nhi, 0, rp);
         if (st == NBT_OK)
-            st = jpanels_init(&c.fine, ngeo, 1, rp);
+            st = jpanels_init(&c.fine, ngeo, nhi, 1, rp);
     }
     if (st == NBT_OK) {
         c.ws = ws;

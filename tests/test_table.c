@@ -431,24 +431,27 @@ int main(void)
      * T g log g term at g = 0, visible at T ~ 1..5 and theta = 0, which no
      * corner or centre check sees. With the first panel in y^4 the Legendre
      * sets must stay small (<= 1e-9 at quad_tol 1e-10: a polynomial in g
-     * there leaves 5e-9 .. 2e-7); a fixed HG g = 0.99 phase (a feature of
-     * width ~1 - g at g = 0 that the fixed panels do not resolve: ~2e-5) must
-     * be bounded by the halved-panel check alone. ---- */
+     * there leaves 5e-9 .. 2e-7). Fixed HG g = 0.99, -0.97: the peak makes a
+     * feature of width ~1 - |g| at g = 0 (forward) or pi (backward), to
+     * which the panels are graded (<= 1e-6; ungraded 3.5e-5, 6.6e-5). A
+     * tabulated phase with peaks at both ends (mean cosine 0: no grading,
+     * and kinks at mu = +-0.99) leaves ~2e-4 that only the halved-panel
+     * check bounds. ---- */
     {
         /* and the fixed-rule G rows at the edges of T: T -> 0 (G's w -> 0
-         * layer), large T, order 11 on [0.1, 3] */
+         * layer), large T, order 11 on [0.1, 3]; g = 2: the tabulated phase */
         struct {
             int n, K;
             double g, Tlo, Thi;
             size_t nx, ny;
-        } jc[7] = {{1, 11, 0, 0, 10, 3, 4},   {20, 3, 0, 0, 10, 3, 4}, {1, 3, 0, 0, 1, 5, 5},
-                   {1, 0, 0.99, 0, 1, 5, 5},  {1, 3, 0, 0, 1e-5, 3, 4}, {1, 3, 0, 2, 60, 3, 4},
-                   {1, 11, 0, 0.1, 3, 3, 4}};
-        double eworst = 0, qleg = 0;
-        for (int q = 0; q < 7; q++) {
+        } jc[9] = {{1, 11, 0, 0, 10, 3, 4},   {20, 3, 0, 0, 10, 3, 4},    {1, 3, 0, 0, 1, 5, 5},
+                   {1, 0, 0.99, 0, 1, 5, 5},  {1, 0, -0.97, 0, 1, 3, 3}, {1, 0, 2, 0, 3, 3, 3},
+                   {1, 3, 0, 0, 1e-5, 3, 4},  {1, 3, 0, 2, 60, 3, 4},     {1, 11, 0, 0.1, 3, 3, 4}};
+        double eworst = 0, qleg = 0, qhg = 0, mu2[4] = {-1, -0.99, 0.99, 1}, p2[4] = {30, 1, 1, 30};
+        for (int q = 0; q < 9; q++) {
             nbt_axis ax = {jc[q].Tlo, jc[q].Thi, NBT_AXIS_LINEAR, 0, jc[q].nx};
             nbt_axis ay = {0, M_PI, NBT_AXIS_LINEAR, 0, jc[q].ny};
-            nbt_phase *ph = jc[q].g > 0 ? nbt_phase_hg(jc[q].g) : NULL;
+            nbt_phase *ph = jc[q].g == 2 ? nbt_phase_tabulated(4, mu2, p2) : jc[q].g != 0 ? nbt_phase_hg(jc[q].g) : NULL;
             size_t np = ph ? 1 : (size_t)(jc[q].K + 4) / 4;
             nbt_table *js[3];
             for (size_t p = 0; p < np; p++) {
@@ -461,6 +464,8 @@ int main(void)
             t_true(nbt_j_table_build_set(js, np, ph, &oj) == NBT_OK, "J node set %d builds", q);
             if (!ph)
                 qleg = fmax(qleg, js[0]->quad_err);
+            else if (jc[q].g != 2)
+                qhg = fmax(qhg, js[0]->quad_err);
             for (size_t i = 0; i < jc[q].nx; i++)
                 for (size_t j = 0; j < jc[q].ny; j++) {
                     double x = nbt_axis_node(&ax, i), y = nbt_axis_node(&ay, j), ex[12], ee[12];
@@ -480,8 +485,9 @@ int main(void)
                 nbt_table_free(js[p]);
             nbt_phase_free(ph);
         }
-        t_true(eworst <= 1.0 && qleg <= 1e-9,
-               "J nodes within float rounding + quad_err (eworst %.2g of it; Legendre quad_err <= %.1e)", eworst, qleg);
+        t_true(eworst <= 1.0 && qleg <= 1e-9 && qhg <= 1e-6,
+               "J nodes within float rounding + quad_err (eworst %.2g of it; quad_err Legendre <= %.1e, HG <= %.1e)",
+               eworst, qleg, qhg);
     }
 
     /* ---- second order on log1p_cbrt (doc/tables.md): the recorded error
