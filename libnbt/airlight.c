@@ -588,24 +588,31 @@ typedef struct {
     double *f;            /* fdim scratch */
 } hrow_ctx;
 
-/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1), n pieces of m nodes */
-static void h_pieces(hrow_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1) of
+ * exp(-u (s - base)) 2/(1+x^2) w(mu) dx, n equal pieces of rule g; f: fdim
+ * scratch. Shared by the H cells and J's G segments. */
+static void gl_pieces(const nbt_gl_rule *g, const nbt__weights *w, unsigned fdim, double u, double base, int wvar,
+                      double lo, double hi, int n, double *f, double *acc)
 {
-    const nbt_gl_rule *g = c->R->gl[m];
-    double step = (hi - lo) / n, u = c->u;
+    double step = (hi - lo) / n;
     for (int p = 0; p < n; p++) {
         double a = lo + p * step, b = p + 1 == n ? hi : a + step;
         double mid = 0.5 * (a + b), hw = 0.5 * (b - a);
         for (size_t q = 0; q < g->n; q++) {
             double x = mid + hw * g->x[q], x2 = x * x, r = 1.0 / (1.0 + x2);
-            double e = u > 0 ? exp(wvar ? -u / x : -u * x) : 1.0;
-            double mu = wvar ? (x2 - 1.0) * r : (1.0 - x2) * r;
-            weights_at(c->w, mu, 2.0 * x * r, c->f);
+            double e = u > 0 ? exp(-u * ((wvar ? 1.0 / x : x) - base)) : 1.0;
+            weights_at(w, wvar ? (x2 - 1.0) * r : (1.0 - x2) * r, 2.0 * x * r, f);
             double wt = hw * g->w[q] * 2.0 * r * e;
-            for (unsigned k = 0; k < c->fdim; k++)
-                acc[k] += wt * c->f[k];
+            for (unsigned k = 0; k < fdim; k++)
+                acc[k] += wt * f[k];
         }
     }
+}
+
+/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1), n pieces of m nodes */
+static void h_pieces(hrow_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+{
+    gl_pieces(c->R->gl[m], c->w, c->fdim, c->u, 0.0, wvar, lo, hi, n, c->f, acc);
     c->bound += 2.0 * (hi - lo) * c->target;
 }
 
@@ -827,20 +834,7 @@ static void sf_choose(const sf_ctx *c, double a, double hw, double as, double ep
 
 static void sf_pieces(sf_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
 {
-    const nbt_gl_rule *g = c->F->gl[m];
-    double step = (hi - lo) / n, u = c->u;
-    for (int p = 0; p < n; p++) {
-        double a = lo + p * step, b = p + 1 == n ? hi : a + step;
-        double mid = 0.5 * (a + b), hw = 0.5 * (b - a);
-        for (size_t q = 0; q < g->n; q++) {
-            double x = mid + hw * g->x[q], x2 = x * x, r = 1.0 / (1.0 + x2);
-            double e = u > 0 ? exp(-u * ((wvar ? 1.0 / x : x) - c->base)) : 1.0;
-            weights_at(c->w, wvar ? (x2 - 1.0) * r : (1.0 - x2) * r, 2.0 * x * r, c->f);
-            double wt = hw * g->w[q] * 2.0 * r * e;
-            for (unsigned k = 0; k < c->fdim; k++)
-                acc[k] += wt * c->f[k];
-        }
-    }
+    gl_pieces(c->F->gl[m], c->w, c->fdim, c->u, c->base, wvar, lo, hi, n, c->f, acc);
     c->len += hi - lo;
 }
 
