@@ -588,24 +588,31 @@ typedef struct {
     double *f;            /* fdim scratch */
 } hrow_ctx;
 
-/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1), n pieces of m nodes */
-static void h_pieces(hrow_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1) of
+ * exp(-u (s - base)) 2/(1+x^2) w(mu) dx, n equal pieces of rule g; f: fdim
+ * scratch. Shared by the H cells and J's G segments. */
+static void gl_pieces(const nbt_gl_rule *g, const nbt__weights *w, unsigned fdim, double u, double base, int wvar,
+                      double lo, double hi, int n, double *f, double *acc)
 {
-    const nbt_gl_rule *g = c->R->gl[m];
-    double step = (hi - lo) / n, u = c->u;
+    double step = (hi - lo) / n;
     for (int p = 0; p < n; p++) {
         double a = lo + p * step, b = p + 1 == n ? hi : a + step;
         double mid = 0.5 * (a + b), hw = 0.5 * (b - a);
         for (size_t q = 0; q < g->n; q++) {
             double x = mid + hw * g->x[q], x2 = x * x, r = 1.0 / (1.0 + x2);
-            double e = u > 0 ? exp(wvar ? -u / x : -u * x) : 1.0;
-            double mu = wvar ? (x2 - 1.0) * r : (1.0 - x2) * r;
-            weights_at(c->w, mu, 2.0 * x * r, c->f);
+            double e = u > 0 ? exp(-u * ((wvar ? 1.0 / x : x) - base)) : 1.0;
+            weights_at(w, wvar ? (x2 - 1.0) * r : (1.0 - x2) * r, 2.0 * x * r, f);
             double wt = hw * g->w[q] * 2.0 * r * e;
-            for (unsigned k = 0; k < c->fdim; k++)
-                acc[k] += wt * c->f[k];
+            for (unsigned k = 0; k < fdim; k++)
+                acc[k] += wt * f[k];
         }
     }
+}
+
+/* add int over [lo, hi] in s (wvar = 0) or w (wvar = 1), n pieces of m nodes */
+static void h_pieces(hrow_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+{
+    gl_pieces(c->R->gl[m], c->w, c->fdim, c->u, 0.0, wvar, lo, hi, n, c->f, acc);
     c->bound += 2.0 * (hi - lo) * c->target;
 }
 
@@ -738,6 +745,140 @@ static int h_pieces_make(const hrules *R, const nbt__weights *w, const double *y
     *Pout = P;
     *pjout = pj;
     return 0;
+}
+
+/* ---- one shifted segment by fixed rules (J's G rows) ----
+ * As the H cells, over a wide interval: pieces in s and w, ratio <= 2 in w
+ * towards w = 0; the exponential sets a = u h as for H, and the rational
+ * part (a pole of order K + 1 at +-i, distance >= 1) the Gauss-Legendre
+ * error pi (h/2)^{2m} (2m)^{K+1}, which for wide pieces asks for more
+ * nodes, not more pieces. */
+
+#define SF_MMAX 20
+
+struct nbt__segfix {
+    nbt_gl_rule *gl[SF_MMAX + 1];
+    double am[SF_MMAX + 1];
+    double target, logt;
+};
+
+void nbt__segfix_free(nbt__segfix *F)
+{
+    if (!F)
+        return;
+    for (int m = 0; m <= SF_MMAX; m++)
+        nbt_gl_rule_free(F->gl[m]);
+    free(F);
+}
+
+nbt__segfix *nbt__segfix_alloc(double tol)
+{
+    nbt__segfix *F = calloc(1, sizeof *F);
+    if (!F)
+        return NULL;
+    F->target = fmax(0.1 * tol, 1e-15);
+    F->logt = log(0.5 * F->target / NBT_PI);
+    for (int m = 2; m <= SF_MMAX; m++) {
+        if (!(F->gl[m] = nbt_gl_rule_alloc((size_t)m))) {
+            nbt__segfix_free(F);
+            return NULL;
+        }
+        double cm = exp((2.0 * m + 1.0) * log(2.0) + 4.0 * lgamma(m + 1.0) - log(2.0 * m + 1.0) -
+                        3.0 * lgamma(2.0 * m + 1.0));
+        double lo = 0.0, hi = 40.0;
+        for (int it = 0; it < 60; it++) {
+            double mid = 0.5 * (lo + hi);
+            if (cm * pow(mid, 2 * m) * exp(mid) <= 0.25 * F->target)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        F->am[m] = lo;
+    }
+    return F;
+}
+
+typedef struct {
+    const nbt__segfix *F;
+    const nbt__weights *w;
+    unsigned fdim;
+    double u, base, len;
+    double *f;
+} sf_ctx;
+
+/* n pieces, m nodes: the exponential's range a, half-width hw, the pole-like
+ * part at w = 0 (as, strength eps) */
+static void sf_choose(const sf_ctx *c, double a, double hw, double as, double eps, int *n, int *m)
+{
+    double K1 = (double)c->w->kmax + 1.0;
+    if (eps > 1.0)
+        eps = 1.0;
+    if (as <= a)
+        eps = 0.0;
+    double top = eps > 0 ? fmax(a, as) : a;
+    int n0 = top > 2.0 ? (int)ceil(top / 2.0) : 1;
+    if (hw > 0.25 && (int)ceil(hw / 0.25) > n0)
+        n0 = (int)ceil(hw / 0.25);
+    for (int nn = n0;; nn++) {
+        double an = a / nn, asn = as / nn, lh = log(0.5 * hw / nn);
+        for (int mm = 2; mm <= SF_MMAX; mm++)
+            if ((an <= c->F->am[mm] && (eps == 0 || eps * ipow(asn / c->F->am[mm], 2 * mm) <= 1.0) &&
+                 2.0 * mm * lh + K1 * log(2.0 * mm) <= c->F->logt) ||
+                (mm == SF_MMAX && nn >= 4 * n0 + 8)) {
+                *n = nn;
+                *m = mm;
+                return;
+            }
+    }
+}
+
+static void sf_pieces(sf_ctx *c, int wvar, double lo, double hi, int n, int m, double *acc)
+{
+    gl_pieces(c->F->gl[m], c->w, c->fdim, c->u, c->base, wvar, lo, hi, n, c->f, acc);
+    c->len += hi - lo;
+}
+
+static void sf_wsplit(sf_ctx *c, double lo, double hi, double *acc)
+{
+    double u = c->u;
+    while (hi > 2.0 * lo) {
+        sf_wsplit(c, 0.5 * hi, hi, acc);
+        hi *= 0.5;
+    }
+    int n, m;
+    sf_choose(c, 0.5 * u * (1.0 / lo - 1.0 / hi), 0.5 * (hi - lo), 1.5 * (hi - lo) / lo, u / lo, &n, &m);
+    sf_pieces(c, 1, lo, hi, n, m, acc);
+}
+
+void nbt__segfix_eval(const nbt__segfix *F, const nbt__weights *w, double u, double v1, double v2, int shifted,
+                      double *out, double *scratch, double *err)
+{
+    unsigned fdim = nbt__fdim(w);
+    sf_ctx c = {F, w, fdim, u, shifted ? nbt__s_of_t(v1) : 0.0, 0.0, scratch};
+    for (unsigned k = 0; k < fdim; k++)
+        out[k] = 0.0;
+    int n, m;
+    if (v1 < 0.0 && v2 > v1) {
+        double lo = nbt__s_of_t(v1), hi = v2 >= 0.0 ? 1.0 : nbt__s_of_t(v2);
+        if (u > 0 && u * (hi - c.base) > Y_TAIL)
+            hi = c.base + Y_TAIL / u;
+        if (hi > lo && !(u > 0 && u * (lo - c.base) > Y_TAIL)) {
+            sf_choose(&c, 0.5 * u * (hi - lo), 0.5 * (hi - lo), 0.0, 0.0, &n, &m);
+            sf_pieces(&c, 0, lo, hi, n, m, out);
+        }
+    }
+    if (v2 > 0.0 && v2 > v1) {
+        double lo = w_of_t(v2), hi = v1 <= 0.0 ? 1.0 : w_of_t(v1);
+        if (u > 0) {
+            lo = fmax(lo, 1.0 / (c.base + Y_TAIL / u));
+            if (hi > lo)
+                sf_wsplit(&c, lo, hi, out);
+        } else if (hi > lo) {
+            sf_choose(&c, 0.0, 0.5 * (hi - lo), 0.0, 0.0, &n, &m);
+            sf_pieces(&c, 1, lo, hi, n, m, out);
+        }
+    }
+    *err = 2.0 * c.len * F->target;
 }
 
 /* ---- H tables: cumulative quadrature in v, one u row per task ---- */

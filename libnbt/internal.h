@@ -56,6 +56,15 @@ nbt_status nbt__airlight_segment(nbt_quad_ws *ws, const nbt__weights *w, double 
                                  double v1, double v2, int shifted, double tol,
                                  double *out, double *err);
 
+/* The same segment by fixed Gauss-Legendre rules (libnbt/airlight.c):
+ * all components at once, *err an a-priori bound (all components);
+ * scratch holds fdim doubles. One workspace per tolerance, shareable. */
+typedef struct nbt__segfix nbt__segfix;
+nbt__segfix *nbt__segfix_alloc(double tol);
+void nbt__segfix_free(nbt__segfix *F);
+void nbt__segfix_eval(const nbt__segfix *F, const nbt__weights *w, double u, double v1, double v2, int shifted,
+                      double *out, double *scratch, double *err);
+
 /* Airlight by Nishita's integral in distance along the ray, with phase p or
  * (p == NULL) the Legendre series b[0..nterms-1]; geometry not checked. */
 nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,

@@ -235,13 +235,23 @@ double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn)
     return NAN;
 }
 
+/* 1/(k+1) for the first orders (constants folded at compile time): the
+ * recurrence's divide sat in its dependency chain, and with the fixed rules
+ * of the G rows (J tables) P_0..P_K per node is most of the work */
+#define INV4(k) 1.0 / ((k) + 1.0), 1.0 / ((k) + 2.0), 1.0 / ((k) + 3.0), 1.0 / ((k) + 4.0)
+#define INV16(k) INV4(k), INV4((k) + 4), INV4((k) + 8), INV4((k) + 12)
+static const double inv_k1[64] = {INV16(0), INV16(16), INV16(32), INV16(48)};
+
 void nbt_legendre_p(size_t kmax, double x, double *P)
 {
     P[0] = 1.0;
     if (kmax == 0)
         return;
     P[1] = x;
-    for (size_t k = 1; k < kmax; k++)
+    size_t k = 1;
+    for (; k < kmax && k < 63; k++)
+        P[k + 1] = ((2.0 * (double)k + 1.0) * x * P[k] - (double)k * P[k - 1]) * inv_k1[k];
+    for (; k < kmax; k++)
         P[k + 1] = ((2.0 * (double)k + 1.0) * x * P[k] - (double)k * P[k - 1]) / ((double)k + 1.0);
 }
 

@@ -13,40 +13,72 @@
 
 /* ---- the azimuthal kernel K_n(theta, g) ---- */
 
+static double ipow_d(double x, int n)
+{
+    double r = 1;
+    for (; n > 0; n >>= 1, x *= x)
+        if (n & 1)
+            r *= x;
+    return r;
+}
+
 static size_t kernel_nodes(int n)
 {
     size_t m = 48 + (size_t)n;
     return m > 600 ? 600 : m;
 }
 
-/* rule: Gauss-Legendre with kernel_nodes(n) nodes. */
-static double kernel_eval(const nbt_gl_rule *rule, int n, double theta, double g)
+/* K_n from cos/sin of theta and g (both in [0, pi]). With a = cos theta
+ * cos g, b = sin theta sin g: a + b = cos(theta - g), a - b = cos(theta + g),
+ * so |a| + b <= 1 and every sum below loses at most ~n DBL_EPSILON absolute,
+ * which is all J's weights need (rule = NULL). Relative accuracy where the
+ * horizon cuts the lobe and a < 0 (K tiny next to those sums) takes a
+ * Gauss-Legendre rule of kernel_nodes(n) nodes: the point evaluations. */
+static double kernel_cs(const nbt_gl_rule *rule, int n, double ct, double st, double cg, double sg)
 {
-    double a = cos(theta) * cos(g), b = fabs(sin(theta) * sin(g));
+    double a = ct * cg, b = fabs(st * sg);
     if (a >= b) {
-        /* the whole cone is above the horizon: 2 pi sum_{j even} C(n,j) a^{n-j} b^j (j-1)!!/j!! */
-        double s = 0, binom = 1, dfr = 1;
-        for (int j = 0; j <= n; j++) {
-            if (j > 0)
-                binom *= (double)(n - j + 1) / j;
-            if (j % 2 == 0) {
-                if (j > 0)
-                    dfr *= (double)(j - 1) / j;
-                s += binom * pow(a, n - j) * pow(b, j) * dfr;
-            }
+        /* the whole cone is above the horizon: 2 pi sum_{j even} C(n,j) a^{n-j} b^j (j-1)!!/j!!
+         * = 2 pi a^n sum_j ... (b/a)^j */
+        if (a == 0)
+            return 0.0;
+        double x = b / a, x2 = x * x, s = 1, binom = 1, dfr = 1, xp = 1;
+        for (int j = 2; j <= n; j += 2) {
+            binom *= (double)(n - j + 2) * (double)(n - j + 1) / ((double)(j - 1) * (double)j);
+            dfr *= (double)(j - 1) / j;
+            xp *= x2;
+            s += binom * xp * dfr;
         }
-        return 2.0 * NBT_PI * s;
+        return 2.0 * NBT_PI * (n <= 16 ? ipow_d(a, n) : pow(a, n)) * s;
     }
     if (a <= -b)
         return 0.0;
-    /* cut by the horizon: 2 int_0^{phi0} (a + b cos phi)^n dphi, analytic on [0, phi0] */
-    double phi0 = acos(-a / b), s = 0;
-    for (size_t i = 0; i < rule->n; i++) {
-        double phi = 0.5 * phi0 * (1.0 + rule->x[i]);
-        double v = a + b * cos(phi);
-        s += rule->w[i] * (v > 0 ? pow(v, n) : 0.0);
+    /* cut by the horizon: 2 I_n, I_m = int_0^{phi0} (a + b cos phi)^m dphi,
+     * cos phi0 = -a/b. The reduction formula's boundary term
+     * b sin phi (a + b cos phi)^{m-1} vanishes at 0 and phi0 for m >= 2:
+     * m I_m = (2m - 1) a I_{m-1} - (m - 1)(a^2 - b^2) I_{m-2}. Its two
+     * solutions grow like (a + b)^m and (a - b)^m, both <= 1 in size. */
+    double c0 = -a / b, phi0 = acos(c0), s0 = sqrt(fmax(0.0, 1.0 - c0 * c0));
+    if (rule && a < 0 && n > 1) {
+        double s = 0;
+        for (size_t i = 0; i < rule->n; i++) {
+            double v = a + b * cos(0.5 * phi0 * (1.0 + rule->x[i]));
+            s += rule->w[i] * (v > 0 ? ipow_d(v, n) : 0.0);
+        }
+        return phi0 * s;
     }
-    return phi0 * s;
+    double I0 = phi0, I1 = a * phi0 + b * s0, d = a * a - b * b;
+    for (int m = 2; m <= n; m++) {
+        double I2 = ((2.0 * m - 1.0) * a * I1 - (m - 1.0) * d * I0) / m;
+        I0 = I1;
+        I1 = I2;
+    }
+    return 2.0 * (n == 0 ? I0 : I1);
+}
+
+static double kernel_eval(const nbt_gl_rule *rule, int n, double theta, double g)
+{
+    return kernel_cs(rule, n, cos(theta), sin(theta), cos(g), sin(g));
 }
 
 double nbt_surface_kernel(int n, double theta, double g)
@@ -338,14 +370,33 @@ nbt_status nbt_surface_table(const nbt_table *const *diffuse, size_t ndiffuse,
 
 /* ---- J tables: J(T_i, theta_j) = sum_q G(T_i, g_q) M(theta_j, q) ----
  *
- * G is smooth in g, so it is sampled once on Gauss-Legendre nodes of fixed
- * panels (graded towards g = 0, where G varies on a scale ~ 1/sqrt(T)).
- * M(theta, q) = int K_n(theta, g) l_q(g) dg, l_q the Lagrange basis of the
- * panel's nodes, integrated per theta between the kernel's own kinks with a
- * smoothstep change of variable that makes the (g - g_kink)^{n+1/2} endpoint
- * behaviour analytic. */
+ * G is smooth in g on (0, pi], so it is sampled once on Gauss-Legendre nodes
+ * of fixed panels (graded towards g = 0, where G varies on a scale
+ * ~ 1/sqrt(T)). At g = 0 it is not smooth: u = T sin g, and H(u, pi/2) has
+ * u^j log u terms, so G ~ smooth + T g log g. A polynomial in g on the first
+ * panel [0, h0] leaves ~T e^-T h0 / m^2 (3.5e-9 at T = 5, 1.5e-7 on T in
+ * [0, 1]); there the nodes and the basis live in y with
+ * g = h0 ((1 + y)/2)^J_FIRST_POW, where g log g becomes y^P log y and the
+ * interpolation error falls like m^-2P. M(theta, q) = int K_n(theta, g)
+ * l_q(y(g)) dg, l_q the Lagrange basis of the panel's nodes in y, is
+ * integrated per theta in y between the kernel's own kinks, with a
+ * smoothstep change of variable that makes the (g - g_kink)^{n+1/2}
+ * endpoint behaviour analytic.
+ *
+ * The error of the product (interpolation of G, the rule for M) is measured:
+ * on the first 3, every J_CHECK_STRIDE-th and the last T row it is rebuilt
+ * with every panel halved, and twice the largest difference over all theta
+ * is added to the G quadrature error. */
 
 #define J_PANEL_NODES 16
+#define J_FIRST_POW 4
+#define J_CHECK_STRIDE 8
+
+typedef struct {
+    size_t npanel, Q;
+    double *pb; /* panel boundaries, npanel + 1, pb[0] = 0 */
+    double *gq; /* nodes in g, Q = npanel * J_PANEL_NODES */
+} jpanels;
 
 typedef struct {
     size_t nch;
@@ -354,27 +405,94 @@ typedef struct {
     nbt__weights w;
     unsigned fdim, nt;
     double tol;
-    size_t npanel, Q;
-    double *pb;                 /* panel boundaries, npanel + 1 */
-    double *gq;                 /* nodes, Q */
-    double *lam;                /* barycentric weights per node within its panel */
+    const jpanels *P;           /* the panels of the current pass */
+    jpanels coarse, fine;       /* the table's, and each halved (the check) */
+    const nbt_gl_rule *rp;      /* the panel rule, nodes y in [-1, 1] */
+    double lam[J_PANEL_NODES];  /* its barycentric weights */
     const double *xs, *ys;
     size_t nx, ny;
     double *G, *M, *F;
     double *rowerr;
     nbt_quad_ws **ws;
     double **buf;
-    nbt_gl_rule *rk, *rm;       /* kernel rule; integration rule for M */
-    int checked;                /* the adaptive check below ran (once per build) */
+    nbt_gl_rule *rm;            /* integration rule for M */
+    int checked;                /* the check ran (on the node rows, once per build) */
+    nbt__segfix *sf;            /* fixed rules for G (Legendre channels), or NULL */
+    double check_err;           /* its result, added to later passes */
 } jfill_ctx;
+
+/* g(y) on panel p, dg/dy, and the inverse */
+static double panel_g(const jpanels *P, size_t p, double y)
+{
+    double a = P->pb[p], b = P->pb[p + 1], r = 0.5 * (1.0 + y);
+    return p == 0 ? b * pow(r, J_FIRST_POW) : a + (b - a) * r;
+}
+
+static double panel_dg(const jpanels *P, size_t p, double y)
+{
+    double a = P->pb[p], b = P->pb[p + 1], r = 0.5 * (1.0 + y);
+    return p == 0 ? 0.5 * J_FIRST_POW * b * pow(r, J_FIRST_POW - 1) : 0.5 * (b - a);
+}
+
+static double panel_y(const jpanels *P, size_t p, double g)
+{
+    double a = P->pb[p], b = P->pb[p + 1];
+    return p == 0 ? 2.0 * pow(g / b, 1.0 / J_FIRST_POW) - 1.0 : (2.0 * g - a - b) / (b - a);
+}
+
+static void jpanels_free(jpanels *P)
+{
+    free(P->pb);
+    free(P->gq);
+}
+
+/* geometric below pi/8 (ngeo panels), 8 uniform above, the last of them
+ * geometric towards pi (nhi more panels); split: each halved */
+static nbt_status jpanels_init(jpanels *P, size_t ngeo, size_t nhi, int split, const nbt_gl_rule *rp)
+{
+    size_t nb = ngeo + 8 + nhi, f = split ? 2 : 1, m = J_PANEL_NODES;
+    P->npanel = nb * f;
+    P->Q = P->npanel * m;
+    P->pb = malloc((P->npanel + 1) * sizeof(double));
+    P->gq = malloc(P->Q * sizeof(double));
+    if (!P->pb || !P->gq)
+        return NBT_ENOMEM;
+    double base[64];
+    size_t p = 0;
+    base[p++] = 0.0;
+    for (size_t j = ngeo; j >= 1; j--)
+        base[p++] = NBT_PI / 8 * ldexp(1.0, -(int)j);
+    for (int j = 1; j <= 7; j++)
+        base[p++] = NBT_PI / 8 * j;
+    for (size_t j = 1; j <= nhi; j++)
+        base[p++] = NBT_PI - NBT_PI / 8 * ldexp(1.0, -(int)j);
+    base[p++] = NBT_PI;
+    for (size_t q = 0; q < nb; q++)
+        for (size_t s = 0; s < f; s++)
+            P->pb[q * f + s] = base[q] + (base[q + 1] - base[q]) * (double)s / (double)f;
+    P->pb[P->npanel] = NBT_PI;
+    for (size_t q = 0; q < P->npanel; q++)
+        for (size_t r = 0; r < m; r++)
+            P->gq[q * m + r] = panel_g(P, q, rp->x[r]);
+    return NBT_OK;
+}
 
 static nbt_status j_grow(size_t i, unsigned thread, void *vp)
 {
     jfill_ctx *c = vp;
     double e = 0, *err = c->buf[thread];
-    for (size_t q = 0; q < c->Q; q++) {
-        double *G = c->G + (i * c->Q + q) * c->fdim;
-        nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->gq[q], c->tol, G, err);
+    for (size_t q = 0; q < c->P->Q; q++) {
+        double *G = c->G + (i * c->P->Q + q) * c->fdim;
+        if (c->sf) {
+            /* Legendre channels: fixed rules, one a-priori bound for all orders */
+            double T = c->xs[i], g = c->P->gq[q], b = 0, ex = exp(-T);
+            nbt__segfix_eval(c->sf, &c->w, T * sin(g), g - NBT_PI_2, NBT_PI_2, 1, G, err, &b);
+            for (unsigned k = 0; k < c->fdim; k++)
+                G[k] *= ex;
+            e = fmax(e, b * ex);
+            continue;
+        }
+        nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->P->gq[q], c->tol, G, err);
         if (st != NBT_OK)
             return st;
         for (unsigned k = 0; k < c->fdim; k++)
@@ -388,85 +506,128 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
 {
     (void)thread;
     jfill_ctx *c = vp;
-    double theta = c->ys[j], kinks[4], lo, hi;
+    const jpanels *P = c->P;
+    double theta = c->ys[j], kinks[4], lo, hi, ct = cos(theta), st = sin(theta);
     size_t nk = kernel_kinks(theta, kinks, &lo, &hi);
-    double *M = c->M + j * c->Q;
-    for (size_t q = 0; q < c->Q; q++)
+    double *M = c->M + j * P->Q;
+    for (size_t q = 0; q < P->Q; q++)
         M[q] = 0;
     size_t m = J_PANEL_NODES;
-    for (size_t p = 0; p < c->npanel; p++) {
-        double a = fmax(c->pb[p], lo), b = fmin(c->pb[p + 1], hi);
+    const double *x = c->rp->x, *lam = c->lam;
+    for (size_t p = 0; p < P->npanel; p++) {
+        double a = fmax(P->pb[p], lo), b = fmin(P->pb[p + 1], hi);
         if (!(b > a))
             continue;
-        const double *x = c->gq + p * m, *lam = c->lam + p * m;
+        /* the pieces between kinks, in the panel's variable y */
         double cuts[6];
         size_t nc = 0;
-        cuts[nc++] = a;
+        cuts[nc++] = panel_y(P, p, a);
         for (size_t k = 0; k < nk; k++)
             if (kinks[k] > a && kinks[k] < b)
-                cuts[nc++] = kinks[k];
-        cuts[nc++] = b;
+                cuts[nc++] = panel_y(P, p, kinks[k]);
+        cuts[nc++] = panel_y(P, p, b);
         for (size_t s = 0; s + 1 < nc; s++) {
             double c0 = cuts[s], w0 = cuts[s + 1] - cuts[s];
             for (size_t r = 0; r < c->rm->n; r++) {
-                double y = 0.5 * (1.0 + c->rm->x[r]);
-                double g = c0 + w0 * y * y * (3.0 - 2.0 * y);
-                double wt = 0.5 * c->rm->w[r] * w0 * 6.0 * y * (1.0 - y);
-                double Kw = wt * kernel_eval(c->rk, c->n, theta, g);
+                double z = 0.5 * (1.0 + c->rm->x[r]);
+                double y = c0 + w0 * z * z * (3.0 - 2.0 * z);
+                double wt = 0.5 * c->rm->w[r] * w0 * 6.0 * z * (1.0 - z) * panel_dg(P, p, y);
+                double g = panel_g(P, p, y);
+                double Kw = wt * kernel_cs(NULL, c->n, ct, st, cos(g), sin(g));
                 if (Kw == 0)
                     continue;
-                /* barycentric Lagrange basis at g */
+                /* barycentric Lagrange basis at y */
                 double den = 0;
                 size_t hit = m;
                 for (size_t q = 0; q < m; q++) {
-                    if (g == x[q]) {
+                    if (y == x[q]) {
                         hit = q;
                         break;
                     }
-                    den += lam[q] / (g - x[q]);
+                    den += lam[q] / (y - x[q]);
                 }
                 if (hit < m) {
                     M[p * m + hit] += Kw;
                     continue;
                 }
                 for (size_t q = 0; q < m; q++)
-                    M[p * m + q] += Kw * lam[q] / (g - x[q]) / den;
+                    M[p * m + q] += Kw * lam[q] / (y - x[q]) / den;
             }
         }
     }
     return NBT_OK;
 }
 
+/* row i of F = G_i M^T, all orders of a G node in one pass (the inner loop
+ * runs over the fdim contiguous orders) */
 static nbt_status j_product(size_t i, unsigned thread, void *vp)
 {
-    (void)thread;
     jfill_ctx *c = vp;
-    size_t nch = c->nch;
-    for (size_t j = 0; j < c->ny; j++) {
-        const double *M = c->M + j * c->Q;
-        for (size_t ch = 0; ch < nch; ch++) {
-            unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-            const double *G = c->G + i * c->Q * c->fdim + k;
-            double s = 0;
-            for (size_t q = 0; q < c->Q; q++)
-                s += G[q * c->fdim] * M[q];
-            c->F[(i * c->ny + j) * nch + ch] = s;
+    size_t nch = c->nch, Q = c->P->Q, fd = c->fdim;
+    double *acc = c->buf[thread];
+    const double *G = c->G + i * Q * fd;
+    size_t j0 = 0;
+    if (fd % 4 == 0) /* whole packs: two theta rows and four orders at a time, in registers */
+        for (; j0 + 2 <= c->ny; j0 += 2) {
+            const double *M0 = c->M + j0 * Q, *M1 = M0 + Q;
+            for (size_t kb = 0; kb < fd; kb += 4) {
+                double a0 = 0, a1 = 0, a2 = 0, a3 = 0, b0 = 0, b1 = 0, b2 = 0, b3 = 0;
+                for (size_t q = 0; q < Q; q++) {
+                    const double *Gq = G + q * fd + kb;
+                    double m0 = M0[q], m1 = M1[q];
+                    a0 += Gq[0] * m0;
+                    a1 += Gq[1] * m0;
+                    a2 += Gq[2] * m0;
+                    a3 += Gq[3] * m0;
+                    b0 += Gq[0] * m1;
+                    b1 += Gq[1] * m1;
+                    b2 += Gq[2] * m1;
+                    b3 += Gq[3] * m1;
+                }
+                acc[kb] = a0;
+                acc[kb + 1] = a1;
+                acc[kb + 2] = a2;
+                acc[kb + 3] = a3;
+                acc[fd + kb] = b0;
+                acc[fd + kb + 1] = b1;
+                acc[fd + kb + 2] = b2;
+                acc[fd + kb + 3] = b3;
+            }
+            for (size_t jj = 0; jj < 2; jj++)
+                for (size_t ch = 0; ch < nch; ch++)
+                    c->F[(i * c->ny + j0 + jj) * nch + ch] = acc[jj * fd + (unsigned)c->kmap[ch]];
         }
+    for (size_t j = j0; j < c->ny; j++) {
+        const double *M = c->M + j * Q;
+        for (size_t k = 0; k < fd; k++)
+            acc[k] = 0;
+        for (size_t q = 0; q < Q; q++) {
+            double m = M[q];
+            if (m == 0)
+                continue;
+            const double *Gq = G + q * fd;
+            for (size_t k = 0; k < fd; k++)
+                acc[k] += Gq[k] * m;
+        }
+        for (size_t ch = 0; ch < nch; ch++)
+            c->F[(i * c->ny + j) * nch + ch] = acc[c->w.phase ? 0u : (unsigned)c->kmap[ch]];
     }
     return NBT_OK;
 }
 
-static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny,
-                         double *F, double *quad_err)
+/* J at (xs[i], ys[j]) on the panels P; *gerr: G's quadrature error times
+ * int K dg <= 2 pi */
+static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, size_t nx, const double *ys,
+                            size_t ny, double *F, double *gerr)
 {
-    jfill_ctx *c = vp;
+    c->P = P;
     c->xs = xs;
     c->ys = ys;
     c->nx = nx;
     c->ny = ny;
     c->F = F;
-    c->G = malloc(nx * c->Q * c->fdim * sizeof(double));
-    c->M = malloc(ny * c->Q * sizeof(double));
+    c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
+    c->M = malloc(ny * P->Q * sizeof(double));
     c->rowerr = calloc(nx, sizeof(double));
     nbt_status st = NBT_ENOMEM;
     if (c->G && c->M && c->rowerr) {
@@ -476,37 +637,55 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
     }
-    /* error of the g quadrature: check against adaptive J at the corners
-     * and the centre (to 1e-8: this bounds an error far below any table's) */
-    double qerr = 0;
-    for (size_t i = 0; i < nx; i++)
-        qerr = fmax(qerr, c->rowerr[i]) ; /* G's own error, times int K <= 2 pi */
-    qerr *= 2.0 * NBT_PI;
-    if (st == NBT_OK && !c->checked) {
-        c->checked = 1;
-        size_t si[5] = {0, nx - 1, 0, nx - 1, nx / 2}, sj[5] = {0, 0, ny - 1, ny - 1, ny / 2};
-        double J[256], E[256];
-        for (int a = 0; a < 5 && st == NBT_OK; a++) {
-            size_t i = si[a], j = sj[a];
-            unsigned fd = c->fdim;
-            double *Jv = fd <= 256 ? J : malloc(2 * fd * sizeof(double)), *Ev = fd <= 256 ? E : Jv + fd;
-            if (!Jv) {
-                st = NBT_ENOMEM;
-                break;
-            }
-            st = j_eval(&c->w, c->n, xs[i], ys[j], fmax(c->tol, 1e-8), Jv, Ev);
-            for (size_t ch = 0; ch < c->nch && st == NBT_OK; ch++) {
-                unsigned k = c->w.phase ? 0u : (unsigned)c->kmap[ch];
-                qerr = fmax(qerr, fabs(F[(i * ny + j) * c->nch + ch] - Jv[k]) + Ev[k]);
-            }
-            if (Jv != J)
-                free(Jv);
-        }
-    }
-    *quad_err = qerr;
+    double e = 0;
+    for (size_t i = 0; i < nx && c->rowerr; i++)
+        e = fmax(e, c->rowerr[i]);
+    *gerr = 2.0 * NBT_PI * e;
     free(c->G);
     free(c->M);
     free(c->rowerr);
+    return st;
+}
+
+static int j_check_row(size_t i, size_t nx)
+{
+    return i < 3 || i % J_CHECK_STRIDE == 0 || i + 1 == nx;
+}
+
+static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys, size_t ny,
+                         double *F, double *quad_err)
+{
+    jfill_ctx *c = vp;
+    double qerr = 0;
+    nbt_status st = j_compute(c, &c->coarse, xs, nx, ys, ny, F, &qerr);
+    if (st == NBT_OK && !c->checked) {
+        c->checked = 1;
+        size_t ns = 0;
+        for (size_t i = 0; i < nx; i++)
+            ns += (size_t)j_check_row(i, nx);
+        double *xc = malloc(ns * sizeof(double)), *Fc = malloc(ns * ny * c->nch * sizeof(double));
+        size_t *ic = malloc(ns * sizeof(size_t));
+        double qf = 0, d = 0;
+        st = NBT_ENOMEM;
+        if (xc && Fc && ic) {
+            ns = 0;
+            for (size_t i = 0; i < nx; i++)
+                if (j_check_row(i, nx)) {
+                    ic[ns] = i;
+                    xc[ns++] = xs[i];
+                }
+            st = j_compute(c, &c->fine, xc, ns, ys, ny, Fc, &qf);
+            for (size_t s = 0; s < ns && st == NBT_OK; s++)
+                for (size_t j = 0; j < ny * c->nch; j++)
+                    d = fmax(d, fabs(F[ic[s] * ny * c->nch + j] - Fc[s * ny * c->nch + j]));
+        }
+        free(xc);
+        free(Fc);
+        free(ic);
+        /* twice: the rows between the checked ones, and the halved panels' own error */
+        c->check_err = 2.0 * d + qf;
+    }
+    *quad_err = qerr + c->check_err;
     return st;
 }
 
@@ -538,56 +717,58 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         ts[i]->quad_tol = o->quad_tol;
     /* panels: geometric below pi/8 down to ~0.2/sqrt(1 + T_max), uniform above */
     size_t ngeo = 0;
-    while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > 0.2 / sqrt(1.0 + t->axis[0].hi))
+    /* a peaked fixed phase p(cos g) puts a feature of width ~1 - |mean
+     * cosine| where the segment's lower end t = g - pi/2 crosses its peak:
+     * at g = 0 (forward), g = pi (backward): panels graded to it */
+    double hmin = 0.2 / sqrt(1.0 + t->axis[0].hi), hpk = 1.0, mc = fixed ? nbt_phase_mean_cosine(fixed) : 0;
+    if (fixed)
+        hpk = 0.5 * (1.0 - fabs(mc));
+    if (mc > 0)
+        hmin = fmin(hmin, hpk);
+    while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > hmin)
         ngeo++;
-    c.npanel = ngeo + 8;
+    size_t nhi = 0;
+    while (mc < 0 && nhi < 20 && NBT_PI / 8 * ldexp(1.0, -(int)nhi) > hpk)
+        nhi++;
     size_t m = J_PANEL_NODES;
-    c.Q = c.npanel * m;
-    c.pb = malloc((c.npanel + 1) * sizeof(double));
-    c.gq = malloc(c.Q * sizeof(double));
-    c.lam = malloc(c.Q * sizeof(double));
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
-    c.rk = nbt_gl_rule_alloc(kernel_nodes(c.n));
     c.rm = nbt_gl_rule_alloc(2 * m + 8);
     c.nt = nbt__nthreads(o->nthreads, 2 * t->axis[0].n);
     nbt_quad_ws *ws[64] = {0};
     double *buf[64] = {0};
     for (unsigned i = 0; i < c.nt; i++) {
         ws[i] = nbt_quad_ws_alloc(c.fdim, SEG_MAX_INTERVALS);
-        buf[i] = malloc(c.fdim * sizeof(double));
+        buf[i] = malloc(2 * c.fdim * sizeof(double)); /* j_product: two rows */
         if (!ws[i] || !buf[i])
             st = NBT_ENOMEM;
     }
-    if (!c.pb || !c.gq || !c.lam || !rp || !c.rk || !c.rm)
+    if (!rp || !c.rm)
         st = NBT_ENOMEM;
     if (st == NBT_OK) {
-        size_t p = 0;
-        c.pb[p++] = 0.0;
-        for (size_t j = ngeo; j >= 1; j--)
-            c.pb[p++] = NBT_PI / 8 * ldexp(1.0, -(int)j);
-        for (int j = 1; j <= 8; j++)
-            c.pb[p++] = NBT_PI / 8 * j;
-        c.pb[c.npanel] = NBT_PI;
-        for (size_t q = 0; q < c.npanel; q++)
-            for (size_t r = 0; r < m; r++) {
-                double a = c.pb[q], b = c.pb[q + 1];
-                c.gq[q * m + r] = 0.5 * (a + b) + 0.5 * (b - a) * rp->x[r];
-                c.lam[q * m + r] = ((r % 2) ? -1.0 : 1.0) * sqrt((1.0 - rp->x[r] * rp->x[r]) * rp->w[r]);
-            }
+        c.rp = rp;
+        for (size_t r = 0; r < m; r++)
+            c.lam[r] = ((r % 2) ? -1.0 : 1.0) * sqrt((1.0 - rp->x[r] * rp->x[r]) * rp->w[r]);
+        st = jpanels_init(&c.coarse, ngeo, nhi, 0, rp);
+        if (st == NBT_OK)
+            st = jpanels_init(&c.fine, ngeo, nhi, 1, rp);
+    }
+    if (st == NBT_OK) {
         c.ws = ws;
         c.buf = buf;
         c.tol = 0.1 * o->quad_tol;
-        st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
+        if (!fixed && !(c.sf = nbt__segfix_alloc(c.tol)))
+            st = NBT_ENOMEM;
+        if (st == NBT_OK)
+            st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
+        nbt__segfix_free(c.sf);
     }
     for (unsigned i = 0; i < c.nt; i++) {
         nbt_quad_ws_free(ws[i]);
         free(buf[i]);
     }
-    free(c.pb);
-    free(c.gq);
-    free(c.lam);
+    jpanels_free(&c.coarse);
+    jpanels_free(&c.fine);
     nbt_gl_rule_free(rp);
-    nbt_gl_rule_free(c.rk);
     nbt_gl_rule_free(c.rm);
     free(kmap);
     if (st == NBT_ENOMEM)

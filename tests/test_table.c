@@ -423,6 +423,73 @@ int main(void)
                eworst, qmax);
     }
 
+    /* ---- J nodes (G on panels in g, M by the kernel's kinks: libnbt/surface.c)
+     * against nbt_jk / nbt_j_phase at 1e-12 (their estimates added): within
+     * float rounding (6e-8 relative) plus the recorded quadrature error. The
+     * cases where the former 5-point check under-bounded the node error (by
+     * 74x at 3x4 nodes, order 11; 17x for Phong n = 20 order 3): G's
+     * T g log g term at g = 0, visible at T ~ 1..5 and theta = 0, which no
+     * corner or centre check sees. With the first panel in y^4 the Legendre
+     * sets must stay small (<= 1e-9 at quad_tol 1e-10: a polynomial in g
+     * there leaves 5e-9 .. 2e-7). Fixed HG g = 0.99, -0.97: the peak makes a
+     * feature of width ~1 - |g| at g = 0 (forward) or pi (backward), to
+     * which the panels are graded (<= 1e-6; ungraded 3.5e-5, 6.6e-5). A
+     * tabulated phase with peaks at both ends (mean cosine 0: no grading,
+     * and kinks at mu = +-0.99) leaves ~2e-4 that only the halved-panel
+     * check bounds. ---- */
+    {
+        /* and the fixed-rule G rows at the edges of T: T -> 0 (G's w -> 0
+         * layer), large T, order 11 on [0.1, 3]; g = 2: the tabulated phase */
+        struct {
+            int n, K;
+            double g, Tlo, Thi;
+            size_t nx, ny;
+        } jc[9] = {{1, 11, 0, 0, 10, 3, 4},   {20, 3, 0, 0, 10, 3, 4},    {1, 3, 0, 0, 1, 5, 5},
+                   {1, 0, 0.99, 0, 1, 5, 5},  {1, 0, -0.97, 0, 1, 3, 3}, {1, 0, 2, 0, 3, 3, 3},
+                   {1, 3, 0, 0, 1e-5, 3, 4},  {1, 3, 0, 2, 60, 3, 4},     {1, 11, 0, 0.1, 3, 3, 4}};
+        double eworst = 0, qleg = 0, qhg = 0, mu2[4] = {-1, -0.99, 0.99, 1}, p2[4] = {30, 1, 1, 30};
+        for (int q = 0; q < 9; q++) {
+            nbt_axis ax = {jc[q].Tlo, jc[q].Thi, NBT_AXIS_LINEAR, 0, jc[q].nx};
+            nbt_axis ay = {0, M_PI, NBT_AXIS_LINEAR, 0, jc[q].ny};
+            nbt_phase *ph = jc[q].g == 2 ? nbt_phase_tabulated(4, mu2, p2) : jc[q].g != 0 ? nbt_phase_hg(jc[q].g) : NULL;
+            size_t np = ph ? 1 : (size_t)(jc[q].K + 4) / 4;
+            nbt_table *js[3];
+            for (size_t p = 0; p < np; p++) {
+                js[p] = nbt_table_alloc(NBT_TABLE_J, &ax, &ay, ph ? 1 : 4);
+                js[p]->n = jc[q].n;
+                for (size_t c = 0; c < js[p]->nch; c++)
+                    js[p]->k[c] = (int)(4 * p + c);
+            }
+            nbt_build_opts oj = {1e-10, 1, 2};
+            t_true(nbt_j_table_build_set(js, np, ph, &oj) == NBT_OK, "J node set %d builds", q);
+            if (!ph)
+                qleg = fmax(qleg, js[0]->quad_err);
+            else if (jc[q].g != 2)
+                qhg = fmax(qhg, js[0]->quad_err);
+            for (size_t i = 0; i < jc[q].nx; i++)
+                for (size_t j = 0; j < jc[q].ny; j++) {
+                    double x = nbt_axis_node(&ax, i), y = nbt_axis_node(&ay, j), ex[12], ee[12];
+                    if (ph)
+                        nbt_j_phase(ph, jc[q].n, x, y, 1e-12, ex, ee);
+                    else
+                        nbt_jk((size_t)jc[q].K, jc[q].n, x, y, 1e-12, ex, ee);
+                    for (size_t p = 0; p < np; p++)
+                        for (size_t c = 0; c < js[p]->nch; c++) {
+                            size_t k = 4 * p + c;
+                            double d = fabs(js[p]->data[(j * jc[q].nx + i) * js[p]->nch + c] - ex[k]) - ee[k] -
+                                       6e-8 * fabs(ex[k]);
+                            eworst = fmax(eworst, d / js[p]->quad_err);
+                        }
+                }
+            for (size_t p = 0; p < np; p++)
+                nbt_table_free(js[p]);
+            nbt_phase_free(ph);
+        }
+        t_true(eworst <= 1.0 && qleg <= 1e-9 && qhg <= 1e-6,
+               "J nodes within float rounding + quad_err (eworst %.2g of it; quad_err Legendre <= %.1e, HG <= %.1e)",
+               eworst, qleg, qhg);
+    }
+
     /* ---- second order on log1p_cbrt (doc/tables.md): the recorded error
      * (honest: above, and tests/test_plan.c at random points) falls by
      * >= 3.5 from 65 to 129 nodes in u/T over [0, 10] with c = 10, where
