@@ -113,11 +113,28 @@ static void test_surface(const nbt_table *J)
         nbt_surface_direct(p, &geo, 1e-8, &R, &RE);
         nbt_phase_free(p);
         nbt_status st = nbt_surface_table_g(J, NULL, g, &geo, 0, &L, &E);
+        if (getenv("NBT_TEST_VERBOSE"))
+            printf("surface: |L - R| %.3g bound %.3g ref err %.3g\n", fabs(L - R), E, RE);
         t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-10 * fabs(R),
                "surface_table_g g=%.3f theta=%.3f: |%.8g - %.8g| <= bound %.2e", g, geo.theta_s, L, R, E);
     }
+    /* at a node g the lookup is the fixed-phase table route's (surface.c's
+     * nbt_surface_table over a 2-D HG(g_m) table on the same axes) */
+    double gm = nbt_axis_node(&J->axis[2], 6), L, E, Lf;
+    nbt_table *F = nbt_table_alloc(NBT_TABLE_J, &J->axis[0], &J->axis[1], 1);
+    nbt_phase *ph = nbt_phase_hg(gm);
+    nbt_build_opts o = {1e-10, 0, 2};
+    F->k[0] = -1;
+    F->n = 1;
+    nbt_j_table_build(F, ph, &o);
+    nbt_phase_free(ph);
+    nbt_surface_geom sg = {0.4, 0.5, 2.0, 3.3, 1.9, 0.5, 0.7, 0, 1};
+    const nbt_table *Fs[1] = {F};
+    nbt_surface_table(Fs, 1, NULL, 0, NULL, 0, &sg, &Lf);
+    nbt_surface_table_g(J, NULL, gm, &sg, 0, &L, &E);
+    t_rel(L, Lf, 1e-6, "surface_table_g at node g = %.4f = the fixed-phase table route", gm);
+    nbt_table_free(F);
     nbt_surface_geom geo = {0.4, 0.5, 2.0, 9.0, 1.0, 0.5, 0.7, 0, 2};
-    double L, E;
     t_true(nbt_surface_table_g(J, NULL, 0.1, &geo, 0, &L, &E) == NBT_ETOL, "T = 4.5 beyond the table's 4: ETOL");
     geo.dsp = 3.0;
     t_true(nbt_surface_table_g(J, NULL, 0.8, &geo, 0, &L, &E) == NBT_EDOM, "g = 0.8 beyond the table's g: EDOM");
@@ -189,7 +206,7 @@ static void test_build_io(void)
 int main(void)
 {
     nbt_table *H = small_table(NBT_TABLE_H, 0, 49, 49, 9, -0.4, 0.5);
-    nbt_table *J = small_table(NBT_TABLE_J, 1, 17, 17, 5, -0.5, 0.7);
+    nbt_table *J = small_table(NBT_TABLE_J, 1, 33, 33, 9, -0.5, 0.7);
     t_true(nbt_table_is_gslice(H) && nbt_table_is_gslice(J), "fill marks the tables g-sliced");
     check_table(H, 300);
     check_table(J, 80);
