@@ -203,68 +203,175 @@ static nbt_status plan_axes(const nbt_gslice_request *r, unsigned nthreads, nbt_
     return st;
 }
 
-nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
-                            char *err, size_t errlen)
+nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
+                           size_t errlen)
 {
-    *out = NULL;
+    memset(out, 0, sizeof *out);
+    out->req = *r;
     double t0 = now_s();
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
-    nbt_axis a0, a1;
+    if ((st = plan_axes(r, nthreads, &out->axis[0], &out->axis[1], err, errlen)) != NBT_OK)
+        return st;
+    /* the g error at 9 slices on a 33^2 grid, decaying as (8/(ng-1))^1.5
+     * (measured for H at |g| -> 0.95: the forward peak's width in v scales
+     * with 1 - g, so the decay is slower than linear interpolation's second
+     * order); its time, scaled, predicts the build's */
+    nbt_axis p0 = out->axis[0], p1 = out->axis[1];
+    p0.n = p1.n = 33;
+    nbt_table *proxy;
+    double tp = now_s();
+    st = build_at(r, &p0, &p1, 9, nthreads, 1, &proxy);
+    tp = now_s() - tp;
+    if (st != NBT_OK)
+        return failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
+    double eg = (proxy->max_err[0] - proxy->quad_err) / proxy->max_abs[0];
+    nbt_table_free(proxy);
     size_t ng = r->size[2];
-    if (r->tol == 0) {
-        st = plan_axes(r, nthreads, &a0, &a1, err, errlen);
-        if (st != NBT_OK)
-            return st;
-        st = build_at(r, &a0, &a1, ng, nthreads, 1, out);
-        if (st != NBT_OK)
-            return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
-    } else {
-        st = plan_axes(r, nthreads, &a0, &a1, err, errlen);
-        if (st != NBT_OK)
-            return st;
-        /* the g error at 9 slices on a 33^2 grid, decaying as (8/(ng-1))^1.5
-         * (measured for H at |g| -> 0.95: the forward peak's width in v
-         * scales with 1 - g, so the decay is slower than linear
-         * interpolation's second order) */
-        nbt_axis p0 = a0, p1 = a1;
-        p0.n = p1.n = 33;
-        nbt_table *proxy;
-        st = build_at(r, &p0, &p1, 9, nthreads, 1, &proxy);
-        if (st != NBT_OK)
-            return failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
-        double eg = (proxy->max_err[0] - proxy->quad_err) / proxy->max_abs[0];
-        nbt_table_free(proxy);
+    if (r->tol > 0) {
         ng = GSIZES[NGSIZES - 1];
         for (size_t i = 0; i < NGSIZES; i++)
             if (eg * pow(8.0 / (double)(GSIZES[i] - 1), 1.5) <= 0.5 * r->tol) {
                 ng = GSIZES[i];
                 break;
             }
-        for (int attempt = 0;; attempt++) {
-            st = build_at(r, &a0, &a1, ng, nthreads, 1, out);
-            if (st != NBT_OK)
-                return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
-            double rel = (*out)->max_err[0] / (*out)->max_abs[0];
-            if (rel <= r->tol)
-                break;
-            size_t n2 = ggrow(ng);
-            if (attempt >= 2 || n2 == 0) {
-                nbt_table_free(*out);
-                *out = NULL;
-                return failf(err, errlen, NBT_ETOL, "g-sliced table: %zux%zux%zu reaches %.2e relative, not tol %g",
-                             a0.n, a1.n, ng, rel, r->tol);
-            }
-            ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
-            nbt_table_free(*out);
-            *out = NULL;
-        }
+    }
+    out->axis[2] = g_axis(r, ng);
+    out->pred_err = eg * pow(8.0 / (double)(ng - 1), 1.5);
+    /* slices cost as the planner's fixed-phase sets: N^2 (H), N^1.1 (J) */
+    double a = r->kind == NBT_TABLE_H ? 2.0 : 1.1;
+    out->pred_seconds = tp * pow((double)out->axis[0].n * (double)out->axis[1].n / (33.0 * 33.0), 0.5 * a) *
+                        (2.0 * (double)ng - 1.0) / 17.0;
+    out->bytes = (double)out->axis[0].n * (double)out->axis[1].n * (double)ng * (r->half ? 2.0 : 4.0);
+    out->plan_seconds = now_s() - t0;
+    return NBT_OK;
+}
+
+nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
+                              size_t errlen)
+{
+    const nbt_gslice_request *r = &p->req;
+    size_t ng = p->axis[2].n;
+    *out = NULL;
+    for (int attempt = 0;; attempt++) {
+        nbt_status st = build_at(r, &p->axis[0], &p->axis[1], ng, nthreads, 1, out);
+        if (st != NBT_OK)
+            return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
+        double rel = (*out)->max_err[0] / (*out)->max_abs[0];
+        if (r->tol == 0 || rel <= r->tol)
+            break;
+        size_t n2 = ggrow(ng);
+        nbt_table_free(*out);
+        *out = NULL;
+        if (attempt >= 2 || n2 == 0)
+            return failf(err, errlen, NBT_ETOL, "g-sliced table: %zux%zux%zu reaches %.2e relative, not tol %g",
+                         p->axis[0].n, p->axis[1].n, ng, rel, r->tol);
+        ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
     }
     if (r->half)
         nbt_table_round_half(*out);
+    return NBT_OK;
+}
+
+nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
+                            char *err, size_t errlen)
+{
+    *out = NULL;
+    double t0 = now_s();
+    nbt_gslice_plan_t p;
+    nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
+    if (st == NBT_OK)
+        st = nbt_gslice_execute(&p, nthreads, out, err, errlen);
     if (seconds)
         *seconds = now_s() - t0;
+    return st;
+}
+
+/* ---- Legendre packs or g slices ---- */
+
+const char *nbt_basis_name(nbt_basis b)
+{
+    return b == NBT_BASIS_LEGENDRE ? "legendre" : b == NBT_BASIS_SLICES ? "slices" : "auto";
+}
+
+nbt_status nbt_basis_parse(const char *name, nbt_basis *b)
+{
+    if (!strcmp(name, "auto"))
+        *b = NBT_BASIS_AUTO;
+    else if (!strcmp(name, "legendre"))
+        *b = NBT_BASIS_LEGENDRE;
+    else if (!strcmp(name, "slices"))
+        *b = NBT_BASIS_SLICES;
+    else
+        return NBT_EINVAL;
+    return NBT_OK;
+}
+
+nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
+                            nbt_basis_choice *out, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    out->leg_seconds = out->leg_bytes = out->sl_seconds = out->sl_bytes = INFINITY;
+    out->leg_err = out->sl_err = NAN;
+    if (want != NBT_BASIS_AUTO && want != NBT_BASIS_LEGENDRE && want != NBT_BASIS_SLICES)
+        return failf(err, errlen, NBT_EINVAL, "basis %d is not accepted: auto, legendre or slices", (int)want);
+    if (!(r->tol > 0 && r->tol < 1))
+        return failf(err, errlen, NBT_EDOM, "basis: tol = %g is not accepted: in (0, 1)", r->tol);
+    double gmax = fmax(fabs(r->g[0]), fabs(r->g[1]));
+    nbt_status st;
+    if (want != NBT_BASIS_SLICES) {
+        nbt_plan_legendre leg;
+        st = nbt_plan_legendre_terms(gmax, r->xmax, r->tol, orders_max, &leg);
+        out->leg_nterms = leg.nterms;
+        if (st == NBT_OK) {
+            nbt_plan_request q = {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, leg.nterms, NULL, r->xmax,
+                                  leg.table_tol, {0, 0}, r->half};
+            nbt_plan *plan = NULL;
+            if ((st = nbt_plan_tables(&q, 1, nthreads, &plan, err, errlen)) != NBT_OK)
+                return st;
+            const nbt_plan_set *ps = nbt_plan_get(plan, 0);
+            out->leg_seconds = ps->pred_seconds;
+            out->leg_err = ps->pred_err;
+            out->leg_bytes = (double)ps->axis[0].n * (double)ps->axis[1].n * 4.0 * (double)ps->npacks *
+                             (r->half ? 2.0 : 4.0);
+            nbt_plan_free(plan);
+        } else if (st != NBT_ETOL)
+            return failf(err, errlen, st, "basis: the Legendre budget failed: %s", nbt_strerror(st));
+    }
+    if (want != NBT_BASIS_LEGENDRE) {
+        nbt_gslice_plan_t p;
+        if ((st = nbt_gslice_plan(r, nthreads, &p, err, errlen)) != NBT_OK)
+            return st;
+        out->sl_seconds = p.pred_seconds;
+        out->sl_bytes = p.bytes;
+        out->sl_err = p.pred_err;
+        out->sl_size[0] = p.axis[0].n;
+        out->sl_size[1] = p.axis[1].n;
+        out->sl_size[2] = p.axis[2].n;
+        out->sl_plan = p;
+    }
+    if (want == NBT_BASIS_LEGENDRE && isinf(out->leg_seconds))
+        return failf(err, errlen, NBT_ETOL, "basis legendre: |g| up to %g needs %s%zu Legendre orders at tol %g, more "
+                     "than %zu: use basis slices", gmax, out->leg_nterms > 512 ? "more than " : "",
+                     out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max);
+    if (want != NBT_BASIS_AUTO) {
+        out->basis = want;
+        snprintf(out->reason, sizeof out->reason, "basis %s requested", nbt_basis_name(want));
+    } else if (isinf(out->leg_seconds)) {
+        out->basis = NBT_BASIS_SLICES;
+        snprintf(out->reason, sizeof out->reason,
+                 "slices: |g| up to %g needs %s%zu Legendre orders at tol %g (at most %zu); slices %zux%zux%zu, "
+                 "%.1f MB, predicted %.2g s", gmax, out->leg_nterms > 512 ? "more than " : "",
+                 out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max, out->sl_size[0],
+                 out->sl_size[1], out->sl_size[2], 1e-6 * out->sl_bytes, out->sl_seconds);
+    } else {
+        out->basis = out->leg_seconds <= out->sl_seconds ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
+        snprintf(out->reason, sizeof out->reason,
+                 "%s: predicted build Legendre %zu orders %.2g s, %.1f MB; slices %zux%zux%zu %.2g s, %.1f MB",
+                 nbt_basis_name(out->basis), out->leg_nterms, out->leg_seconds, 1e-6 * out->leg_bytes,
+                 out->sl_size[0], out->sl_size[1], out->sl_size[2], out->sl_seconds, 1e-6 * out->sl_bytes);
+    }
     return NBT_OK;
 }
 

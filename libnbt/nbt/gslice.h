@@ -53,16 +53,59 @@ typedef struct {
     int half;                 /* store half floats */
 } nbt_gslice_request;
 
-/* Plan and build. Axes 0 and 1: the planner's sizes and mappings
- * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2,
- * the larger of the two; g: a 33^2 proxy with 9 slices measures the g
- * interpolation error at the g midpoints, the g size follows from its
- * decay as ng^-1.5 (measured) on the ladder 9, 13, 17, 25, 33, 49, 65, 97,
- * 129, ..., 1024 for tol/2. The final build measures its error; if it misses
- * tol the g axis grows along the ladder, up to 2 times, then NBT_ETOL.
- * seconds (may be NULL): total time including the proxies. */
+/* A plan: axes 0 and 1 are the planner's sizes and mappings
+ * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2
+ * (or its mappings at the requested size), the larger of the two; g: a
+ * 33^2 proxy with 9 slices measures the g interpolation error at the g
+ * midpoints, and the g size follows from its decay as ng^-1.5 (measured) on
+ * the ladder 9, 13, 17, 25, 33, 49, 65, 97, 129, ..., 1024 for tol/2.
+ * Predicted time: the proxy's scaled as the planner scales fixed-phase
+ * sets, times the slice count. */
+typedef struct {
+    nbt_gslice_request req;
+    nbt_axis axis[3];
+    double pred_err;          /* predicted g interpolation error / max_abs */
+    double pred_seconds;      /* predicted build time, error measurement included */
+    double bytes;             /* table size as float (half: half) */
+    double plan_seconds;      /* time spent planning (proxies) */
+} nbt_gslice_plan_t;
+
+nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
+                           size_t errlen);
+/* Build the plan's table; with a tol it measures its error and, if it
+ * misses tol, grows the g axis along the ladder up to 2 times, then
+ * NBT_ETOL (err names size and error). */
+nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
+                              size_t errlen);
+/* Plan and execute; seconds (may be NULL): total time, proxies included. */
 nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
                             char *err, size_t errlen);
+
+/* Which basis serves a g range: Legendre packs (nbt/plan.h) or g slices. */
+typedef enum { NBT_BASIS_AUTO = 0, NBT_BASIS_LEGENDRE, NBT_BASIS_SLICES } nbt_basis;
+/* "auto", "legendre", "slices"; parse: NBT_EINVAL for other names. */
+const char *nbt_basis_name(nbt_basis b);
+nbt_status nbt_basis_parse(const char *name, nbt_basis *b);
+
+typedef struct {
+    nbt_basis basis;          /* the choice: LEGENDRE or SLICES */
+    size_t leg_nterms;        /* Legendre terms the range needs (513: more than 512) */
+    double leg_seconds, leg_bytes, leg_err;  /* Legendre packs' predicted build time, size, error
+                                                (INFINITY/NaN: out of reach or not asked) */
+    size_t sl_size[3];
+    double sl_seconds, sl_bytes, sl_err;     /* the g-sliced table's */
+    char reason[320];         /* one line: the choice and the numbers behind it */
+    nbt_gslice_plan_t sl_plan; /* the slices' plan (for nbt_gslice_execute) when predicted */
+} nbt_basis_choice;
+
+/* Predict both for a table kind over r->g at r->tol (r->size unused) and
+ * choose (want = AUTO): the smaller predicted build time; Legendre only
+ * when at most orders_max orders meet tol. want = LEGENDRE or SLICES
+ * predicts only that one (LEGENDRE out of reach: NBT_ETOL naming the
+ * orders). Planning runs the planners' proxy builds (about a tenth of a
+ * build). */
+nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
+                            nbt_basis_choice *out, char *err, size_t errlen);
 
 /* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
 int nbt_table_is_gslice(const nbt_table *t);
