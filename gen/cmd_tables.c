@@ -106,8 +106,14 @@ int tableset_write(const nbt_tableset *ts, const char *stem, int preview)
             axis_desc(&t->axis[0], nbt_table_axis_name(t->kind, 0), d0, sizeof d0);
             axis_desc(&t->axis[1], nbt_table_axis_name(t->kind, 1), d1, sizeof d1);
             double e = nbt_table_max_err(t);
-            printf("%-22s %4zux%-4zu %s %s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
-                   t->axis[0].n, t->axis[1].n, d0, d1, e, ts->scale > 0 ? e / ts->scale : e, t->quad_err);
+            char d2[96] = "";
+            if (t->axis[2].n >= 2) {
+                axis_desc(&t->axis[2], nbt_table_axis_name(t->kind, 2), d2 + 1, sizeof d2 - 1);
+                d2[0] = ' ';
+            }
+            printf("%-22s %4zux%-4zu%s%.0zu %s %s%s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
+                   t->axis[0].n, t->axis[1].n, t->axis[2].n >= 2 ? "x" : "", t->axis[2].n >= 2 ? t->axis[2].n : 0,
+                   d0, d1, d2, e, ts->scale > 0 ? e / ts->scale : e, t->quad_err);
         }
     }
     for (size_t i = 0; i < 2 * ts->count; i++)

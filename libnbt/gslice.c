@@ -488,3 +488,22 @@ nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specul
     }
     return out ? NBT_ETOL : NBT_OK;
 }
+
+nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choice *out, char *err, size_t errlen)
+{
+    nbt_status st = nbt_scene_check(s, err, errlen);
+    if (st != NBT_OK)
+        return st;
+    if (!s->have_g)
+        return failf(err, errlen, NBT_EINVAL, "basis: the scene has no g range");
+    nbt_basis want = (nbt_basis)s->basis;
+    if (!(s->g[0] < s->g[1])) {
+        if (want == NBT_BASIS_SLICES)
+            return failf(err, errlen, NBT_EINVAL, "basis slices needs a g range lo < hi (g = %g is one value: "
+                         "phase = hg:g=%g is exact for it)", s->g[0], s->g[0]);
+        want = NBT_BASIS_LEGENDRE;
+    }
+    nbt_gslice_request r = {s->airlight ? NBT_TABLE_H : NBT_TABLE_J, s->airlight || s->diffuse ? 1 : s->phong[0],
+                            s->kappa_t[1] * s->distance[1], {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
+    return nbt_basis_choose(&r, s->orders_max, want, nthreads, out, err, errlen);
+}

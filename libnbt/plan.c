@@ -66,6 +66,10 @@ nbt_status nbt_scene_check(const nbt_scene *s, char *err, size_t errlen)
     if (!!s->have_g == !!s->phase)
         return failf(err, errlen, NBT_EINVAL, "give exactly one of g (a value or range: Legendre tables) and "
                      "phase (fixed phase)");
+    if (s->basis < 0 || s->basis > 2)
+        return failf(err, errlen, NBT_EINVAL, "basis = %d is not accepted: auto, legendre or slices", s->basis);
+    if (s->basis != 0 && !s->have_g)
+        return failf(err, errlen, NBT_EINVAL, "basis applies to a g range only (a fixed phase needs one table per kind)");
     if (s->have_g && !range_ok(s->g, -0.99, 0.99))
         return failf(err, errlen, NBT_EDOM, "g = %g:%g is not accepted: -0.99 <= lo <= hi <= 0.99", s->g[0], s->g[1]);
     if (s->kappa_s[1] >= 0 && s->kappa_s[1] > s->kappa_t[1])

@@ -130,6 +130,14 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
 nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specular, double g,
                                const nbt_surface_geom *geo, double fallback_tol, double *Lp, double *abserr);
 
+/* The basis for a scene with a g range (s->have_g): nbt_basis_choose with
+ * want = s->basis for its first set (H if airlight, else J^1, else the
+ * first Phong J^n) over [0, max kappa_t x max distance] at s->tol with
+ * s->orders_max; g slices need g[0] < g[1] (a single g is a fixed phase).
+ * NBT_EINVAL for a scene without a g range. */
+#include <nbt/plan.h>
+nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choice *out, char *err, size_t errlen);
+
 #ifdef __cplusplus
 }
 #endif
