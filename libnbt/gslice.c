@@ -357,7 +357,7 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
                      out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max);
     if (want != NBT_BASIS_AUTO) {
         out->basis = want;
-        snprintf(out->reason, sizeof out->reason, "basis %s requested", nbt_basis_name(want));
+        snprintf(out->reason, sizeof out->reason, "%s: requested", nbt_basis_name(want));
     } else if (isinf(out->leg_seconds)) {
         out->basis = NBT_BASIS_SLICES;
         snprintf(out->reason, sizeof out->reason,
