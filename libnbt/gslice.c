@@ -2,7 +2,6 @@
  * fixed-phase builds, the g interpolation error, sizing, evaluation. */
 #include <config.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,16 +107,7 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 
 /* ---- error-driven size ---- */
 
-static nbt_status failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
+#define failf nbt__failf
 
 static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1024};
 #define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])

@@ -28,7 +28,8 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static nbt_status failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
+#define failf nbt__failf
+nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
 {
     if (err && errlen) {
         va_list ap;

@@ -32,22 +32,28 @@ static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, 
     return t;
 }
 
+/* H_p or J_p^n of the table's kind for HG(g), independently integrated */
+static double exact(const nbt_table *t, double x, double y, double g)
+{
+    double v, e;
+    nbt_phase *p = nbt_phase_hg(g);
+    if (t->kind == NBT_TABLE_H)
+        nbt_h_phase(p, x, y, 1e-11, &v, &e);
+    else
+        nbt_j_phase(p, t->n, x, y, 1e-11, &v, &e);
+    nbt_phase_free(p);
+    return v;
+}
+
 /* the recorded max_err bounds |lookup3 - exact| at random (x, y, g); node
  * slices hold the fixed-phase values to the quadrature tolerance */
 static void check_table(const nbt_table *t, int npts)
 {
-    int isH = t->kind == NBT_TABLE_H;
     double worst = 0;
     for (int i = 0; i < npts; i++) {
         double x = t->axis[0].lo + (t->axis[0].hi - t->axis[0].lo) * pow(uni(), 3.0);
         double y = t->axis[1].lo + (t->axis[1].hi - t->axis[1].lo) * uni();
-        double g = t->axis[2].lo + (t->axis[2].hi - t->axis[2].lo) * uni(), ex, e, L;
-        nbt_phase *p = nbt_phase_hg(g);
-        if (isH)
-            nbt_h_phase(p, x, y, 1e-11, &ex, &e);
-        else
-            nbt_j_phase(p, t->n, x, y, 1e-11, &ex, &e);
-        nbt_phase_free(p);
+        double g = t->axis[2].lo + (t->axis[2].hi - t->axis[2].lo) * uni(), ex = exact(t, x, y, g), L;
         nbt_table_lookup3(t, x, y, g, &L);
         worst = fmax(worst, fabs(L - ex));
     }
@@ -59,14 +65,7 @@ static void check_table(const nbt_table *t, int npts)
     /* a node of a slice is the fixed-phase value (float storage: 1e-6 rel) */
     size_t m = t->axis[2].n - 2, j = t->axis[1].n / 3, ii = t->axis[0].n / 2;
     double g = nbt_axis_node(&t->axis[2], m), x = nbt_axis_node(&t->axis[0], ii), y = nbt_axis_node(&t->axis[1], j);
-    double ex, e;
-    nbt_phase *p = nbt_phase_hg(g);
-    if (isH)
-        nbt_h_phase(p, x, y, 1e-11, &ex, &e);
-    else
-        nbt_j_phase(p, t->n, x, y, 1e-11, &ex, &e);
-    nbt_phase_free(p);
-    t_rel(t->data[(m * t->axis[1].n + j) * t->axis[0].n + ii], ex, 1e-6, "%s slice %zu node = fixed-phase value",
+    t_rel(t->data[(m * t->axis[1].n + j) * t->axis[0].n + ii], exact(t, x, y, g), 1e-6, "%s slice %zu node = fixed-phase value",
           nbt_table_kind_name(t->kind), m);
 }
 
