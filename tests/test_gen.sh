@@ -398,6 +398,20 @@ tv=$1; tb=$2
 set -- $("$NBT_GEN" eval airlight --g 0.21 $geo)
 awk -v a="$tv" -v e="$tb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e + 1e-10 * b) }' && ok ||
   bad "eval --tables g-sliced: $tv +- $tb vs direct $1"
+# from Legendre packs (orders 0..7, H_k recorded errors plus the series truncation beyond them)
+"$NBT_GEN" airlight --kmax 7 --size 33x33 --max 4 -o "$tmp/gl.exr" --no-preview --quiet >/dev/null 2>&1
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo --method table --tables "$tmp/gl_k0-3.exr" "$tmp/gl_k4-7.exr" 2>/dev/null)
+lv=$1; lb=$2
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo)
+awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
+  bad "eval --tables Legendre packs: $lv +- $lb vs direct $1"
+# 4 orders at g = 0.45: the truncation beyond them (5.5e-4) is most of the error, and the bound must hold it
+"$NBT_GEN" airlight --kmax 3 --size 33x33 --max 4 -o "$tmp/g3.exr" --no-preview --quiet >/dev/null 2>&1
+set -- $("$NBT_GEN" eval airlight --g 0.45 $geo --method table --tables "$tmp/g3.exr" 2>/dev/null)
+lv=$1; lb=$2
+set -- $("$NBT_GEN" eval airlight --g 0.45 $geo)
+awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
+  bad "eval --tables 4 Legendre orders at g = 0.45: $lv +- $lb vs direct $1"
 expect_usage "eval --tables: g outside the table" "covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
