@@ -4,6 +4,8 @@
  * airlight over random rays and g against the direct integral: the pure
  * lookup (what a shader computes) and the library route with its fallback
  * (nbt_airlight_table_g / nbt_airlight_table_e).
+ * Then surface radiance from g-sliced J^1 tables (Legendre J packs: see
+ * bench_tables).
  * Usage: bench_gslice [tol] [rays] [max_legendre_seconds]   (make bench) */
 #include <math.h>
 #include <stdio.h>
@@ -124,6 +126,50 @@ static void row(const char *what, double G, const char *size, double mb, double 
            s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
 }
 
+/* Surface radiance (Lambert, kd = 1) from a g-sliced J^1 table over random
+ * geometries (T = kappa_t d_sp <= XMAX, theta_s in [0, pi]: below the
+ * horizon only scattered light arrives) against nbt_surface_direct: the
+ * lookup (no fallback) and the route with fallback to the direct integral
+ * where the bound exceeds 10% of the value. */
+static void surface_part(double tol, int n)
+{
+    static const double Gs[] = {0.5, 0.8, 0.9};
+    printf("# surface: g-sliced J^1, T in [0, %g], tol %g; %d random geometries and g; relative to\n"
+           "# nbt_surface_direct (the direct term included, as in L_p)\n", XMAX, tol, n);
+    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0]; gi++) {
+        double G = Gs[gi], secs;
+        nbt_gslice_request r = {NBT_TABLE_J, 1, XMAX, {-G, G}, tol, {0, 0, 0}, 0};
+        nbt_table *t = NULL;
+        char err[256];
+        if (nbt_gslice_build(&r, 2, &t, &secs, err, sizeof err) != NBT_OK) {
+            printf("J1 slices %4.2f  %s\n", G, err);
+            continue;
+        }
+        double wl = 0, wr = 0;
+        int ok = 0, fell = 0;
+        for (int i = 0; i < n; i++) {
+            nbt_surface_geom geo = {0.3, 0.5, 1.0, 0.5 + 19.0 * uni(), M_PI * uni(), 0.5, 1.0, 0.0, 1};
+            double g = -G + 2.0 * G * uni(), R, RE, L, E, Lf, Ef;
+            nbt_phase *p = nbt_phase_hg(g);
+            nbt_surface_direct(p, &geo, 1e-9, &R, &RE);
+            nbt_phase_free(p);
+            nbt_surface_table_g(t, NULL, g, &geo, 0, &L, &E);
+            nbt_surface_table_g(t, NULL, g, &geo, 1e-9, &Lf, &Ef);
+            fell += Lf != L;
+            double e = fabs(L - R) / fabs(R);
+            ok += e <= 1e-3;
+            wl = fmax(wl, e);
+            wr = fmax(wr, fabs(Lf - R) / fabs(R));
+        }
+        printf("J1 slices %4.2f %zux%zux%zu %6.2f MB %6.2f s rec %.1e | lookup: worst %.1e <=1e-3 %3.0f%% | "
+               "route: worst %.1e fallback %3.0f%%\n", G, t->axis[0].n, t->axis[1].n, t->axis[2].n,
+               4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], wl, 100.0 * ok / n, wr,
+               100.0 * fell / n);
+        nbt_table_free(t);
+        fflush(stdout);
+    }
+}
+
 int main(int argc, char **argv)
 {
     double tol = argc > 1 ? atof(argv[1]) : 1e-2;
@@ -187,5 +233,6 @@ int main(int argc, char **argv)
         nbt_table_free(t);
         fflush(stdout);
     }
+    surface_part(tol, nrays / 2);
     return 0;
 }

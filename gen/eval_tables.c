@@ -105,7 +105,9 @@ int eval_from_tables(int surface, const void *geo, const char *const *files, siz
             if ((sg->kd > 0 && !dif) || (sg->ks > 0 && !spe))
                 die_usage("--tables: no g-sliced J table for the %s lobe (n = %d)", sg->kd > 0 && !dif ? "diffuse" : "specular",
                           sg->kd > 0 && !dif ? 1 : sg->n);
-            st = nbt_surface_table_g(dif, spe, g, sg, 0, &v, &e);
+            /* the airlight route's policy: where the bound exceeds 10% of the
+             * value, the direct integral */
+            st = nbt_surface_table_g(dif, spe, g, sg, 1e-9, &v, &e);
         }
         what = "g-sliced";
     } else if (nfixed) {
