@@ -71,6 +71,9 @@ nbt_status nbt_scene_check(const nbt_scene *s, char *err, size_t errlen)
         return failf(err, errlen, NBT_EINVAL, "basis = %d is not accepted: auto, legendre or slices", s->basis);
     if (s->basis != 0 && !s->have_g)
         return failf(err, errlen, NBT_EINVAL, "basis applies to a g range only (a fixed phase needs one table per kind)");
+    if (s->basis == 2 && !(s->g[0] < s->g[1]))
+        return failf(err, errlen, NBT_EINVAL, "basis = slices needs a g range lo < hi (g = %g is one value: phase = "
+                     "hg:g=%g is exact for it)", s->g[0], s->g[0]);
     if (s->have_g && !range_ok(s->g, -0.99, 0.99))
         return failf(err, errlen, NBT_EDOM, "g = %g:%g is not accepted: -0.99 <= lo <= hi <= 0.99", s->g[0], s->g[1]);
     if (s->kappa_s[1] >= 0 && s->kappa_s[1] > s->kappa_t[1])

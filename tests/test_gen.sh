@@ -428,6 +428,8 @@ expect_usage "--basis slices with --size" "sizes its table by --tol" "$NBT_GEN" 
   grep -q "^# basis legendre: predicted build Legendre" "$tmp/ga.out" && ok || bad "--basis auto: $(cat "$tmp/ga.out")"
 printf 'kappa_t = 0.5\ndistance = 8\ng = -0.5:0.5\nbasis = sometimes\n' >"$tmp/b.scene"
 expect_usage "scene: bad basis" "basis = 'sometimes' is not accepted: auto, legendre or slices" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
+printf 'kappa_t = 0.5\ndistance = 8\ng = 0.9\nbasis = slices\n' >"$tmp/b.scene"
+expect_usage "scene: basis slices for one g" "basis = slices needs a g range" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
 printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\nbasis = slices\n' >"$tmp/b.scene"
 expect_usage "scene: basis with a fixed phase" "basis applies to a g range only" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
 
