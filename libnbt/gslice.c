@@ -487,12 +487,8 @@ nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choi
     if (!s->have_g)
         return failf(err, errlen, NBT_EINVAL, "basis: the scene has no g range");
     nbt_basis want = (nbt_basis)s->basis;
-    if (!(s->g[0] < s->g[1])) {
-        if (want == NBT_BASIS_SLICES)
-            return failf(err, errlen, NBT_EINVAL, "basis slices needs a g range lo < hi (g = %g is one value: "
-                         "phase = hg:g=%g is exact for it)", s->g[0], s->g[0]);
-        want = NBT_BASIS_LEGENDRE;
-    }
+    if (!(s->g[0] < s->g[1]))
+        want = NBT_BASIS_LEGENDRE; /* one g (basis slices is refused by the check) */
     nbt_gslice_request r = {s->airlight ? NBT_TABLE_H : NBT_TABLE_J, s->airlight || s->diffuse ? 1 : s->phong[0],
                             s->kappa_t[1] * s->distance[1], {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
     return nbt_basis_choose(&r, s->orders_max, want, nthreads, out, err, errlen);
