@@ -12,7 +12,7 @@
 enum {
     O_K, O_U, O_V, O_N, O_T, O_THETA, O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP,
     O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_METHOD, O_TERMS, O_TOL, O_ALBEDO, O_SIGMAT, O_BSPREAD, O_Z, O_R,
-    O_MODEL, O_DENSITY, O_INFINITE, O_BEAMMODEL, O_COUNT
+    O_MODEL, O_DENSITY, O_INFINITE, O_BEAMMODEL, O_TABLES, O_COUNT
 };
 static const struct option opts[] = {
     {"k", required_argument, 0, O_K},         {"u", required_argument, 0, O_U},
@@ -30,7 +30,7 @@ static const struct option opts[] = {
     {"B", required_argument, 0, O_BSPREAD},   {"z", required_argument, 0, O_Z},
     {"r", required_argument, 0, O_R},         {"model", required_argument, 0, O_MODEL},
     {"density", required_argument, 0, O_DENSITY}, {"infinite", no_argument, 0, O_INFINITE},
-    {"beam-model", required_argument, 0, O_BEAMMODEL},
+    {"beam-model", required_argument, 0, O_BEAMMODEL}, {"tables", required_argument, 0, O_TABLES},
     {"help", no_argument, 0, 'h'},            {0, 0, 0, 0}};
 
 static void eval_help(void)
@@ -41,7 +41,12 @@ static void eval_help(void)
          "       nbt-gen eval airlight (--g G | --phase SPEC) --kappa-s KS --kappa-t KT --I0 I\n"
          "                --dsv D --gamma GA --dvp DV|inf [--method direct|series|table] [--terms N] [--tol EPS]\n"
          "       nbt-gen eval surface (--g G | --phase SPEC) --kappa-s KS --kappa-t KT --I0 I\n"
-         "                --dsp D --theta-s TS --theta-r TR --kd KD --ks KS --n N [--method ...] [--terms N] [--tol EPS]\n\n"
+         "                --dsp D --theta-s TS --theta-r TR --kd KD --ks KS --n N [--method ...] [--terms N] [--tol EPS]\n"
+         "       nbt-gen eval airlight|surface ... --method table --tables FILE.exr [FILE.exr ...]\n"
+         "                from given tables instead of building them: Legendre packs (with --g G or\n"
+         "                --phase SPEC; the bound adds the series truncation beyond their orders), one\n"
+         "                fixed-phase table per lobe (no --g/--phase), or g-sliced tables (--g G at run\n"
+         "                time); prints the value and the bound the tables record\n\n"
          "       nbt-gen eval moments --albedo W --sigma-t ST --B B --z Z [--model ishimaru|smallangle]\n"
          "                [--density FILE]           prints M0 M2 alpha beta (narrow beam, pencil at z = 0)\n"
          "       nbt-gen eval psi --albedo W --sigma-t ST --B B --z Z --r R\n"
@@ -363,6 +368,18 @@ int cmd_eval(int argc, char **argv)
             die_usage("see 'nbt-gen eval --help'");
         a.arg[c] = optarg ? optarg : ""; /* a flag without argument is present as "" */
     }
+    /* --tables FILE [FILE ...]: the files after the first are left as operands */
+    const char *files[65];
+    size_t nfiles = 0;
+    if (a.arg[O_TABLES]) {
+        if (!a.arg[O_METHOD] || strcmp(a.arg[O_METHOD], "table"))
+            die_usage("--tables applies to --method table only");
+        if (a.arg[O_TERMS] || a.arg[O_TOL])
+            die_usage("--tables: --terms and --tol do not apply (the files fix both)");
+        files[nfiles++] = a.arg[O_TABLES];
+        for (; optind < argc && nfiles < 65; optind++)
+            files[nfiles++] = argv[optind];
+    }
     if (optind < argc)
         die_usage("eval: unexpected argument '%s'", argv[optind]);
     double tol = a.arg[O_TOL] ? opt_double("--tol", a.arg[O_TOL], 1e-15, 0, 0.1, 0) : 1e-8;
@@ -407,7 +424,8 @@ int cmd_eval(int argc, char **argv)
     phys_t ph;
     memset(&ph, 0, sizeof ph);
     if (!strcmp(what, "airlight")) {
-        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP, O_METHOD, O_TERMS, O_TOL};
+        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSV, O_GAMMA, O_DVP, O_METHOD, O_TERMS, O_TOL,
+                                 O_TABLES};
         only(&a, what, ok, sizeof ok / sizeof ok[0]);
         ph.ag.kappa_s = need(&a, O_KS, "--kappa-s", 0, 0, INFINITY, 1);
         ph.ag.kappa_t = need(&a, O_KT, "--kappa-t", 0, 0, INFINITY, 1);
@@ -420,10 +438,16 @@ int cmd_eval(int argc, char **argv)
             ph.ag.dvp = need(&a, O_DVP, "--dvp", 0, 1, INFINITY, 1);
         if (ph.ag.kappa_t < ph.ag.kappa_s)
             die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.ag.kappa_t, ph.ag.kappa_s);
+        if (nfiles) {
+            if (nbt_airlight_check(&ph.ag) != NBT_OK)
+                die_usage("eval: the ray must not run through the source (gamma = 0 with dvp > dsv)");
+            return eval_from_tables(0, &ph.ag, files, nfiles, a.arg[O_G], a.arg[O_PHASE]);
+        }
         return eval_phys(&a, &ph);
     }
     if (!strcmp(what, "surface")) {
-        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_N, O_METHOD, O_TERMS, O_TOL};
+        static const int ok[] = {O_G, O_PHASE, O_KS, O_KT, O_I0, O_DSP, O_THS, O_THR, O_KD, O_KSPEC, O_N, O_METHOD, O_TERMS, O_TOL,
+                                 O_TABLES};
         only(&a, what, ok, sizeof ok / sizeof ok[0]);
         ph.surface = 1;
         ph.sg.kappa_s = need(&a, O_KS, "--kappa-s", 0, 0, INFINITY, 1);
@@ -437,6 +461,8 @@ int cmd_eval(int argc, char **argv)
         ph.sg.n = (int)opt_long("--n", a.arg[O_N] ? a.arg[O_N] : "", 1, 10000);
         if (ph.sg.kappa_t < ph.sg.kappa_s)
             die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.sg.kappa_t, ph.sg.kappa_s);
+        if (nfiles)
+            return eval_from_tables(1, &ph.sg, files, nfiles, a.arg[O_G], a.arg[O_PHASE]);
         return eval_phys(&a, &ph);
     }
     die_usage("eval: '%s' is not accepted: H, J, airlight, surface, moments or psi", what);

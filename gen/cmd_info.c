@@ -18,9 +18,10 @@ int cmd_info(int argc, char **argv)
         if (c == 'a')
             at = optarg;
         else if (c == 'h') {
-            puts("Usage: nbt-gen info FILE.exr [--at X,Y]\n"
+            puts("Usage: nbt-gen info FILE.exr [--at X,Y[,G]]\n"
                  "Prints the table's metadata; with --at, the bilinear (GPU-equivalent) values at\n"
-                 "physical coordinates X (u or T) and Y (v or theta).");
+                 "physical coordinates X (u or T) and Y (v or theta); on a 3-D (g-sliced) table the\n"
+                 "trilinear (sampler3D) value at X,Y,G (G: the slice axis, e.g. g; default its low end).");
             return 0;
         } else
             die_usage("see 'nbt-gen info --help'");
@@ -28,11 +29,12 @@ int cmd_info(int argc, char **argv)
     if (optind != argc - 1)
         die_usage("info: expected exactly one table file");
     const char *path = argv[optind];
-    double x = 0, y = 0;
+    double x = 0, y = 0, z = NAN;
     if (at) {
         char extra;
-        if (sscanf(at, "%lf,%lf%c", &x, &y, &extra) != 2 || !isfinite(x) || !isfinite(y))
-            die_usage("--at: '%s' is not accepted: expected X,Y (two finite numbers)", at);
+        int got = sscanf(at, "%lf,%lf,%lf%c", &x, &y, &z, &extra);
+        if ((got != 2 && got != 3) || !isfinite(x) || !isfinite(y) || (got == 3 && !isfinite(z)))
+            die_usage("--at: '%s' is not accepted: expected X,Y or X,Y,G (finite numbers)", at);
     }
     nbt_table *t;
     char err[512];
@@ -51,6 +53,10 @@ int cmd_info(int argc, char **argv)
     if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P || t->axis[0].map == NBT_AXIS_LOG1P_CBRT ||
         t->axis[1].map == NBT_AXIS_LOG1P_CBRT)
         printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
+    if (t->axis[2].n >= 2)
+        printf("axis2       %s %s [%.17g, %.17g] %zu slices (3-D: trilinear lookup, a sampler3D)\n",
+               nbt_table_axis_name(t->kind, 2), nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
+               t->axis[2].n);
     printf("storage     %s\n", t->half ? "half" : "float");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
     int fitted = t->kind == NBT_TABLE_KERNEL && strstr(t->phase, " fitted ") != NULL;
@@ -67,6 +73,8 @@ int cmd_info(int argc, char **argv)
             snprintf(what, sizeof what, "P%d", strstr(t->phase, " P4") ? 4 : (int)ch);
         else if (t->kind == NBT_TABLE_KERNEL)
             snprintf(what, sizeof what, ch == 0 ? "alpha/sig_t" : "beta*sig_t");
+        else if (t->k[ch] < 0 && t->axis[2].n >= 2)
+            snprintf(what, sizeof what, "phase(g)");
         else if (t->k[ch] < 0)
             snprintf(what, sizeof what, "fixed phase");
         else
@@ -81,8 +89,16 @@ int cmd_info(int argc, char **argv)
         printf("quad tol    %.3g (largest node error estimate %.3g)\n", t->quad_tol, t->quad_err);
     if (at) {
         double v[NBT_TABLE_MAX_CH];
-        nbt_table_lookup(t, x, y, v);
-        printf("at %s=%.17g %s=%.17g:", n0, x, n1, y);
+        if (t->axis[2].n >= 2 && !isnan(z)) {
+            nbt_table_lookup3(t, x, y, z, v);
+            printf("at %s=%.17g %s=%.17g %s=%.17g:", n0, x, n1, y, nbt_table_axis_name(t->kind, 2), z);
+            if (z < t->axis[2].lo || z > t->axis[2].hi)
+                fprintf(stderr, "nbt-gen: warning: %s = %g lies outside the table; clamped to its edge\n",
+                        nbt_table_axis_name(t->kind, 2), z);
+        } else {
+            nbt_table_lookup(t, x, y, v);
+            printf("at %s=%.17g %s=%.17g%s:", n0, x, n1, y, t->axis[2].n >= 2 ? " (slice 0)" : "");
+        }
         for (size_t ch = 0; ch < t->nch; ch++)
             printf(" %.9g", v[ch]);
         printf("\n");

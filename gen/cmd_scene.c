@@ -13,6 +13,54 @@
 #include "commands.h"
 #include "scene.h"
 
+/* The scene's sets as g-sliced tables (basis slices): H, J^1, J^n at the
+ * scene's tol, written to DIR/H_hg_slices.exr, J1_hg_slices.exr, ... All
+ * built before any is written. */
+static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, int quiet)
+{
+    nbt_gslice_request rq[2 + NBT_SCENE_MAX_PHONG];
+    size_t n = 0;
+    double xmax = s->kappa_t[1] * s->distance[1];
+    if (s->airlight)
+        rq[n++] = (nbt_gslice_request){NBT_TABLE_H, 0, xmax, {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
+    if (s->diffuse)
+        rq[n++] = (nbt_gslice_request){NBT_TABLE_J, 1, xmax, {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
+    for (size_t i = 0; i < s->nphong; i++)
+        rq[n++] = (nbt_gslice_request){NBT_TABLE_J, s->phong[i], xmax, {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
+    nbt_table *t[2 + NBT_SCENE_MAX_PHONG] = {0};
+    char err[512];
+    progress prog;
+    progress_init(&prog, "scene", quiet);
+    for (size_t i = 0; i < n; i++) {
+        double secs;
+        if (nbt_gslice_build(&rq[i], threads, &t[i], &secs, err, sizeof err) != NBT_OK) {
+            for (size_t j = 0; j < i; j++)
+                nbt_table_free(t[j]);
+            die("%s", err);
+        }
+        progress_note(&prog, "set %zu/%zu: g-sliced %s%s %zux%zux%zu in %.2f s", i + 1, n,
+                      nbt_table_kind_name(rq[i].kind), rq[i].kind == NBT_TABLE_J ? "^n" : "", t[i]->axis[0].n,
+                      t[i]->axis[1].n, t[i]->axis[2].n, secs);
+    }
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+        die("cannot create the directory '%s': %s", dir, strerror(errno));
+    int rc = 0;
+    for (size_t i = 0; i < n; i++) {
+        char stem[1024];
+        if (rq[i].kind == NBT_TABLE_H)
+            snprintf(stem, sizeof stem, "%s/H_hg_slices", dir);
+        else
+            snprintf(stem, sizeof stem, "%s/J%d_hg_slices", dir, rq[i].n);
+        nbt_tableset ts = {{t[i]}, 1, t[i]->max_abs[0], t[i]->max_err[0] / t[i]->max_abs[0], 0};
+        if (rc == 0)
+            rc = tableset_write(&ts, stem, 1);
+        nbt_table_free(t[i]);
+    }
+    if (rc == 0 && !quiet)
+        fprintf(stderr, "nbt-gen: scene: %zu g-sliced table(s) in %s/ in %.3f s\n", n, dir, now_seconds() - prog.t0);
+    return rc;
+}
+
 int cmd_scene(int argc, char **argv)
 {
     static const struct option opts[] = {{"output", required_argument, 0, 'o'},
@@ -34,7 +82,9 @@ int cmd_scene(int argc, char **argv)
         else if (c == 'h') {
             puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet]\n"
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"
-                 "each with the smallest size and Legendre order count meeting its tol.\n"
+                 "each with the smallest size and Legendre order count meeting its tol; with a g\n"
+                 "range, Legendre packs or g-sliced tables by the scene's basis key (default auto:\n"
+                 "the smaller predicted build time, printed with the reason).\n"
                  "Progress on stderr: each set's start with its predicted time, its end with the\n"
                  "actual time, one warning line when the plan predicts more than 60 s; --quiet: none.");
             return 0;
@@ -50,6 +100,14 @@ int cmd_scene(int argc, char **argv)
         die_usage("%s", perr);
     check_writable_dir("-o", dir);
     char err[1024];
+    if (s.have_g && s.basis != NBT_BASIS_LEGENDRE) {
+        nbt_basis_choice ch;
+        if (nbt_scene_basis(&s, threads, &ch, err, sizeof err) != NBT_OK)
+            die("%s: %s", argv[optind], err);
+        printf("# basis %s\n", ch.reason);
+        if (ch.basis == NBT_BASIS_SLICES)
+            return scene_slices(&s, dir, threads, quiet);
+    }
     nbt_plan *plan = NULL;
     progress prog;
     progress_init(&prog, "scene", quiet);

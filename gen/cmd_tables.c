@@ -106,8 +106,14 @@ int tableset_write(const nbt_tableset *ts, const char *stem, int preview)
             axis_desc(&t->axis[0], nbt_table_axis_name(t->kind, 0), d0, sizeof d0);
             axis_desc(&t->axis[1], nbt_table_axis_name(t->kind, 1), d1, sizeof d1);
             double e = nbt_table_max_err(t);
-            printf("%-22s %4zux%-4zu %s %s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
-                   t->axis[0].n, t->axis[1].n, d0, d1, e, ts->scale > 0 ? e / ts->scale : e, t->quad_err);
+            char d2[96] = "";
+            if (t->axis[2].n >= 2) {
+                axis_desc(&t->axis[2], nbt_table_axis_name(t->kind, 2), d2 + 1, sizeof d2 - 1);
+                d2[0] = ' ';
+            }
+            printf("%-22s %4zux%-4zu%s%.0zu %s %s%s  max interp err %.2e (rel %.2e)  quad err %.1e\n", paths[2 * i],
+                   t->axis[0].n, t->axis[1].n, t->axis[2].n >= 2 ? "x" : "", t->axis[2].n >= 2 ? t->axis[2].n : 0,
+                   d0, d1, d2, e, ts->scale > 0 ? e / ts->scale : e, t->quad_err);
         }
     }
     for (size_t i = 0; i < 2 * ts->count; i++)
@@ -157,7 +163,7 @@ static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threa
 static void tables_help(const char *cmd)
 {
     printf("Usage: nbt-gen %s [-o FILE.exr] [--size WxH | --tol EPS] [--kmax K | --g LO:HI | --phase SPEC]\n"
-           "       %*s [--max X] [--half] [--threads T] [--no-preview] [--quiet]%s\n\n"
+           "       %*s [--basis legendre|slices|auto] [--max X] [--half] [--threads T] [--no-preview] [--quiet]%s\n\n"
            "Tabulates %s on a node-aligned grid and writes OpenEXR (+ PNG preview).\n"
            "  -o FILE.exr    output (default ./%s.exr; more than 4 orders: FILE_k0-3.exr, ...)\n"
            "  --size WxH     nodes per axis (2..4096); mappings by the planner's rule: log1p_cbrt (u/T),\n"
@@ -169,6 +175,9 @@ static void tables_help(const char *cmd)
            "  --g LO:HI      HG asymmetry range to serve: the number of orders is chosen so the\n"
            "                 airlight series truncation stays below tol/2, and the tables' error\n"
            "                 target is tol/2 over the error amplification sum (2k+1)|g|^k\n"
+           "  --basis B      with --g: legendre (the orders above), slices (one 3-D table of HG\n"
+           "                 slices over g, looked up trilinearly: nbt/gslice.h) or auto (default:\n"
+           "                 the smaller predicted build time; prints why); slices need --tol\n"
            "  --phase SPEC   fixed phase instead: iso, rayleigh, hg:g=G, gauss:B=B, table:FILE\n"
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
@@ -195,6 +204,56 @@ static void parse_size(const char *arg, size_t *w, size_t *h)
     *h = (size_t)b;
 }
 
+/* --basis auto|slices: choose (printing why) and, for slices, build and
+ * write the g-sliced table. Returns the exit status, or -1 when the
+ * Legendre tables were chosen (the caller builds them). */
+static int slices_or_legendre(const nbt_plan_request *s, double g_lo, double g_hi, nbt_basis basis, unsigned threads,
+                              const char *out, int preview, int quiet)
+{
+    nbt_gslice_request r = {s->kind, s->n, s->xmax, {g_lo, g_hi}, s->tol, {0, 0, 0}, s->half};
+    if (!(g_lo < g_hi)) {
+        if (basis == NBT_BASIS_SLICES)
+            die_usage("--basis slices: --g %g:%g is one value: give a range LO < HI (or --phase hg:g=%g)", g_lo, g_hi,
+                      g_lo);
+        return -1;
+    }
+    if (fmax(fabs(g_lo), fabs(g_hi)) > NBT_GSLICE_GMAX)
+        die_usage("--g: %g:%g is not accepted for slices: |g| <= %g", g_lo, g_hi, NBT_GSLICE_GMAX);
+    nbt_basis_choice ch;
+    char err[512];
+    progress prog;
+    progress_init(&prog, s->kind == NBT_TABLE_H ? "airlight" : "surface", quiet);
+    if (nbt_basis_choose(&r, 512, basis, threads, &ch, err, sizeof err) != NBT_OK)
+        die("%s", err);
+    printf("# basis %s\n", ch.reason);
+    if (ch.basis == NBT_BASIS_LEGENDRE)
+        return -1;
+    progress_note(&prog, "g-sliced %zux%zux%zu: predicted %.2g s", ch.sl_plan.axis[0].n, ch.sl_plan.axis[1].n,
+                  ch.sl_plan.axis[2].n, ch.sl_plan.pred_seconds);
+    nbt_table *t = NULL;
+    double t0 = now_seconds();
+    if (nbt_gslice_execute(&ch.sl_plan, threads, &t, err, sizeof err) != NBT_OK)
+        die("%s", err);
+    char stem[1024];
+    if (out) {
+        size_t n = strlen(out);
+        memcpy(stem, out, n - 4);
+        stem[n - 4] = '\0';
+    } else if (s->kind == NBT_TABLE_H)
+        snprintf(stem, sizeof stem, "H_hg_slices");
+    else
+        snprintf(stem, sizeof stem, "J%d_hg_slices", s->n);
+    nbt_tableset ts = {{t}, 1, t->max_abs[0], t->max_err[0] / t->max_abs[0], now_seconds() - t0};
+    int rc = tableset_write(&ts, stem, preview);
+    if (rc == 0)
+        printf("# g-sliced: %zu slices, g %s [%g, %g], %.1f MB as %s, built in %.2f s (planning %.2f s)\n",
+               t->axis[2].n, nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
+               1e-6 * (double)nbt_table_size(t) * (t->half ? 2.0 : 4.0), t->half ? "half" : "float", ts.seconds,
+               ch.sl_plan.plan_seconds);
+    nbt_table_free(t);
+    return rc;
+}
+
 /* --kmax accepts orders 0..KMAX_CLI (64 packs of four) */
 #define KMAX_CLI 255
 
@@ -204,14 +263,15 @@ int cmd_tables(int argc, char **argv)
     int surface = !strcmp(cmd, "surface");
     nbt_plan_request s = {surface ? NBT_TABLE_J : NBT_TABLE_H, surface ? 1 : 0, 4, NULL, 10.0, 0, {0, 0}, 0};
     unsigned threads = 0;
-    const char *out = NULL, *phase_spec = NULL;
+    const char *out = NULL, *phase_spec = NULL, *basis_arg = NULL;
+    nbt_basis basis = NBT_BASIS_AUTO;
     int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1, quiet = 0;
     double g_lo = 0, g_hi = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"size", required_argument, 0, 's'},
         {"tol", required_argument, 0, 't'},    {"kmax", required_argument, 0, 'k'},
         {"phase", required_argument, 0, 'p'},  {"n", required_argument, 0, 'n'},
-        {"g", required_argument, 0, 'g'},
+        {"g", required_argument, 0, 'g'},      {"basis", required_argument, 0, 'b'},
         {"max", required_argument, 0, 'm'},    {"half", no_argument, 0, 'H'},
         {"threads", required_argument, 0, 'j'}, {"no-preview", no_argument, 0, 'P'},
         {"quiet", no_argument, 0, 'q'},
@@ -225,6 +285,11 @@ int cmd_tables(int argc, char **argv)
         case 't': s.tol = opt_double("--tol", optarg, 0, 1, 1, 1); have_tol = 1; break;
         case 'k': s.nterms = (size_t)opt_long("--kmax", optarg, 0, KMAX_CLI) + 1; have_k = 1; break;
         case 'p': phase_spec = optarg; break;
+        case 'b':
+            if (nbt_basis_parse(optarg, &basis) != NBT_OK)
+                die_usage("--basis: '%s' is not accepted: legendre, slices or auto", optarg);
+            basis_arg = optarg;
+            break;
         case 'g': opt_range("--g", optarg, -0.99, 0.99, &g_lo, &g_hi); have_g = 1; break;
         case 'n':
             if (!surface)
@@ -248,6 +313,12 @@ int cmd_tables(int argc, char **argv)
         die_usage("--kmax and --phase exclude each other: Legendre orders or one fixed phase");
     if (have_g && (phase_spec || have_k))
         die_usage("--g chooses the Legendre orders itself: it excludes --kmax and --phase");
+    if (basis_arg && !have_g)
+        die_usage("--basis applies to a g range (--g LO:HI) only");
+    if (have_g && basis == NBT_BASIS_SLICES && have_size)
+        die_usage("--basis slices sizes its table by --tol: --size is not accepted with it");
+    if (have_g && have_size)
+        basis = NBT_BASIS_LEGENDRE; /* auto with --size: the Legendre tables of that size */
     if (!have_size && !have_tol)
         s.tol = 1e-3;
     if (out) {
@@ -266,6 +337,13 @@ int cmd_tables(int argc, char **argv)
         check_writable("-o", out);
     else
         check_writable_dir(cmd, ".");
+    if (have_g && basis != NBT_BASIS_LEGENDRE) {
+        int rc = slices_or_legendre(&s, g_lo, g_hi, basis, threads, out, preview, quiet);
+        if (rc >= 0) {
+            nbt_phase_free(ph);
+            return rc;
+        }
+    }
     if (have_g) {
         nbt_plan_legendre leg;
         double gmax = fmax(fabs(g_lo), fabs(g_hi));

@@ -9,6 +9,10 @@ int cmd_tables(int argc, char **argv); /* "airlight" and "surface" */
 int cmd_scene(int argc, char **argv);
 int cmd_eval(int argc, char **argv);
 int cmd_info(int argc, char **argv);
+/* eval airlight|surface --method table --tables FILE...: geo is an
+ * nbt_airlight_geom or nbt_surface_geom (gen/eval_tables.c) */
+int eval_from_tables(int surface, const void *geo, const char *const *files, size_t nfiles, const char *g_arg,
+                     const char *phase_arg);
 int cmd_kernel(int argc, char **argv);
 
 /* Write each table of a built set as EXR (+ PNG preview unless !preview)

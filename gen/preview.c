@@ -148,9 +148,25 @@ static void number(char *buf, size_t n, double v, double step)
 #define PW PREVIEW_PANEL_W
 #define PH PREVIEW_PANEL_H
 
+/* A 3-D (g-sliced) table shows two panels of its one channel: the slice
+ * nearest the middle of the slice axis (g = 0 for a symmetric g range) and
+ * the last slice (the most forward-peaked phase). */
+static double panel_slice(const nbt_table *t, int k)
+{
+    const nbt_axis *a = &t->axis[2];
+    if (k == 1)
+        return a->hi;
+    double mid = 0.5 * (a->lo + a->hi), best = a->lo;
+    for (size_t i = 0; i < a->n; i++)
+        if (fabs(nbt_axis_node(a, i) - mid) < fabs(best - mid))
+            best = nbt_axis_node(a, i);
+    return best;
+}
+
 int preview_write_png(const nbt_table *t, const char *path)
 {
-    int nc = (int)t->nch;
+    int sliced = t->axis[2].n >= 2 && t->nch == 1;
+    int nc = sliced ? 2 : (int)t->nch;
     canvas c = {NULL, PREVIEW_W(nc), PREVIEW_H};
     c.px = malloc((size_t)c.w * (size_t)c.h * 3);
     float *val = malloc((size_t)nc * PW * PH * sizeof(float));
@@ -168,7 +184,11 @@ int preview_write_png(const nbt_table *t, const char *path)
         double y = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
         for (int i = 0; i < PW; i++) {
             double x = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
-            nbt_table_lookup(t, x, y, v);
+            if (sliced) {
+                nbt_table_lookup3(t, x, y, panel_slice(t, 0), &v[0]);
+                nbt_table_lookup3(t, x, y, panel_slice(t, 1), &v[1]);
+            } else
+                nbt_table_lookup(t, x, y, v);
             for (int k = 0; k < nc; k++) {
                 val[((size_t)k * PH + (size_t)j) * PW + (size_t)i] = (float)v[k];
                 if (isfinite(v[k])) {
@@ -200,7 +220,10 @@ int preview_write_png(const nbt_table *t, const char *path)
         rect(&c, x0 - 1, y0 - 1, 1, PH + 2, BLACK);
         rect(&c, x0 + PW, y0 - 1, 1, PH + 2, BLACK);
         char title[64];
-        if (t->kind == NBT_TABLE_PSI)
+        if (sliced)
+            snprintf(title, sizeof title, "%s = %.3g", nbt_table_axis_name(t->kind, 2),
+                     fabs(panel_slice(t, k)) < 1e-12 ? 0.0 : panel_slice(t, k));
+        else if (t->kind == NBT_TABLE_PSI)
             snprintf(title, sizeof title, "%s", k == 0 ? "psi" : "psi stderr");
         else if (t->k[k] >= 0)
             snprintf(title, sizeof title, "k = %d", t->k[k]);
@@ -264,8 +287,13 @@ int preview_write_png(const nbt_table *t, const char *path)
     char nn[16] = "";
     if (t->kind == NBT_TABLE_J)
         snprintf(nn, sizeof nn, " n=%d", t->n);
-    snprintf(cap, sizeof cap, "%s table%s: %s  %zux%zu nodes", nbt_table_kind_name(t->kind), nn,
-             what[t->kind >= 0 && (int)t->kind < 4 ? (int)t->kind : 0], ax->n, ay->n);
+    if (sliced)
+        snprintf(cap, sizeof cap, "%s table%s: %s  %zux%zux%zu nodes (%zu %s slices, 2 shown)",
+                 nbt_table_kind_name(t->kind), nn, what[t->kind >= 0 && (int)t->kind < 4 ? (int)t->kind : 0], ax->n,
+                 ay->n, t->axis[2].n, t->axis[2].n, nbt_table_axis_name(t->kind, 2));
+    else
+        snprintf(cap, sizeof cap, "%s table%s: %s  %zux%zu nodes", nbt_table_kind_name(t->kind), nn,
+                 what[t->kind >= 0 && (int)t->kind < 4 ? (int)t->kind : 0], ax->n, ay->n);
     text(&c, 10, 8, 0, cap);
     text(&c, 10, 8 + LH, 0, err);
     snprintf(cap, sizeof cap, "nodes: %s %s, %s %s%s%.80s", nbt_table_axis_name(t->kind, 0),

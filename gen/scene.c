@@ -77,6 +77,13 @@ static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, ch
             if (msg_range(err, n, opt, val, -0.99, 0.99, &s->g[0], &s->g[1]))
                 return -1;
             s->have_g = 1;
+        } else if (!strcmp(key, "basis")) {
+            nbt_basis b;
+            if (nbt_basis_parse(val, &b) != NBT_OK) {
+                snprintf(err, n, "%s = '%s' is not accepted: auto, legendre or slices", opt, val);
+                return -1;
+            }
+            s->basis = (int)b;
         } else if (!strcmp(key, "phase")) {
             snprintf(seen->phase, sizeof seen->phase, "%s", val);
         } else if (!strcmp(key, "airlight")) {
@@ -107,8 +114,8 @@ static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, ch
                 s->phong[s->nphong++] = (int)e;
             }
         } else {
-            snprintf(err, n, "%s:%d: unknown key '%s': accepted are kappa_t, kappa_s, distance, g, phase, airlight, "
-                     "diffuse, phong, tol, half, orders_max", path, line, key);
+            snprintf(err, n, "%s:%d: unknown key '%s': accepted are kappa_t, kappa_s, distance, g, basis, phase, "
+                     "airlight, diffuse, phong, tol, half, orders_max", path, line, key);
             return -1;
         }
     }

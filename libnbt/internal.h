@@ -14,6 +14,11 @@
 nbt_status nbt__fail(nbt_status s, const char *reason);
 #define NBT_FAIL(s, reason) return nbt__fail((s), (reason))
 
+/* Format a one-line reason into err (if given) and return st; no handler
+ * (the planners' errors go to the caller's buffer). Defined in plan.c. */
+nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
 /* Weights of the airlight integrand: Legendre orders 0..kmax, or one
  * channel: 4 pi p(mu) when phase != NULL, or the truncated series
  * sum_k (2k+1) b_k P_k(mu) when b != NULL (orders 0..kmax). */

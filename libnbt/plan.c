@@ -28,7 +28,8 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static nbt_status failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
+#define failf nbt__failf
+nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
 {
     if (err && errlen) {
         va_list ap;
@@ -66,6 +67,13 @@ nbt_status nbt_scene_check(const nbt_scene *s, char *err, size_t errlen)
     if (!!s->have_g == !!s->phase)
         return failf(err, errlen, NBT_EINVAL, "give exactly one of g (a value or range: Legendre tables) and "
                      "phase (fixed phase)");
+    if (s->basis < 0 || s->basis > 2)
+        return failf(err, errlen, NBT_EINVAL, "basis = %d is not accepted: auto, legendre or slices", s->basis);
+    if (s->basis != 0 && !s->have_g)
+        return failf(err, errlen, NBT_EINVAL, "basis applies to a g range only (a fixed phase needs one table per kind)");
+    if (s->basis == 2 && !(s->g[0] < s->g[1]))
+        return failf(err, errlen, NBT_EINVAL, "basis = slices needs a g range lo < hi (g = %g is one value: phase = "
+                     "hg:g=%g is exact for it)", s->g[0], s->g[0]);
     if (s->have_g && !range_ok(s->g, -0.99, 0.99))
         return failf(err, errlen, NBT_EDOM, "g = %g:%g is not accepted: -0.99 <= lo <= hi <= 0.99", s->g[0], s->g[1]);
     if (s->kappa_s[1] >= 0 && s->kappa_s[1] > s->kappa_t[1])

@@ -323,9 +323,15 @@ nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 [ -n "$nt" ] && [ "$nt" -le 16 ] && [ "$(ls "$tmp/scene"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
   bad "example scene: $nt orders, H files $(ls "$tmp/scene")"
 # a scene needing more orders than the shaders take (|g| <= 0.8 at tol 1e-2
-# needs ~38): by default the planner stops with one line naming orders_max
-# and the limit, and writes nothing; orders_max = 512 builds ceil(N/4) packs
+# needs ~38): with basis = legendre the planner stops with one line naming
+# orders_max and the limit, and writes nothing; orders_max = 512 builds
+# ceil(N/4) packs; the default basis (auto) builds one g-sliced table instead
 printf 'kappa_t = 0.1\ndistance = 10\ng = 0:0.8\ndiffuse = no\ntol = 1e-2\n' >"$tmp/g8.scene"
+"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8s" --quiet >"$tmp/out" 2>&1 &&
+  grep -q "^# basis slices: |g| up to 0.8 needs [0-9]* Legendre orders at tol 0.01 (at most 16)" "$tmp/out" &&
+  [ "$(ls "$tmp/g8s")" = "H_hg_slices.exr
+H_hg_slices.png" ] && ok || bad "scene beyond 16 orders, basis auto: $(cat "$tmp/out"), $(ls "$tmp/g8s" 2>&1 | tr '\n' ' ')"
+printf 'basis = legendre\n' >>"$tmp/g8.scene"
 "$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8" >/dev/null 2>"$tmp/err"; rc=$?
 [ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "orders_max = 16" "$tmp/err" && grep -q "at most 16" "$tmp/err" &&
   [ ! -e "$tmp/g8" ] && ok || bad "scene beyond the shaders' 16 orders: rc=$rc, $(cat "$tmp/err"), $(ls "$tmp/g8" 2>&1 | head -3)"
@@ -372,6 +378,60 @@ if [ -n "${top_builddir:-}" ] && [ -f "$top_builddir/Makefile" ]; then
   grep -q 'rm ' "$tmp/clean" && ! grep -q 'nbt-tables\|nbt-demo\.png\|nbt-scatter[^ ]*\.\(exr\|png\)' "$tmp/clean" && ok ||
     bad "make clean/distclean would remove a user's output: $(grep 'nbt-tables\|nbt-demo\.png\|nbt-scatter[^ ]*\.\(exr\|png\)' "$tmp/clean")"
 fi
+
+# g-sliced tables (nbt/gslice.h): build, describe, look up against the independent H_p, evaluate from the file
+"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet >"$tmp/gs.out" 2>&1 &&
+  [ -s "$tmp/gs.exr" ] && [ -s "$tmp/gs.png" ] && grep -q "^# basis slices: requested" "$tmp/gs.out" && ok ||
+  bad "airlight --basis slices: $(cat "$tmp/gs.out")"
+"$NBT_GEN" info "$tmp/gs.exr" --at 0.7,0.3,0.21 >"$tmp/gs.info"
+grep -q "^axis2 *g cos \[-0.4" "$tmp/gs.info" && ok || bad "info names the g axis: $(cat "$tmp/gs.info")"
+# the trilinear value within the recorded error of H_p for HG(0.21) by quadrature
+gerr=$(sed -n 's/.*max interp err //p' "$tmp/gs.info")
+glook=$(sed -n 's/^at u=.* g=[^:]*: //p' "$tmp/gs.info")
+set -- $("$NBT_GEN" eval H --phase hg:g=0.21 --u 0.7 --v 0.3)
+awk -v a="$glook" -v b="$1" -v e="$gerr" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
+  bad "g-sliced lookup $glook vs H_p $1: beyond the recorded $gerr"
+# airlight from the file at g = 0.21 against the direct integral, within the printed bound
+geo="--kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsv 3 --gamma 0.4 --dvp 6.5"
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo --method table --tables "$tmp/gs.exr" 2>/dev/null)
+tv=$1; tb=$2
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo)
+awk -v a="$tv" -v e="$tb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e + 1e-10 * b) }' && ok ||
+  bad "eval --tables g-sliced: $tv +- $tb vs direct $1"
+# from Legendre packs (orders 0..7, H_k recorded errors plus the series truncation beyond them)
+"$NBT_GEN" airlight --kmax 7 --size 33x33 --max 4 -o "$tmp/gl.exr" --no-preview --quiet >/dev/null 2>&1
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo --method table --tables "$tmp/gl_k0-3.exr" "$tmp/gl_k4-7.exr" 2>/dev/null)
+lv=$1; lb=$2
+set -- $("$NBT_GEN" eval airlight --g 0.21 $geo)
+awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
+  bad "eval --tables Legendre packs: $lv +- $lb vs direct $1"
+# 4 orders at g = 0.45: the truncation beyond them (5.5e-4) is most of the error, and the bound must hold it
+"$NBT_GEN" airlight --kmax 3 --size 33x33 --max 4 -o "$tmp/g3.exr" --no-preview --quiet >/dev/null 2>&1
+set -- $("$NBT_GEN" eval airlight --g 0.45 $geo --method table --tables "$tmp/g3.exr" 2>/dev/null)
+lv=$1; lb=$2
+set -- $("$NBT_GEN" eval airlight --g 0.45 $geo)
+awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
+  bad "eval --tables 4 Legendre orders at g = 0.45: $lv +- $lb vs direct $1"
+expect_usage "eval --tables: g outside the table" "covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
+expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
+expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
+expect_usage "eval --tables: g-sliced with --phase" "run-time asymmetry with --g" "$NBT_GEN" eval airlight --phase iso $geo --method table --tables "$tmp/gs.exr"
+expect_usage "eval --tables without --method table" "method table only" "$NBT_GEN" eval airlight --g 0.2 $geo --tables "$tmp/gs.exr"
+"$NBT_GEN" airlight --phase hg:g=0.2 --size 9x9 --max 4 -o "$tmp/gf.exr" --no-preview >/dev/null 2>&1
+expect_usage "eval --tables: mixed kinds" "mix Legendre, fixed-phase and g-sliced" "$NBT_GEN" eval airlight $geo --method table --tables "$tmp/gf.exr" "$tmp/gs.exr"
+expect_usage "eval --tables: fixed phase with --g" "fixes the phase" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/gf.exr"
+expect_usage "--basis: bad value" "legendre, slices or auto" "$NBT_GEN" airlight --g 0:0.5 --basis fourier
+expect_usage "--basis without --g" "g range" "$NBT_GEN" airlight --phase iso --basis slices
+expect_usage "--basis slices with --size" "sizes its table by --tol" "$NBT_GEN" airlight --g 0:0.5 --basis slices --size 9x9
+# auto prints its reason; a small |g| range is cheaper as Legendre packs
+(cd "$tmp" && "$NBT_GEN" airlight --g -0.3:0.3 --tol 2e-2 --max 4 -o "$tmp/ga.exr" --no-preview --quiet >"$tmp/ga.out" 2>&1) &&
+  grep -q "^# basis legendre: predicted build Legendre" "$tmp/ga.out" && ok || bad "--basis auto: $(cat "$tmp/ga.out")"
+printf 'kappa_t = 0.5\ndistance = 8\ng = -0.5:0.5\nbasis = sometimes\n' >"$tmp/b.scene"
+expect_usage "scene: bad basis" "basis = 'sometimes' is not accepted: auto, legendre or slices" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
+printf 'kappa_t = 0.5\ndistance = 8\ng = 0.9\nbasis = slices\n' >"$tmp/b.scene"
+expect_usage "scene: basis slices for one g" "basis = slices needs a g range" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
+printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\nbasis = slices\n' >"$tmp/b.scene"
+expect_usage "scene: basis with a fixed phase" "basis applies to a g range only" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
 
 # the default scene
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&

@@ -9,6 +9,7 @@
 #include <nbt/airlight.h>
 #include <nbt/surface.h>
 #include <nbt/plan.h>
+#include <nbt/gslice.h>
 #include <nbt/beam.h>
 #include <nbt/mc.h>
 #include <nbt/screen.h>

@@ -62,6 +62,8 @@ typedef struct {
     double tol;               /* relative error target, 1e-7 .. 0.5 (default 1e-3) */
     size_t orders_max;        /* most Legendre orders per set, 1 .. 512 (default NBT_PLAN_GL_ORDERS) */
     int half;                 /* store half floats */
+    int basis;                /* with g: nbt_basis (nbt/gslice.h): 0 auto, 1 Legendre packs, 2 g slices;
+                                 nbt_plan_scene plans Legendre packs, nbt_scene_basis chooses */
 } nbt_scene;
 
 /* Defaults: airlight and diffuse on, tol 1e-3, orders_max 16, kappa_s not

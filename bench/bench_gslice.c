@@ -1,0 +1,238 @@
+/* bench/bench_gslice.c: run-time g, Legendre packs against g-sliced tables,
+ * in one process: for HG g ranges [-G, G], G = 0.5, 0.8, 0.9, 0.95, the
+ * size, build time and error of each at the same tolerance, and the
+ * airlight over random rays and g against the direct integral: the pure
+ * lookup (what a shader computes) and the library route with its fallback
+ * (nbt_airlight_table_g / nbt_airlight_table_e).
+ * Then surface radiance from g-sliced J^1 tables (Legendre J packs: see
+ * bench_tables).
+ * Usage: bench_gslice [tol] [rays] [max_legendre_seconds]   (make bench) */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <nbt/nbt.h>
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static unsigned long long rs = 0x9e3779b97f4a7c15ull;
+static double uni(void)
+{
+    rs = rs * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rs >> 11) / 9007199254740992.0;
+}
+
+#define XMAX 10.0
+
+/* a random ray with u = kappa_t h <= XMAX (kappa_t = 0.5, d_sv <= 19) */
+static nbt_airlight_geom ray(int i)
+{
+    nbt_airlight_geom g = {0.3, 0.5, 1.0, 0.5 + 18.5 * uni(), 0.02 + (M_PI - 0.04) * uni(), 0};
+    g.dvp = i % 3 == 0 ? INFINITY : 0.1 + 25.0 * uni();
+    return g;
+}
+
+/* the shader's arithmetic: prefactor times the difference of two lookups,
+ * summed over channels with weights (2k+1) g^k (Legendre) or 1 */
+static double pure_lookup(const nbt_table *const *t, size_t nt, double g, const nbt_airlight_geom *geo)
+{
+    double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma), u = geo->kappa_t * h;
+    double th0 = geo->gamma - M_PI_2, thd = isinf(geo->dvp) ? M_PI_2 : atan2(geo->dvp - tt, h), s = 0;
+    for (size_t i = 0; i < nt; i++) {
+        double a[4], b[4];
+        nbt_table_lookup3(t[i], u, thd, g, a);
+        nbt_table_lookup3(t[i], u, th0, g, b);
+        for (size_t c = 0; c < t[i]->nch; c++) {
+            int k = t[i]->k[c];
+            s += (k < 0 ? 1.0 : (2.0 * k + 1.0) * pow(g, k)) * (a[c] - b[c]);
+        }
+    }
+    return geo->kappa_s * geo->I0 * exp(-geo->kappa_t * tt) / (4.0 * M_PI * h) * s;
+}
+
+typedef struct {
+    double worst_pure, worst_route, p99_pure, fallback_frac;
+    double worst_inf;    /* |lookup - direct| / the unobstructed ray's airlight */
+    double frac_1e3;     /* rays whose lookup is within 1e-3 relative */
+} ray_stats;
+
+static int cmpd(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* over nrays random rays and g in [-G, G] */
+static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G, int nrays)
+{
+    ray_stats r = {0, 0, 0, 0, 0, 0};
+    int ok3 = 0;
+    double *rel = malloc((size_t)nrays * sizeof(double));
+    int fell = 0;
+    size_t K = 0;
+    for (size_t i = 0; i < nt; i++)
+        for (size_t c = 0; c < t[i]->nch; c++)
+            if ((size_t)t[i]->k[c] + 1 > K)
+                K = (size_t)t[i]->k[c] + 1;
+    double *b = malloc((K + 1) * sizeof(double));
+    for (int i = 0; i < nrays; i++) {
+        nbt_airlight_geom geo = ray(i);
+        double g = -G + 2.0 * G * uni(), R, RE, L, E;
+        nbt_phase *p = nbt_phase_hg(g);
+        nbt_airlight_direct(p, &geo, 1e-10, &R, &RE);
+        nbt_phase_free(p);
+        double Lp = pure_lookup(t, nt, g, &geo), Rinf = R, e2;
+        if (!isinf(geo.dvp)) {
+            nbt_airlight_geom gi = geo;
+            gi.dvp = INFINITY;
+            nbt_phase *q = nbt_phase_hg(g);
+            nbt_airlight_direct(q, &gi, 1e-10, &Rinf, &e2);
+            nbt_phase_free(q);
+        }
+        r.worst_inf = fmax(r.worst_inf, fabs(Lp - R) / Rinf);
+        if (sliced)
+            nbt_airlight_table_g(t[0], g, &geo, &L, &E);
+        else {
+            for (size_t k = 0; k <= K; k++)
+                b[k] = pow(g, (double)k);
+            nbt_airlight_table_e(t, nt, b, K, NULL, &geo, &L, &E);
+        }
+        if (E < 1e-9 * fabs(L))
+            fell++; /* the ray quadrature's estimate: the fallback ran */
+        rel[i] = fabs(Lp - R) / fabs(R);
+        ok3 += rel[i] <= 1e-3;
+        r.worst_pure = fmax(r.worst_pure, rel[i]);
+        r.worst_route = fmax(r.worst_route, fabs(L - R) / fabs(R));
+    }
+    qsort(rel, (size_t)nrays, sizeof(double), cmpd);
+    r.p99_pure = rel[(size_t)(0.99 * (nrays - 1))];
+    r.fallback_frac = (double)fell / nrays;
+    r.frac_1e3 = (double)ok3 / nrays;
+    free(rel);
+    free(b);
+    return r;
+}
+
+static void row(const char *what, double G, const char *size, double mb, double secs, double rec, ray_stats s)
+{
+    printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %3.0f%% "
+           "vs-unobstructed %.1e | route: worst %.1e fallback %3.0f%%\n", what, G, size, mb, secs, rec,
+           s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
+}
+
+/* Surface radiance (Lambert, kd = 1) from a g-sliced J^1 table over random
+ * geometries (T = kappa_t d_sp <= XMAX, theta_s in [0, pi]: below the
+ * horizon only scattered light arrives) against nbt_surface_direct: the
+ * lookup (no fallback) and the route with fallback to the direct integral
+ * where the bound exceeds 10% of the value. */
+static void surface_part(double tol, int n)
+{
+    static const double Gs[] = {0.5, 0.8, 0.9};
+    printf("# surface: g-sliced J^1, T in [0, %g], tol %g; %d random geometries and g; relative to\n"
+           "# nbt_surface_direct (the direct term included, as in L_p)\n", XMAX, tol, n);
+    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0]; gi++) {
+        double G = Gs[gi], secs;
+        nbt_gslice_request r = {NBT_TABLE_J, 1, XMAX, {-G, G}, tol, {0, 0, 0}, 0};
+        nbt_table *t = NULL;
+        char err[256];
+        if (nbt_gslice_build(&r, 2, &t, &secs, err, sizeof err) != NBT_OK) {
+            printf("J1 slices %4.2f  %s\n", G, err);
+            continue;
+        }
+        double wl = 0, wr = 0;
+        int ok = 0, fell = 0;
+        for (int i = 0; i < n; i++) {
+            nbt_surface_geom geo = {0.3, 0.5, 1.0, 0.5 + 19.0 * uni(), M_PI * uni(), 0.5, 1.0, 0.0, 1};
+            double g = -G + 2.0 * G * uni(), R, RE, L, E, Lf, Ef;
+            nbt_phase *p = nbt_phase_hg(g);
+            nbt_surface_direct(p, &geo, 1e-9, &R, &RE);
+            nbt_phase_free(p);
+            nbt_surface_table_g(t, NULL, g, &geo, 0, &L, &E);
+            nbt_surface_table_g(t, NULL, g, &geo, 1e-9, &Lf, &Ef);
+            fell += Lf != L;
+            double e = fabs(L - R) / fabs(R);
+            ok += e <= 1e-3;
+            wl = fmax(wl, e);
+            wr = fmax(wr, fabs(Lf - R) / fabs(R));
+        }
+        printf("J1 slices %4.2f %zux%zux%zu %6.2f MB %6.2f s rec %.1e | lookup: worst %.1e <=1e-3 %3.0f%% | "
+               "route: worst %.1e fallback %3.0f%%\n", G, t->axis[0].n, t->axis[1].n, t->axis[2].n,
+               4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], wl, 100.0 * ok / n, wr,
+               100.0 * fell / n);
+        nbt_table_free(t);
+        fflush(stdout);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    double tol = argc > 1 ? atof(argv[1]) : 1e-2;
+    int nrays = argc > 2 ? atoi(argv[2]) : 200;
+    double legmax = argc > 3 ? atof(argv[3]) : 30.0;
+    static const double Gs[] = {0.5, 0.8, 0.9, 0.95};
+    printf("# H tables for HG g in [-G, G], u in [0, %g], tol %g (max_err / max |value|), 2 threads;\n"
+           "# airlight over %d random rays (d_vp finite and infinite, gamma in (0.02, pi-0.02)) and g,\n"
+           "# relative to nbt_airlight_direct. 'lookup': the shader's arithmetic; 'route': the library\n"
+           "# call with its fallback to the ray integral where the bound exceeds 10%% of the value.\n"
+           "# 'vs-unobstructed': the lookup's error relative to the airlight of the same ray with\n"
+           "# d_vp = inf (equal to 'worst' when the worst rays are unobstructed ones: sideways and\n"
+           "# backward rays far from the source, whose airlight is a difference of two nearly\n"
+           "# equal lookups). 'rec': the recorded error, relative to max |value|\n"
+           "# (Legendre: the tables' times the amplification plus the truncation).\n",
+           XMAX, tol, nrays);
+    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0]; gi++) {
+        double G = Gs[gi];
+        /* Legendre packs, as nbt-gen airlight --g -G:G --basis legendre */
+        nbt_plan_legendre leg;
+        nbt_status st = nbt_plan_legendre_terms(G, XMAX, tol, 512, &leg);
+        if (st == NBT_OK) {
+            nbt_plan_request q = {NBT_TABLE_H, 0, leg.nterms, NULL, XMAX, leg.table_tol, {0, 0}, 0};
+            nbt_plan *plan = NULL;
+            char err[256];
+            double t0 = now();
+            nbt_plan_tables(&q, 1, 2, &plan, err, sizeof err);
+            const nbt_plan_set *ps = nbt_plan_get(plan, 0);
+            char size[64];
+            snprintf(size, sizeof size, "%zux%zu x%zu", ps->axis[0].n, ps->axis[1].n, leg.nterms);
+            double mb = 16e-6 * (double)ps->axis[0].n * (double)ps->axis[1].n * (double)ps->npacks;
+            if (ps->pred_seconds > legmax) {
+                printf("legendre  %4.2f  %-16s %8.2f MB  predicted %.0f s: not built (limit %g s)\n", G, size, mb,
+                       ps->pred_seconds, legmax);
+            } else {
+                nbt_tableset ts;
+                if (nbt_plan_execute(plan, 0, &ts, err, sizeof err) == NBT_OK) {
+                    double secs = now() - t0;
+                    ray_stats s = rays((const nbt_table *const *)ts.t, ts.count, 0, G, nrays);
+                    row("legendre", G, size, mb, secs, ts.rel_err * leg.amp + leg.trunc_err, s);
+                    nbt_tableset_free(&ts);
+                }
+            }
+            nbt_plan_free(plan);
+        } else
+            printf("legendre  %4.2f  needs more than %d orders at tol %g\n", G, 512, tol);
+        /* g slices */
+        nbt_gslice_request r = {NBT_TABLE_H, 0, XMAX, {-G, G}, tol, {0, 0, 0}, 0};
+        nbt_table *t = NULL;
+        char err[256];
+        double secs;
+        st = nbt_gslice_build(&r, 2, &t, &secs, err, sizeof err);
+        if (st != NBT_OK) {
+            printf("slices    %4.2f  %s\n", G, err);
+            continue;
+        }
+        char size[64];
+        snprintf(size, sizeof size, "%zux%zux%zu", t->axis[0].n, t->axis[1].n, t->axis[2].n);
+        ray_stats s = rays((const nbt_table *const *)&t, 1, 1, G, nrays);
+        row("slices", G, size, 4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], s);
+        nbt_table_free(t);
+        fflush(stdout);
+    }
+    surface_part(tol, nrays / 2);
+    return 0;
+}

@@ -1,0 +1,495 @@
+/* libnbt/gslice.c: g-sliced H and J tables (nbt/gslice.h): per-slice
+ * fixed-phase builds, the g interpolation error, sizing, evaluation. */
+#include <config.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <nbt/gslice.h>
+#include <nbt/plan.h>
+#include "internal.h"
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int nbt_table_is_gslice(const nbt_table *t)
+{
+    return t && (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J) && t->axis[2].n >= 2 && t->nch == 1 &&
+           t->k[0] == -1 && !strcmp(t->phase, "hg");
+}
+
+/* One fixed-phase slice at g over the table's axes 0 and 1. */
+static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts *o, nbt_table **out)
+{
+    *out = NULL;
+    nbt_table *s = nbt_table_alloc(t->kind, &t->axis[0], &t->axis[1], 1);
+    nbt_phase *p = nbt_phase_hg(g);
+    if (!s || !p) {
+        nbt_table_free(s);
+        nbt_phase_free(p);
+        NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory");
+    }
+    s->k[0] = -1;
+    s->n = t->n;
+    nbt_status st = t->kind == NBT_TABLE_H ? nbt_h_table_build(s, p, o) : nbt_j_table_build(s, p, o);
+    nbt_phase_free(p);
+    if (st != NBT_OK)
+        nbt_table_free(s);
+    else
+        *out = s;
+    return st;
+}
+
+nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
+{
+    if (t->kind != NBT_TABLE_H && t->kind != NBT_TABLE_J)
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: the kind must be H or J");
+    if (t->axis[2].n < 2)
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: axis 2 (g) needs at least 2 nodes");
+    if (!(t->axis[2].lo >= -NBT_GSLICE_GMAX && t->axis[2].hi <= NBT_GSLICE_GMAX))
+        NBT_FAIL(NBT_EDOM, "g-sliced table: the g axis must lie in [-0.99, 0.99]");
+    t->nch = 1;
+    t->k[0] = -1;
+    for (int c = 1; c < NBT_TABLE_MAX_CH; c++)
+        t->k[c] = 0, t->max_err[c] = t->max_abs[c] = NAN;
+    snprintf(t->phase, sizeof t->phase, "hg");
+    if (t->kind == NBT_TABLE_H)
+        t->n = 0;
+    size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
+    double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
+    nbt_status st = NBT_OK;
+    for (size_t m = 0; m < ng && st == NBT_OK; m++) {
+        nbt_table *s;
+        st = build_slice(t, nbt_axis_node(&t->axis[2], m), o, &s);
+        if (st != NBT_OK)
+            break;
+        memcpy(t->data + m * ns, s->data, ns * sizeof(float));
+        if (o->measure_error)
+            slice_err = fmax(slice_err, s->max_err[0]);
+        qerr = fmax(qerr, s->quad_err);
+        amax = fmax(amax, s->max_abs[0]);
+        nbt_table_free(s);
+    }
+    /* the interpolation in g: exact slices at every g midpoint against the
+     * trilinear lookup at every (u, v) node */
+    nbt_build_opts om = *o;
+    om.measure_error = 0;
+    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
+        double gm = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
+        nbt_table *s;
+        st = build_slice(t, gm, &om, &s);
+        if (st != NBT_OK)
+            break;
+        for (size_t j = 0; j < ny; j++) {
+            double y = nbt_axis_node(&t->axis[1], j);
+            for (size_t i = 0; i < nx; i++) {
+                double v;
+                nbt_table_lookup3(t, nbt_axis_node(&t->axis[0], i), y, gm, &v);
+                gerr = fmax(gerr, fabs(v - (double)s->data[j * nx + i]));
+            }
+        }
+        qerr = fmax(qerr, s->quad_err);
+        nbt_table_free(s);
+    }
+    if (st != NBT_OK)
+        return st;
+    t->quad_tol = o->quad_tol;
+    t->quad_err = qerr;
+    t->max_abs[0] = amax;
+    t->max_err[0] = o->measure_error ? slice_err + gerr + qerr : NAN;
+    return NBT_OK;
+}
+
+/* ---- error-driven size ---- */
+
+#define failf nbt__failf
+
+static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1024};
+#define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])
+
+static size_t ggrow(size_t n)
+{
+    for (size_t i = 0; i < NGSIZES; i++)
+        if (GSIZES[i] > n)
+            return GSIZES[i];
+    return 0;
+}
+
+static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
+{
+    return (nbt_axis){r->g[0], r->g[1], NBT_AXIS_COS, 0, n};
+}
+
+static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t errlen)
+{
+    if (r->kind != NBT_TABLE_H && r->kind != NBT_TABLE_J)
+        return failf(err, errlen, NBT_EINVAL, "g-sliced table: the kind must be H or J");
+    if (r->kind == NBT_TABLE_J && (r->n < 1 || r->n > 10000))
+        return failf(err, errlen, NBT_EDOM, "g-sliced table: n = %d is not accepted: 1 .. 10000", r->n);
+    if (!(r->g[0] >= -NBT_GSLICE_GMAX && r->g[0] < r->g[1] && r->g[1] <= NBT_GSLICE_GMAX))
+        return failf(err, errlen, NBT_EDOM, "g-sliced table: g = %g:%g is not accepted: -%g <= lo < hi <= %g",
+                     r->g[0], r->g[1], NBT_GSLICE_GMAX, NBT_GSLICE_GMAX);
+    if (!(r->xmax > 0 && r->xmax <= 1e6))
+        return failf(err, errlen, NBT_EDOM, "g-sliced table: xmax = %g is not accepted: 0 < xmax <= 1e6", r->xmax);
+    if (!(r->tol >= 0 && r->tol < 1))
+        return failf(err, errlen, NBT_EDOM, "g-sliced table: tol = %g is not accepted: 0 (fixed size) or in (0, 1)",
+                     r->tol);
+    if (r->tol == 0 && (r->size[0] < 2 || r->size[1] < 2 || r->size[0] > 4096 || r->size[1] > 4096 ||
+                        r->size[2] < 2 || r->size[2] > 1024))
+        return failf(err, errlen, NBT_EDOM, "g-sliced table: size %zux%zux%zu is not accepted: 2 .. 4096 per axis, "
+                     "g 2 .. 1024", r->size[0], r->size[1], r->size[2]);
+    return NBT_OK;
+}
+
+static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, const nbt_axis *a1, size_t ng,
+                           unsigned nthreads, int measure, nbt_table **out)
+{
+    nbt_axis a2 = g_axis(r, ng);
+    *out = nbt_table_alloc3(r->kind, a0, a1, &a2, 1);
+    if (!*out)
+        NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory or too large");
+    (*out)->n = r->kind == NBT_TABLE_J ? r->n : 0;
+    nbt_build_opts o = {1e-10, measure, nthreads};
+    nbt_status st = nbt_gslice_fill(*out, &o);
+    if (st != NBT_OK) {
+        nbt_table_free(*out);
+        *out = NULL;
+    }
+    return st;
+}
+
+/* Axes 0 and 1 from the planner for HG(g[0]) and HG(g[1]) at tol/2 (or
+ * its mappings at the requested size). */
+static nbt_status plan_axes(const nbt_gslice_request *r, unsigned nthreads, nbt_axis *a0, nbt_axis *a1, char *err,
+                            size_t errlen)
+{
+    nbt_phase *p0 = nbt_phase_hg(r->g[0]), *p1 = nbt_phase_hg(r->g[1]);
+    if (!p0 || !p1) {
+        nbt_phase_free(p0);
+        nbt_phase_free(p1);
+        return failf(err, errlen, NBT_ENOMEM, "g-sliced table: out of memory");
+    }
+    nbt_plan_request rq[2] = {{r->kind, r->kind == NBT_TABLE_J ? r->n : 0, 0, p0, r->xmax, 0.5 * r->tol,
+                               {r->size[0], r->size[1]}, 0},
+                              {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, 0, p1, r->xmax, 0.5 * r->tol,
+                               {r->size[0], r->size[1]}, 0}};
+    nbt_plan *plan = NULL;
+    nbt_status st = nbt_plan_tables(rq, 2, nthreads, &plan, err, errlen);
+    if (st == NBT_OK) {
+        const nbt_plan_set *s0 = nbt_plan_get(plan, 0), *s1 = nbt_plan_get(plan, 1);
+        *a0 = s0->axis[0];
+        *a1 = s0->axis[1];
+        a0->n = a0->n > s1->axis[0].n ? a0->n : s1->axis[0].n;
+        a1->n = a1->n > s1->axis[1].n ? a1->n : s1->axis[1].n;
+    }
+    nbt_plan_free(plan);
+    nbt_phase_free(p0);
+    nbt_phase_free(p1);
+    return st;
+}
+
+nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
+                           size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    out->req = *r;
+    double t0 = now_s();
+    nbt_status st = check_request(r, err, errlen);
+    if (st != NBT_OK)
+        return st;
+    if ((st = plan_axes(r, nthreads, &out->axis[0], &out->axis[1], err, errlen)) != NBT_OK)
+        return st;
+    /* the g error at 9 slices on a 33^2 grid, decaying as (8/(ng-1))^1.5
+     * (measured for H at |g| -> 0.95: the forward peak's width in v scales
+     * with 1 - g, so the decay is slower than linear interpolation's second
+     * order); its time, scaled, predicts the build's */
+    nbt_axis p0 = out->axis[0], p1 = out->axis[1];
+    p0.n = p1.n = 33;
+    nbt_table *proxy;
+    double tp = now_s();
+    st = build_at(r, &p0, &p1, 9, nthreads, 1, &proxy);
+    tp = now_s() - tp;
+    if (st != NBT_OK)
+        return failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
+    double eg = (proxy->max_err[0] - proxy->quad_err) / proxy->max_abs[0];
+    nbt_table_free(proxy);
+    size_t ng = r->size[2];
+    if (r->tol > 0) {
+        ng = GSIZES[NGSIZES - 1];
+        for (size_t i = 0; i < NGSIZES; i++)
+            if (eg * pow(8.0 / (double)(GSIZES[i] - 1), 1.5) <= 0.5 * r->tol) {
+                ng = GSIZES[i];
+                break;
+            }
+    }
+    out->axis[2] = g_axis(r, ng);
+    out->pred_err = eg * pow(8.0 / (double)(ng - 1), 1.5);
+    /* slices cost as the planner's fixed-phase sets: N^2 (H), N^1.1 (J) */
+    double a = r->kind == NBT_TABLE_H ? 2.0 : 1.1;
+    out->pred_seconds = tp * pow((double)out->axis[0].n * (double)out->axis[1].n / (33.0 * 33.0), 0.5 * a) *
+                        (2.0 * (double)ng - 1.0) / 17.0;
+    out->bytes = (double)out->axis[0].n * (double)out->axis[1].n * (double)ng * (r->half ? 2.0 : 4.0);
+    out->plan_seconds = now_s() - t0;
+    return NBT_OK;
+}
+
+nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
+                              size_t errlen)
+{
+    const nbt_gslice_request *r = &p->req;
+    size_t ng = p->axis[2].n;
+    *out = NULL;
+    for (int attempt = 0;; attempt++) {
+        nbt_status st = build_at(r, &p->axis[0], &p->axis[1], ng, nthreads, 1, out);
+        if (st != NBT_OK)
+            return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
+        double rel = (*out)->max_err[0] / (*out)->max_abs[0];
+        if (r->tol == 0 || rel <= r->tol)
+            break;
+        size_t n2 = ggrow(ng);
+        nbt_table_free(*out);
+        *out = NULL;
+        if (attempt >= 2 || n2 == 0)
+            return failf(err, errlen, NBT_ETOL, "g-sliced table: %zux%zux%zu reaches %.2e relative, not tol %g",
+                         p->axis[0].n, p->axis[1].n, ng, rel, r->tol);
+        ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
+    }
+    if (r->half)
+        nbt_table_round_half(*out);
+    return NBT_OK;
+}
+
+nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
+                            char *err, size_t errlen)
+{
+    *out = NULL;
+    double t0 = now_s();
+    nbt_gslice_plan_t p;
+    nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
+    if (st == NBT_OK)
+        st = nbt_gslice_execute(&p, nthreads, out, err, errlen);
+    if (seconds)
+        *seconds = now_s() - t0;
+    return st;
+}
+
+/* ---- Legendre packs or g slices ---- */
+
+const char *nbt_basis_name(nbt_basis b)
+{
+    return b == NBT_BASIS_LEGENDRE ? "legendre" : b == NBT_BASIS_SLICES ? "slices" : "auto";
+}
+
+nbt_status nbt_basis_parse(const char *name, nbt_basis *b)
+{
+    if (!strcmp(name, "auto"))
+        *b = NBT_BASIS_AUTO;
+    else if (!strcmp(name, "legendre"))
+        *b = NBT_BASIS_LEGENDRE;
+    else if (!strcmp(name, "slices"))
+        *b = NBT_BASIS_SLICES;
+    else
+        return NBT_EINVAL;
+    return NBT_OK;
+}
+
+nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
+                            nbt_basis_choice *out, char *err, size_t errlen)
+{
+    memset(out, 0, sizeof *out);
+    out->leg_seconds = out->leg_bytes = out->sl_seconds = out->sl_bytes = INFINITY;
+    out->leg_err = out->sl_err = NAN;
+    if (want != NBT_BASIS_AUTO && want != NBT_BASIS_LEGENDRE && want != NBT_BASIS_SLICES)
+        return failf(err, errlen, NBT_EINVAL, "basis %d is not accepted: auto, legendre or slices", (int)want);
+    if (!(r->tol > 0 && r->tol < 1))
+        return failf(err, errlen, NBT_EDOM, "basis: tol = %g is not accepted: in (0, 1)", r->tol);
+    double gmax = fmax(fabs(r->g[0]), fabs(r->g[1]));
+    nbt_status st;
+    if (want != NBT_BASIS_SLICES) {
+        nbt_plan_legendre leg;
+        st = nbt_plan_legendre_terms(gmax, r->xmax, r->tol, orders_max, &leg);
+        out->leg_nterms = leg.nterms;
+        if (st == NBT_OK) {
+            nbt_plan_request q = {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, leg.nterms, NULL, r->xmax,
+                                  leg.table_tol, {0, 0}, r->half};
+            nbt_plan *plan = NULL;
+            if ((st = nbt_plan_tables(&q, 1, nthreads, &plan, err, errlen)) != NBT_OK)
+                return st;
+            const nbt_plan_set *ps = nbt_plan_get(plan, 0);
+            out->leg_seconds = ps->pred_seconds;
+            out->leg_err = ps->pred_err;
+            out->leg_bytes = (double)ps->axis[0].n * (double)ps->axis[1].n * 4.0 * (double)ps->npacks *
+                             (r->half ? 2.0 : 4.0);
+            nbt_plan_free(plan);
+        } else if (st != NBT_ETOL)
+            return failf(err, errlen, st, "basis: the Legendre budget failed: %s", nbt_strerror(st));
+    }
+    if (want != NBT_BASIS_LEGENDRE) {
+        nbt_gslice_plan_t p;
+        if ((st = nbt_gslice_plan(r, nthreads, &p, err, errlen)) != NBT_OK)
+            return st;
+        out->sl_seconds = p.pred_seconds;
+        out->sl_bytes = p.bytes;
+        out->sl_err = p.pred_err;
+        out->sl_size[0] = p.axis[0].n;
+        out->sl_size[1] = p.axis[1].n;
+        out->sl_size[2] = p.axis[2].n;
+        out->sl_plan = p;
+    }
+    if (want == NBT_BASIS_LEGENDRE && isinf(out->leg_seconds))
+        return failf(err, errlen, NBT_ETOL, "basis legendre: |g| up to %g needs %s%zu Legendre orders at tol %g, more "
+                     "than %zu: use basis slices", gmax, out->leg_nterms > 512 ? "more than " : "",
+                     out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max);
+    if (want != NBT_BASIS_AUTO) {
+        out->basis = want;
+        snprintf(out->reason, sizeof out->reason, "%s: requested", nbt_basis_name(want));
+    } else if (isinf(out->leg_seconds)) {
+        out->basis = NBT_BASIS_SLICES;
+        snprintf(out->reason, sizeof out->reason,
+                 "slices: |g| up to %g needs %s%zu Legendre orders at tol %g (at most %zu); slices %zux%zux%zu, "
+                 "%.1f MB, predicted %.2g s", gmax, out->leg_nterms > 512 ? "more than " : "",
+                 out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max, out->sl_size[0],
+                 out->sl_size[1], out->sl_size[2], 1e-6 * out->sl_bytes, out->sl_seconds);
+    } else {
+        out->basis = out->leg_seconds <= out->sl_seconds ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
+        snprintf(out->reason, sizeof out->reason,
+                 "%s: predicted build Legendre %zu orders %.2g s, %.1f MB; slices %zux%zux%zu %.2g s, %.1f MB",
+                 nbt_basis_name(out->basis), out->leg_nterms, out->leg_seconds, 1e-6 * out->leg_bytes,
+                 out->sl_size[0], out->sl_size[1], out->sl_size[2], out->sl_seconds, 1e-6 * out->sl_bytes);
+    }
+    return NBT_OK;
+}
+
+/* ---- evaluation ---- */
+
+static nbt_status check_g(const nbt_table *t, double g, nbt_table_kind kind)
+{
+    if (!nbt_table_is_gslice(t) || t->kind != kind)
+        NBT_FAIL(NBT_EINVAL, kind == NBT_TABLE_H ? "airlight: the table is not a g-sliced H table"
+                                                 : "surface: the table is not a g-sliced J table");
+    if (!(g >= t->axis[2].lo && g <= t->axis[2].hi))
+        NBT_FAIL(NBT_EDOM, "g lies outside the table's g range");
+    return NBT_OK;
+}
+
+#define TABLE_RAY_FRAC 0.1
+
+nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
+                                double *abserr)
+{
+    nbt_status st = nbt_airlight_check(geo);
+    if (st != NBT_OK)
+        return st;
+    if ((st = check_g(t, g, NBT_TABLE_H)) != NBT_OK)
+        return st;
+    double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma);
+    double Lt = NAN, Et = INFINITY;
+    int outside = 0;
+    if (h > 0.0) {
+        double u = geo->kappa_t * h, th0 = geo->gamma - NBT_PI_2;
+        double thd = isinf(geo->dvp) ? NBT_PI_2 : atan2(geo->dvp - tt, h), a, b;
+        outside = u > t->axis[0].hi;
+        nbt_table_lookup3(t, u, thd, g, &a);
+        nbt_table_lookup3(t, u, th0, g, &b);
+        double s = a - b, w = 2.0 * t->max_err[0];
+        /* e^{-kt t} may overflow where t < 0 while s is tiny: combine in logs */
+        double lp = -geo->kappa_t * tt + log(geo->kappa_s * geo->I0 / (4.0 * NBT_PI * h));
+        int zero = geo->kappa_s == 0.0 || geo->I0 == 0.0;
+        Lt = s == 0.0 || zero ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
+        Et = zero ? 0.0 : (w > 0 ? exp(lp + log(w)) : (w == 0 ? 0.0 : NAN));
+        if (isnan(Et) || Et <= TABLE_RAY_FRAC * fabs(Lt)) {
+            *La = Lt;
+            *abserr = Et;
+            return outside ? NBT_ETOL : NBT_OK;
+        }
+    }
+    nbt_phase *p = nbt_phase_hg(g);
+    if (!p)
+        NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
+    double Lr, Er;
+    st = nbt__airlight_ray(p, NULL, 0, geo, 1e-10, &Lr, &Er);
+    nbt_phase_free(p);
+    if (st != NBT_OK && st != NBT_ETOL)
+        return st;
+    if (st == NBT_ETOL && h > 0.0 && !(Er < Et)) {
+        *La = Lt;
+        *abserr = Et;
+        return outside ? NBT_ETOL : NBT_OK;
+    }
+    *La = Lr;
+    *abserr = Er;
+    return st;
+}
+
+static double surface_direct_term(const nbt_surface_geom *g)
+{
+    double cs = fmax(cos(g->theta_s), 0.0), cr = fmax(cos(g->theta_r), 0.0);
+    return g->I0 * exp(-g->kappa_t * g->dsp) / (g->dsp * g->dsp) * (g->kd * cs + g->ks * pow(cr, g->n));
+}
+
+nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specular, double g,
+                               const nbt_surface_geom *geo, double fallback_tol, double *Lp, double *abserr)
+{
+    nbt_status st = nbt_surface_check(geo);
+    if (st != NBT_OK)
+        return st;
+    if ((geo->kd > 0 && !diffuse) || (geo->ks > 0 && !specular))
+        NBT_FAIL(NBT_EINVAL, "surface: a lobe with a non-zero coefficient has no table");
+    if (diffuse && (st = check_g(diffuse, g, NBT_TABLE_J)) != NBT_OK)
+        return st;
+    if (specular && (st = check_g(specular, g, NBT_TABLE_J)) != NBT_OK)
+        return st;
+    if (diffuse && diffuse->n != 1)
+        NBT_FAIL(NBT_EINVAL, "surface: the diffuse table must have n = 1");
+    if (specular && specular->n != geo->n)
+        NBT_FAIL(NBT_EINVAL, "surface: the specular table must have the geometry's n");
+    double T = geo->kappa_t * geo->dsp, sd = 0, ss = 0, ed = 0, es = 0;
+    int out = 0;
+    if (geo->kd > 0) {
+        nbt_table_lookup3(diffuse, T, geo->theta_s, g, &sd);
+        ed = diffuse->max_err[0];
+        out |= T > diffuse->axis[0].hi;
+    }
+    if (geo->ks > 0) {
+        nbt_table_lookup3(specular, T, geo->theta_r, g, &ss);
+        es = specular->max_err[0];
+        out |= T > specular->axis[0].hi;
+    }
+    double f = geo->kappa_s * geo->I0 / (4.0 * NBT_PI * geo->dsp);
+    *Lp = surface_direct_term(geo) + f * (geo->kd * sd + geo->ks * ss);
+    *abserr = f * (geo->kd * ed + geo->ks * es);
+    if (fallback_tol > 0 && !(*abserr <= TABLE_RAY_FRAC * fabs(*Lp))) {
+        nbt_phase *p = nbt_phase_hg(g);
+        if (!p)
+            NBT_FAIL(NBT_ENOMEM, "surface: out of memory");
+        double L, E;
+        st = nbt_surface_direct(p, geo, fallback_tol, &L, &E);
+        nbt_phase_free(p);
+        if (st == NBT_OK || (st == NBT_ETOL && E < *abserr)) {
+            *Lp = L;
+            *abserr = E;
+            return st;
+        }
+    }
+    return out ? NBT_ETOL : NBT_OK;
+}
+
+nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choice *out, char *err, size_t errlen)
+{
+    nbt_status st = nbt_scene_check(s, err, errlen);
+    if (st != NBT_OK)
+        return st;
+    if (!s->have_g)
+        return failf(err, errlen, NBT_EINVAL, "basis: the scene has no g range");
+    nbt_basis want = (nbt_basis)s->basis;
+    if (!(s->g[0] < s->g[1]))
+        want = NBT_BASIS_LEGENDRE; /* one g (basis slices is refused by the check) */
+    nbt_gslice_request r = {s->airlight ? NBT_TABLE_H : NBT_TABLE_J, s->airlight || s->diffuse ? 1 : s->phong[0],
+                            s->kappa_t[1] * s->distance[1], {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
+    return nbt_basis_choose(&r, s->orders_max, want, nthreads, out, err, errlen);
+}

@@ -1,0 +1,144 @@
+/* nbt/gslice.h: g-sliced tables, H_p(u, v; g) and J_p^n(T, theta; g) for a
+ * Henyey-Greenstein phase function whose asymmetry g is chosen at run time.
+ *
+ * A g-sliced table is a 3-D nbt_table (nbt/table.h): axes 0 and 1 as for a
+ * fixed-phase H or J table, axis[2] the asymmetry g (map "cos", nodes
+ * clustered towards both ends of [g_lo, g_hi]); one channel, k[0] = -1,
+ * phase "hg". Slice m holds the plain fixed-phase values of nbt/airlight.h
+ * (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m), g_m node m of axis[2]: no
+ * transformation of values, so a sampler3D at node-aligned coordinates on
+ * all three axes returns what nbt_table_lookup3 does.
+ *
+ * Recorded error (max_err[0], absolute): the largest in-slice bilinear
+ * error (each slice's own midpoint measurement, as for a fixed-phase table)
+ * plus the largest error of the interpolation in g, measured as
+ * |lookup3 - exact| on exact slices at every g midpoint, at every (u, v)
+ * node, plus the largest quadrature error estimate. The sum bounds the
+ * trilinear error at any point by the triangle inequality, up to the
+ * variation of the g error between (u, v) nodes (tests/test_gslice.c checks
+ * it against independently integrated values at random (u, v, g)). */
+#ifndef NBT_GSLICE_H
+#define NBT_GSLICE_H
+
+#include <stddef.h>
+#include <nbt/error.h>
+#include <nbt/table.h>
+#include <nbt/airlight.h>
+#include <nbt/surface.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Accepted g range of g-sliced tables: |g| <= NBT_GSLICE_GMAX. */
+#define NBT_GSLICE_GMAX 0.99
+
+/* Fill a 3-D table whose kind (H or J), axes (axis[2]: g within
+ * [-NBT_GSLICE_GMAX, NBT_GSLICE_GMAX], n >= 2) and, for J, n are set;
+ * sets nch = 1, k[0] = -1, phase "hg", quad_tol, quad_err, max_abs and (with
+ * o->measure_error) max_err as described above (NaN without). Every slice is
+ * an ordinary fixed-phase build (nbt_h_table_build / nbt_j_table_build).
+ * NBT_EINVAL for a 2-D table or another kind, NBT_EDOM for a g axis
+ * outside the range. */
+nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
+
+/* An error-driven g-sliced table. */
+typedef struct {
+    nbt_table_kind kind;      /* NBT_TABLE_H or NBT_TABLE_J */
+    int n;                    /* J: cosine exponent 1..10000 */
+    double xmax;              /* u or T in [0, xmax], 0 < xmax <= 1e6 */
+    double g[2];              /* g range, -NBT_GSLICE_GMAX <= g[0] < g[1] <= NBT_GSLICE_GMAX */
+    double tol;               /* target max_err / max_abs in (0, 1); 0: use size */
+    size_t size[3];           /* nodes per axis (u|T, v|theta, g) when tol == 0: 2..4096, g 2..1024 */
+    int half;                 /* store half floats */
+} nbt_gslice_request;
+
+/* A plan: axes 0 and 1 are the planner's sizes and mappings
+ * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2
+ * (or its mappings at the requested size), the larger of the two; g: a
+ * 33^2 proxy with 9 slices measures the g interpolation error at the g
+ * midpoints, and the g size follows from its decay as ng^-1.5 (measured) on
+ * the ladder 9, 13, 17, 25, 33, 49, 65, 97, 129, ..., 1024 for tol/2.
+ * Predicted time: the proxy's scaled as the planner scales fixed-phase
+ * sets, times the slice count. */
+typedef struct {
+    nbt_gslice_request req;
+    nbt_axis axis[3];
+    double pred_err;          /* predicted g interpolation error / max_abs */
+    double pred_seconds;      /* predicted build time, error measurement included */
+    double bytes;             /* table size as float (half: half) */
+    double plan_seconds;      /* time spent planning (proxies) */
+} nbt_gslice_plan_t;
+
+nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
+                           size_t errlen);
+/* Build the plan's table; with a tol it measures its error and, if it
+ * misses tol, grows the g axis along the ladder up to 2 times, then
+ * NBT_ETOL (err names size and error). */
+nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
+                              size_t errlen);
+/* Plan and execute; seconds (may be NULL): total time, proxies included. */
+nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
+                            char *err, size_t errlen);
+
+/* Which basis serves a g range: Legendre packs (nbt/plan.h) or g slices. */
+typedef enum { NBT_BASIS_AUTO = 0, NBT_BASIS_LEGENDRE, NBT_BASIS_SLICES } nbt_basis;
+/* "auto", "legendre", "slices"; parse: NBT_EINVAL for other names. */
+const char *nbt_basis_name(nbt_basis b);
+nbt_status nbt_basis_parse(const char *name, nbt_basis *b);
+
+typedef struct {
+    nbt_basis basis;          /* the choice: LEGENDRE or SLICES */
+    size_t leg_nterms;        /* Legendre terms the range needs (513: more than 512) */
+    double leg_seconds, leg_bytes, leg_err;  /* Legendre packs' predicted build time, size, error
+                                                (INFINITY/NaN: out of reach or not asked) */
+    size_t sl_size[3];
+    double sl_seconds, sl_bytes, sl_err;     /* the g-sliced table's */
+    char reason[320];         /* one line: the choice and the numbers behind it */
+    nbt_gslice_plan_t sl_plan; /* the slices' plan (for nbt_gslice_execute) when predicted */
+} nbt_basis_choice;
+
+/* Predict both for a table kind over r->g at r->tol (r->size unused) and
+ * choose (want = AUTO): the smaller predicted build time; Legendre only
+ * when at most orders_max orders meet tol. want = LEGENDRE or SLICES
+ * predicts only that one (LEGENDRE out of reach: NBT_ETOL naming the
+ * orders). Planning runs the planners' proxy builds (about a tenth of a
+ * build). */
+nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
+                            nbt_basis_choice *out, char *err, size_t errlen);
+
+/* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
+int nbt_table_is_gslice(const nbt_table *t);
+
+/* Airlight from a g-sliced H table at run-time g (nbt/airlight.h's L_a with
+ * the trilinear lookup, as a shader does) and its bound: 2 max_err times the
+ * prefactor. The fallback policy is nbt_airlight_table_e's: where the bound
+ * exceeds 10% of the value (or on the source axis) the ray integral with
+ * HG(g) is returned with its error estimate. NBT_EDOM for g outside the
+ * table's g range (no extrapolation), NBT_ETOL for u beyond its u range. */
+nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
+                                double *abserr);
+
+/* Surface radiance from g-sliced J tables at run-time g: diffuse (n = 1)
+ * and specular (n = geo->n) tables (either may be NULL when kd resp. ks is
+ * 0). abserr: the tables' max_err times kappa_s I0 kd (ks)/(4 pi d_sp);
+ * where it exceeds 10% of the scattered part the lookup is kept but
+ * NBT_ETOL is not raised (the direct term is exact); pass fallback_tol > 0
+ * to integrate nbt_surface_direct with HG(g) there instead (slow: seconds).
+ * NBT_EDOM for g outside a table's g range, NBT_ETOL for T beyond its T
+ * range. */
+nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specular, double g,
+                               const nbt_surface_geom *geo, double fallback_tol, double *Lp, double *abserr);
+
+/* The basis for a scene with a g range (s->have_g): nbt_basis_choose with
+ * want = s->basis for its first set (H if airlight, else J^1, else the
+ * first Phong J^n) over [0, max kappa_t x max distance] at s->tol with
+ * s->orders_max; g slices need g[0] < g[1] (a single g is a fixed phase).
+ * NBT_EINVAL for a scene without a g range. */
+#include <nbt/plan.h>
+nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choice *out, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,219 @@
+/* tests/test_gslice.c: g-sliced H and J tables (nbt/gslice.h) against
+ * independently integrated H_p, J_p^n (nbt_h_phase, nbt_j_phase with
+ * nbt_phase_hg) and the direct integrals (nbt_airlight_direct,
+ * nbt_surface_direct). Small tables keep it to about a second. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include "testutil.h"
+
+/* deterministic uniforms in [0, 1) (LCG: high-entropy points, reproducible) */
+static unsigned long long rs = 0x2385u;
+static double uni(void)
+{
+    rs = rs * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rs >> 11) / 9007199254740992.0;
+}
+
+static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, size_t ng, double glo, double ghi)
+{
+    nbt_axis a0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, nx};
+    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI / 2, M_PI / 2, NBT_AXIS_COS, 0, ny}
+                                      : (nbt_axis){0, M_PI, NBT_AXIS_LINEAR, 0, ny};
+    nbt_axis a2 = {glo, ghi, NBT_AXIS_COS, 0, ng};
+    nbt_table *t = nbt_table_alloc3(kind, &a0, &a1, &a2, 1);
+    t->n = n;
+    nbt_build_opts o = {1e-10, 1, 2};
+    nbt_status st = nbt_gslice_fill(t, &o);
+    t_true(st == NBT_OK, "%s g-sliced fill %zux%zux%zu: status %d", nbt_table_kind_name(kind), nx, ny, ng, st);
+    return t;
+}
+
+/* H_p or J_p^n of the table's kind for HG(g), independently integrated */
+static double exact(const nbt_table *t, double x, double y, double g)
+{
+    double v, e;
+    nbt_phase *p = nbt_phase_hg(g);
+    if (t->kind == NBT_TABLE_H)
+        nbt_h_phase(p, x, y, 1e-11, &v, &e);
+    else
+        nbt_j_phase(p, t->n, x, y, 1e-11, &v, &e);
+    nbt_phase_free(p);
+    return v;
+}
+
+/* the recorded max_err bounds |lookup3 - exact| at random (x, y, g); node
+ * slices hold the fixed-phase values to the quadrature tolerance */
+static void check_table(const nbt_table *t, int npts)
+{
+    double worst = 0;
+    for (int i = 0; i < npts; i++) {
+        double x = t->axis[0].lo + (t->axis[0].hi - t->axis[0].lo) * pow(uni(), 3.0);
+        double y = t->axis[1].lo + (t->axis[1].hi - t->axis[1].lo) * uni();
+        double g = t->axis[2].lo + (t->axis[2].hi - t->axis[2].lo) * uni(), ex = exact(t, x, y, g), L;
+        nbt_table_lookup3(t, x, y, g, &L);
+        worst = fmax(worst, fabs(L - ex));
+    }
+    t_true(worst <= t->max_err[0], "%s g-sliced: true error %.3e at %d random (x, y, g) <= recorded %.3e",
+           nbt_table_kind_name(t->kind), worst, npts, t->max_err[0]);
+    /* the recorded error is a bound, not a gross overestimate (factor 30) */
+    t_true(t->max_err[0] <= 30 * worst, "%s g-sliced: recorded %.3e within 30x of the true %.3e",
+           nbt_table_kind_name(t->kind), t->max_err[0], worst);
+    /* a node of a slice is the fixed-phase value (float storage: 1e-6 rel) */
+    size_t m = t->axis[2].n - 2, j = t->axis[1].n / 3, ii = t->axis[0].n / 2;
+    double g = nbt_axis_node(&t->axis[2], m), x = nbt_axis_node(&t->axis[0], ii), y = nbt_axis_node(&t->axis[1], j);
+    t_rel(t->data[(m * t->axis[1].n + j) * t->axis[0].n + ii], exact(t, x, y, g), 1e-6, "%s slice %zu node = fixed-phase value",
+          nbt_table_kind_name(t->kind), m);
+}
+
+static void test_airlight(const nbt_table *t)
+{
+    /* lookup within its bound (plus the reference's error) of the direct
+     * integral; where the bound is large the ray integral is returned (on
+     * this small table: all but the forward rays) */
+    int fell = 0, n = 40;
+    for (int i = 0; i < n; i++) {
+        nbt_airlight_geom geo = {0.3, 0.5, 2.0, 1.0 + 4.0 * uni(), 0.05 + 3.0 * uni(),
+                                 i % 3 == 0 ? INFINITY : 0.5 + 6.0 * uni()};
+        double g = t->axis[2].lo + (t->axis[2].hi - t->axis[2].lo) * uni(), L, E, R, RE;
+        nbt_phase *p = nbt_phase_hg(g);
+        nbt_airlight_direct(p, &geo, 1e-10, &R, &RE);
+        nbt_phase_free(p);
+        nbt_status st = nbt_airlight_table_g(t, g, &geo, &L, &E);
+        if (E < 1e-8 * fabs(L))
+            fell++; /* the ray integral's estimate */
+        t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-12 * fabs(R),
+               "airlight_table_g g=%.3f gamma=%.3f dvp=%g: |%.8g - %.8g| <= bound %.2e", g, geo.gamma, geo.dvp, L, R,
+               E);
+    }
+    t_true(fell < n, "airlight_table_g: the lookup served %d of %d rays", n - fell, n);
+    /* on the source axis the ray integral with HG(g) */
+    nbt_airlight_geom ax = {0.3, 0.5, 2.0, 3.0, M_PI, 5.0};
+    double L, E, R, RE;
+    nbt_phase *p = nbt_phase_hg(0.31);
+    nbt_airlight_direct(p, &ax, 1e-10, &R, &RE);
+    nbt_phase_free(p);
+    nbt_status st = nbt_airlight_table_g(t, 0.31, &ax, &L, &E);
+    t_true(st == NBT_OK, "airlight_table_g on the axis: status %d", st);
+    t_rel(L, R, 1e-8, "airlight_table_g on the axis = direct");
+    /* errors */
+    t_true(nbt_airlight_table_g(t, t->axis[2].hi + 0.01, &ax, &L, &E) == NBT_EDOM, "g beyond the range: EDOM");
+}
+
+static void test_surface(const nbt_table *J)
+{
+    for (int i = 0; i < 3; i++) {
+        nbt_surface_geom geo = {0.4, 0.5, 2.0, 2.0 + 4.0 * uni(), 0.3 + 2.5 * uni(), 0.5, 0.7, 0, 1};
+        double g = J->axis[2].lo + (J->axis[2].hi - J->axis[2].lo) * uni(), L, E, R, RE;
+        nbt_phase *p = nbt_phase_hg(g);
+        nbt_surface_direct(p, &geo, 1e-8, &R, &RE);
+        nbt_phase_free(p);
+        nbt_status st = nbt_surface_table_g(J, NULL, g, &geo, 0, &L, &E);
+        if (getenv("NBT_TEST_VERBOSE"))
+            printf("surface: |L - R| %.3g bound %.3g ref err %.3g\n", fabs(L - R), E, RE);
+        t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-10 * fabs(R),
+               "surface_table_g g=%.3f theta=%.3f: |%.8g - %.8g| <= bound %.2e", g, geo.theta_s, L, R, E);
+    }
+    /* at a node g the lookup is the fixed-phase table route's (surface.c's
+     * nbt_surface_table over a 2-D HG(g_m) table on the same axes) */
+    double gm = nbt_axis_node(&J->axis[2], 6), L, E, Lf;
+    nbt_table *F = nbt_table_alloc(NBT_TABLE_J, &J->axis[0], &J->axis[1], 1);
+    nbt_phase *ph = nbt_phase_hg(gm);
+    nbt_build_opts o = {1e-10, 0, 2};
+    F->k[0] = -1;
+    F->n = 1;
+    nbt_j_table_build(F, ph, &o);
+    nbt_phase_free(ph);
+    nbt_surface_geom sg = {0.4, 0.5, 2.0, 3.3, 1.9, 0.5, 0.7, 0, 1};
+    const nbt_table *Fs[1] = {F};
+    nbt_surface_table(Fs, 1, NULL, 0, NULL, 0, &sg, &Lf);
+    nbt_surface_table_g(J, NULL, gm, &sg, 0, &L, &E);
+    t_rel(L, Lf, 1e-6, "surface_table_g at node g = %.4f = the fixed-phase table route", gm);
+    nbt_table_free(F);
+    nbt_surface_geom geo = {0.4, 0.5, 2.0, 9.0, 1.0, 0.5, 0.7, 0, 2};
+    t_true(nbt_surface_table_g(J, NULL, 0.1, &geo, 0, &L, &E) == NBT_ETOL, "T = 4.5 beyond the table's 4: ETOL");
+    geo.dsp = 3.0;
+    t_true(nbt_surface_table_g(J, NULL, 0.8, &geo, 0, &L, &E) == NBT_EDOM, "g = 0.8 beyond the table's g: EDOM");
+    geo.ks = 0.3;
+    t_true(nbt_surface_table_g(J, NULL, 0.1, &geo, 0, &L, &E) == NBT_EINVAL, "specular lobe without table: EINVAL");
+    t_true(nbt_surface_table_g(J, J, 0.1, &geo, 0, &L, &E) == NBT_EINVAL, "specular table with n != geo n: EINVAL");
+}
+
+static void test_errors(nbt_table *H, nbt_table *J)
+{
+    nbt_build_opts o = {1e-10, 0, 1};
+    nbt_axis a0 = {0, 1, NBT_AXIS_LINEAR, 0, 3}, a1 = {-1, 1, NBT_AXIS_LINEAR, 0, 3}, a2 = {-0.995, 0.5, NBT_AXIS_COS, 0, 2};
+    nbt_table *t2 = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 1);
+    t_true(nbt_gslice_fill(t2, &o) == NBT_EINVAL, "fill of a 2-D table: EINVAL");
+    nbt_table_free(t2);
+    nbt_table *t3 = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &a2, 1);
+    t_true(nbt_gslice_fill(t3, &o) == NBT_EDOM, "fill with g = -0.995: EDOM");
+    t3->kind = NBT_TABLE_PSI;
+    t_true(nbt_gslice_fill(t3, &o) == NBT_EINVAL, "fill of a PSI table: EINVAL");
+    nbt_table_free(t3);
+    nbt_airlight_geom geo = {0.3, 0.5, 2.0, 3.0, 1.0, 5.0};
+    double L, E;
+    t_true(nbt_airlight_table_g(J, 0.1, &geo, &L, &E) == NBT_EINVAL, "airlight from a J table: EINVAL");
+    nbt_surface_geom sg = {0.4, 0.5, 2.0, 3.0, 1.0, 0.5, 0.7, 0, 1};
+    t_true(nbt_surface_table_g(H, NULL, 0.1, &sg, 0, &L, &E) == NBT_EINVAL, "surface from an H table: EINVAL");
+    char err[256] = "";
+    nbt_table *out;
+    nbt_gslice_request r = {NBT_TABLE_H, 0, 4.0, {0.5, 0.2}, 1e-2, {0, 0, 0}, 0};
+    t_true(nbt_gslice_build(&r, 1, &out, NULL, err, sizeof err) == NBT_EDOM && strstr(err, "g = 0.5:0.2"),
+           "request g 0.5:0.2: EDOM naming it (%s)", err);
+    r = (nbt_gslice_request){NBT_TABLE_H, 0, 4.0, {-0.5, 0.2}, 0, {33, 33, 1}, 0};
+    t_true(nbt_gslice_build(&r, 1, &out, NULL, err, sizeof err) == NBT_EDOM && strstr(err, "33x33x1"),
+           "request size 33x33x1: EDOM naming it (%s)", err);
+    r = (nbt_gslice_request){NBT_TABLE_J, 0, 4.0, {-0.5, 0.2}, 1e-2, {0, 0, 0}, 0};
+    t_true(nbt_gslice_build(&r, 1, &out, NULL, err, sizeof err) == NBT_EDOM && strstr(err, "n = 0"),
+           "request J n = 0: EDOM naming it (%s)", err);
+}
+
+/* an error-driven build meets its tolerance, and an EXR round trip keeps
+ * the table a g-sliced one */
+static void test_build_io(void)
+{
+    nbt_gslice_request r = {NBT_TABLE_H, 0, 3.0, {-0.3, 0.6}, 2e-2, {0, 0, 0}, 0};
+    nbt_table *t = NULL;
+    char err[256] = "";
+    nbt_status st = nbt_gslice_build(&r, 2, &t, NULL, err, sizeof err);
+    t_true(st == NBT_OK, "error-driven build tol 2e-2: status %d %s", st, err);
+    if (st != NBT_OK)
+        return;
+    t_true(t->max_err[0] / t->max_abs[0] <= r.tol, "build: recorded %.2e relative <= tol",
+           t->max_err[0] / t->max_abs[0]);
+    check_table(t, 60);
+    char path[] = "/tmp/test_gslice_XXXXXX.exr";
+    int fd = mkstemps(path, 4);
+    close(fd);
+    nbt_table *back = NULL;
+    char rerr[256];
+    st = nbt_table_write_exr(t, path, NBT_EXR_ZIP);
+    if (st == NBT_OK)
+        st = nbt_table_read_exr(path, &back, rerr, sizeof rerr);
+    unlink(path);
+    t_true(st == NBT_OK && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
+               back->max_err[0] == t->max_err[0],
+           "EXR round trip keeps the g-sliced table (%zu slices)", t->axis[2].n);
+    nbt_table_free(back);
+    nbt_table_free(t);
+}
+
+int main(void)
+{
+    nbt_table *H = small_table(NBT_TABLE_H, 0, 49, 49, 9, -0.4, 0.5);
+    nbt_table *J = small_table(NBT_TABLE_J, 1, 33, 33, 9, -0.5, 0.7);
+    t_true(nbt_table_is_gslice(H) && nbt_table_is_gslice(J), "fill marks the tables g-sliced");
+    check_table(H, 300);
+    check_table(J, 80);
+    test_airlight(H);
+    test_surface(J);
+    test_errors(H, J);
+    test_build_io();
+    nbt_table_free(H);
+    nbt_table_free(J);
+    return t_done();
+}
