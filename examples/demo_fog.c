@@ -177,7 +177,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "nbt-demo: %s\n", err);
         return 1;
     }
-    nbt_gl_config cfg = {1, 1, 1, 1, 0, 0};
+    nbt_gl_config cfg = {1, 1, 1, 1, 0, 0, 0};
     char *src = nbt_gl_shader_source(&cfg, SCENE);
     GLuint prog = gl_fullscreen_program(src, err, sizeof err);
     free(src);

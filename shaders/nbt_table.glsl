@@ -3,6 +3,8 @@
 // 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
 // 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
+// nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
+// g), with the same convention on all three axes: libnbt's nbt_table_lookup3.
 const float NBT_PI = 3.14159265358979;
 
 float nbt_axis_unit(float x, vec4 a, int map)
@@ -29,4 +31,11 @@ vec4 nbt_lookup(sampler2D t, vec4 a0, int m0, vec4 a1, int m1, float x0, float x
 {
     return texture(t, vec2(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
                            nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w)));
+}
+
+vec4 nbt_lookup3(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2, float x0, float x1, float x2)
+{
+    return texture(t, vec3(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
+                           nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w),
+                           nbt_texcoord(nbt_axis_unit(x2, a2, m2), a2.w)));
 }

@@ -124,7 +124,7 @@ static void validate(const nbt_gl_config *c0, const char *main_src)
  * loose uniform are errors (what the targets' headers exist to avoid) */
 static void validators_can_fail(const char *main_src)
 {
-    nbt_gl_config c = {1, 0, 0, 0, 0, 0};
+    nbt_gl_config c = {1, 0, 0, 0, 0, 0, 0};
     char *src = nbt_gl_shader_source_target(&c, NBT_GL_TARGET_ES300, main_src);
     char *p = strstr(src, "precision highp float;");
     memset(p, ' ', strlen("precision highp float;"));
@@ -151,17 +151,17 @@ int main(void)
     const char *just_beam = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3)); }\n";
     validators_can_fail(just_airlight);
     for (int h = 1; h <= 4; h++)
-        validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0}, just_airlight);
+        validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0, 0}, just_airlight);
     for (int j = 1; j <= 4; j++)
-        validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0}, just_surface);
-    validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0}, just_airlight);
-    validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0}, just_beam);
+        validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0, 0}, just_surface);
+    validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0, 0}, just_airlight);
+    validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0, 0}, just_beam);
     const char *just_all = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30), "
                            "nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0), "
                            "nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3), 1.0); }\n";
-    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0}, just_all);
-    t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
-    t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
+    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0, 0}, just_all);
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
 
     /* tables: orders 0..7 of H, J^1, J^20 */
     nbt_table *Ht[2], *J1t[2], *Jnt[2];
@@ -171,7 +171,7 @@ int main(void)
         Jnt[p] = build(NBT_TABLE_J, 20, p, 49);
     }
     t_true(Ht[0] && Ht[1] && J1t[0] && J1t[1] && Jnt[0] && Jnt[1], "tables built");
-    nbt_gl_config cfg = {2, 2, 2, 0, 1, 0};
+    nbt_gl_config cfg = {2, 2, 2, 0, 1, 0, 0};
     char *src = nbt_gl_shader_source(&cfg, MAIN);
     GLuint prog = gl_fullscreen_program(src, err, sizeof err);
     free(src);
@@ -277,7 +277,7 @@ int main(void)
             "  color.b = nbt_beam_fit_psi(1.0, 0.5, 0.03, mix(0.05, 25.0, f.x), mix(0.05, 1.5, f.y) * mix(0.05, 25.0, f.x));\n"
             "  color.a = nbt_beam_fit_psi(0.8, 0.97, 0.2, 12.5, mix(0.01, 12.5, f.x) * mix(0.1, 1.5, f.y));\n"
             "}\n";
-        nbt_gl_config bc = {0, 0, 0, 0, 1, 0};
+        nbt_gl_config bc = {0, 0, 0, 0, 1, 0, 0};
         /* the validators see a main without the test's loose uniform (Vulkan takes none) */
         validate(&bc, "layout(location = 0) out vec4 color;\n"
                       "void main() { color = vec4(nbt_beam_fit_psi(1.7, 0.9, 0.0685, 3.0, 0.9)); }\n");
