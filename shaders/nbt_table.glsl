@@ -14,8 +14,9 @@ float nbt_axis_unit(float x, vec4 a, int map)
         return sqrt(r);
     if (map == 2)
         return log(1.0 + a.z * r) / log(1.0 + a.z);
-    if (map == 3)
-        return acos(clamp(1.0 - 2.0 * r, -1.0, 1.0)) / NBT_PI;
+    if (map == 3) // acos(1 - 2r)/pi, as 2 atan(sqrt r, sqrt(1 - r))/pi: llvmpipe's acos is off by
+                  // up to 5e-5 in s (its atan 2e-6), and 1 - 2r loses r's low bits near r = 0
+        return 2.0 * atan(sqrt(r), sqrt(1.0 - r)) / NBT_PI;
     if (map == 4)
         return pow(log(1.0 + a.z * r) / log(1.0 + a.z), 1.0 / 3.0);
     return r;
