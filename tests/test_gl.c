@@ -106,13 +106,14 @@ static void validate(const nbt_gl_config *c0, const char *main_src)
             continue;
         }
         int rc = glslang(src, tflags[target]);
-        t_true(rc == 0, "glslangValidator accepts the %s variant h=%d j1=%d jn=%d fixed=%d beam=%d%s", tname[target],
-               c.h_packs, c.j1_packs, c.jn_packs, c.fixed_phase, c.beam, rc == 0 ? "" : " (is glslang-tools installed?)");
+        t_true(rc == 0, "glslangValidator accepts the %s variant h=%d j1=%d jn=%d fixed=%d beam=%d g-sliced=%d%s",
+               tname[target], c.h_packs, c.j1_packs, c.jn_packs, c.fixed_phase, c.beam, c.g_sliced,
+               rc == 0 ? "" : " (is glslang-tools installed?)");
         if (target == NBT_GL_TARGET_GL330) {
             char err[4096];
             unsigned p = gl_fullscreen_program(src, err, sizeof err);
-            t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d: %s", c.h_packs, c.j1_packs,
-                   c.jn_packs, c.fixed_phase, p ? "ok" : err);
+            t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d g-sliced=%d: %s", c.h_packs,
+                   c.j1_packs, c.jn_packs, c.fixed_phase, c.g_sliced, p ? "ok" : err);
             if (p)
                 glDeleteProgram(p);
         }
@@ -477,6 +478,14 @@ int main(void)
     validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0, 0}, just_all);
     t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
     t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
+    /* g-sliced (sampler3D tables, uniform nbt_g and the explicit-g functions) */
+    const char *just_g = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30), "
+                         "nbt_airlight_g(0.1, 0.2, 1.0, 3.0, 0.5, 1e30, 0.9), nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0), "
+                         "nbt_surface_g(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0, 0.95)); }\n";
+    validate(&(nbt_gl_config){1, 1, 1, 0, 0, 0, 1}, just_g);
+    validate(&(nbt_gl_config){1, 0, 0, 0, 0, 0, 1}, just_airlight);
+    validate(&(nbt_gl_config){0, 1, 0, 1, 0, 0, 1}, just_surface);
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){1, 2, 0, 0, 0, 0, 1}, NULL) == NULL, "g-sliced with 2 packs rejected");
 
     /* tables: orders 0..7 of H, J^1, J^20 */
     nbt_table *Ht[2], *J1t[2], *Jnt[2];
