@@ -160,18 +160,13 @@ int main(int argc, char **argv)
         gr[i] = (float)gr[i];
     }
     GLuint tex[2];
-    glActiveTexture(GL_TEXTURE0);
-    tex[0] = nbt_gl_upload_table(Ht);
+    glUseProgram(prog);
+    tex[0] = nbt_gl_bind_table(prog, "nbt_H0", Ht, 1);
+    glActiveTexture(GL_TEXTURE2);
     glGenTextures(1, &tex[1]);
     glBindTexture(GL_TEXTURE_2D, tex[1]);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glActiveTexture(GL_TEXTURE1);
-    glBindTexture(GL_TEXTURE_3D, tex[0]);
-    glActiveTexture(GL_TEXTURE2);
-    glBindTexture(GL_TEXTURE_2D, tex[1]);
-    glUseProgram(prog);
-    glUniform1i(glGetUniformLocation(prog, "nbt_H0"), 1);
     glUniform1i(glGetUniformLocation(prog, "rays"), 2);
     nbt_gl_set_table_axes(prog, "nbt_H", Ht);
     printf("g-sliced H %zu x %zu x %zu (u log1p_cbrt [0, 10], v cos, g %s [-0.95, 0.95]), %.1f MB as float, "

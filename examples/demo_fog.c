@@ -193,14 +193,8 @@ static void scene_uniforms(GLuint prog, int pw, int ph)
 static int bind_tables(GLuint prog, nbt_table *const *t, GLuint *tex)
 {
     static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
-    glActiveTexture(GL_TEXTURE0);
     for (int i = 0; i < 3; i++)
-        tex[i] = nbt_gl_upload_table(t[i]);
-    for (int i = 0; i < 3; i++) {
-        glActiveTexture(GL_TEXTURE0 + (GLenum)i);
-        glBindTexture(nbt_gl_table_target(t[i]), tex[i]);
-        glUniform1i(glGetUniformLocation(prog, names[i]), i);
-    }
+        tex[i] = nbt_gl_bind_table(prog, names[i], t[i], (unsigned)i);
     nbt_gl_set_table_axes(prog, "nbt_H", t[0]);
     nbt_gl_set_table_axes(prog, "nbt_J", t[1]);
     return !tex[0] || !tex[1] || !tex[2];

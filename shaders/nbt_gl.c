@@ -152,6 +152,15 @@ unsigned nbt_gl_upload_table(const nbt_table *t)
     return tex;
 }
 
+unsigned nbt_gl_bind_table(unsigned program, const char *sampler, const nbt_table *t, unsigned unit)
+{
+    glActiveTexture(GL_TEXTURE0 + unit);
+    GLuint tex = nbt_gl_upload_table(t);
+    if (tex)
+        glUniform1i(glGetUniformLocation(program, sampler), (GLint)unit);
+    return tex;
+}
+
 int nbt_gl_set_beam_fit(unsigned program, const nbt_beam_fit *f, int infinite)
 {
     int g = infinite ? 1 : 0;

@@ -276,20 +276,15 @@ static void check_lookup3(nbt_table *t, const char *what)
         q[3] = 0;
     }
     GLuint tex[2];
-    glActiveTexture(GL_TEXTURE0);
-    tex[0] = nbt_gl_upload_table(t);
+    glUseProgram(p);
+    tex[0] = nbt_gl_bind_table(p, "tab", t, 12);
+    t_true(tex[0] != 0 && nbt_gl_table_target(t) == GL_TEXTURE_3D, "%s: uploaded as a 3-D texture", what);
+    glActiveTexture(GL_TEXTURE13);
     glGenTextures(1, &tex[1]);
     glBindTexture(GL_TEXTURE_2D, tex[1]);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, pt);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glActiveTexture(GL_TEXTURE12);
-    glBindTexture(GL_TEXTURE_3D, tex[0]);
-    glActiveTexture(GL_TEXTURE13);
-    glBindTexture(GL_TEXTURE_2D, tex[1]);
-    t_true(tex[0] != 0 && nbt_gl_table_target(t) == GL_TEXTURE_3D, "%s: uploaded as a 3-D texture", what);
-    glUseProgram(p);
-    glUniform1i(glGetUniformLocation(p, "tab"), 12);
     glUniform1i(glGetUniformLocation(p, "pts"), 13);
     float a[3][4];
     int map[3];
@@ -388,15 +383,9 @@ static void test_gsliced(void)
     const nbt_table *tabs[3] = {Hg, J1g, Jng};
     static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
     GLuint tex[3];
-    glActiveTexture(GL_TEXTURE0);
-    for (int i = 0; i < 3; i++)
-        tex[i] = nbt_gl_upload_table(tabs[i]);
     glUseProgram(p);
-    for (int i = 0; i < 3; i++) {
-        glActiveTexture(GL_TEXTURE8 + (GLenum)i);
-        glBindTexture(nbt_gl_table_target(tabs[i]), tex[i]);
-        glUniform1i(glGetUniformLocation(p, names[i]), 8 + i);
-    }
+    for (int i = 0; i < 3; i++)
+        tex[i] = nbt_gl_bind_table(p, names[i], tabs[i], 8 + (unsigned)i);
     nbt_gl_set_table_axes(p, "nbt_H", Hg);
     nbt_gl_set_table_axes(p, "nbt_J", J1g);
     glUniform2f(glGetUniformLocation(p, "res"), W, H);

@@ -88,6 +88,12 @@ unsigned nbt_gl_table_target(const nbt_table *t);
  * texture name, 0 on failure (glGetError set). */
 unsigned nbt_gl_upload_table(const nbt_table *t);
 
+/* Upload t on texture unit `unit` (nbt_gl_upload_table, which leaves it
+ * bound there and that unit active) and point the program's sampler
+ * `sampler` (e.g. "nbt_H0") at it; the program must be in use. Returns the
+ * texture name, 0 on failure. */
+unsigned nbt_gl_bind_table(unsigned program, const char *sampler, const nbt_table *t, unsigned unit);
+
 /* Set the fitted kernel model's uniforms (nbt_beam_fit_c, _lo, _hi) of the
  * program in use to f's coefficients for one geometry (infinite: a source
  * inside the medium; 0: a beam entering from vacuum), as floats. Returns 1
