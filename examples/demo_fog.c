@@ -5,6 +5,8 @@
  * A fourth column repeats g = 0.9 with multiple scattering of the surfaces'
  * light on the way to the camera (nbt/screen.h, operator A with the moment
  * kernel of a Gaussian lobe of the same mean cosine, depth in 64 layers).
+ * Columns five and six are g = 0.9 and 0.95 drawn from one set of g-sliced
+ * tables (HG g on a third axis, sampler3D) at the run-time uniform nbt_g.
  * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel) */
 #include <config.h>
 #include <ctype.h>
@@ -65,6 +67,33 @@ static nbt_table *table(nbt_table_kind kind, int n, const nbt_phase *ph, size_t 
     if (st != NBT_OK) {
         nbt_table_free(t);
         return NULL;
+    }
+    return t;
+}
+
+/* A g-sliced table over gax: slice m is the fixed-phase table of HG(g_m),
+ * g_m = node m of gax, built as above and copied in (channel k = -1, phase
+ * "hg"). Replaced by libnbt's g-sliced builder at merge. */
+static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, size_t N, const nbt_axis *gax)
+{
+    nbt_table *t = NULL;
+    for (size_t m = 0; m < gax->n; m++) {
+        nbt_phase *hg = nbt_phase_hg(nbt_axis_node(gax, m));
+        nbt_table *s = table(kind, n, hg, N);
+        nbt_phase_free(hg);
+        if (s && !t && (t = nbt_table_alloc3(kind, &s->axis[0], &s->axis[1], gax, 1))) {
+            t->k[0] = -1;
+            t->n = n;
+            snprintf(t->phase, sizeof t->phase, "hg");
+        }
+        if (!s || !t) {
+            nbt_table_free(s);
+            nbt_table_free(t);
+            return NULL;
+        }
+        size_t slice = s->axis[0].n * s->axis[1].n;
+        memcpy(t->data + m * slice, s->data, slice * sizeof(float));
+        nbt_table_free(s);
     }
     return t;
 }
@@ -150,6 +179,48 @@ static void label(unsigned char *img, int W, int H, int pw, int ph, int col, int
         }
 }
 
+/* the scene's uniforms shared by every panel */
+static void scene_uniforms(GLuint prog, int pw, int ph)
+{
+    glUniform2f(glGetUniformLocation(prog, "res"), (float)pw, (float)ph);
+    glUniform3f(glGetUniformLocation(prog, "light"), 1.6f, 2.6f, -4.5f);
+    glUniform1f(glGetUniformLocation(prog, "albedo"), 0.9f);
+    glUniform1f(glGetUniformLocation(prog, "I0"), 10.0f);
+    glUniform1f(glGetUniformLocation(prog, "exposure"), 1.5f);
+}
+
+/* H, J^1 and J^20 (2-D or g-sliced 3-D) on texture units 0-2 of prog (in use) */
+static int bind_tables(GLuint prog, nbt_table *const *t, GLuint *tex)
+{
+    static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
+    for (int i = 0; i < 3; i++)
+        tex[i] = nbt_gl_bind_table(prog, names[i], t[i], (unsigned)i);
+    nbt_gl_set_table_axes(prog, "nbt_H", t[0]);
+    nbt_gl_set_table_axes(prog, "nbt_J", t[1]);
+    return !tex[0] || !tex[1] || !tex[2];
+}
+
+/* draw the current program into px (RGBA floats); returns the CPU seconds */
+static double draw(float *px, int pw, int ph)
+{
+    double r0 = (double)clock() / CLOCKS_PER_SEC;
+    gl_draw_fullscreen();
+    glReadPixels(0, 0, pw, ph, GL_RGBA, GL_FLOAT, px);
+    return (double)clock() / CLOCKS_PER_SEC - r0;
+}
+
+/* panel (col, row) of the strip from px; row 0 is kappa 0.05 (top) */
+static void put_panel(unsigned char *img, int W, const float *px, int pw, int ph, int col, int row)
+{
+    for (int y = 0; y < ph; y++)
+        for (int x = 0; x < pw; x++)
+            for (int c = 0; c < 3; c++) {
+                float v = px[((size_t)y * pw + x) * 4 + c];
+                int X = col * pw + x, Y = (1 - row) * ph + y;
+                img[((size_t)Y * W + X) * 3 + c] = (unsigned char)lrintf(255.0f * fminf(fmaxf(v, 0.0f), 1.0f));
+            }
+}
+
 int main(int argc, char **argv)
 {
     const char *out = "nbt-demo.png";
@@ -161,8 +232,9 @@ int main(int argc, char **argv)
             printf("nbt-demo (nbt) %s\n", nbt_version());
             return 0;
         } else if (!strcmp(argv[i], "--help")) {
-            puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9 and 0.9 with multiple scattering (columns)\n"
-                 "x kappa = 0.05, 0.2 (rows); each panel labelled with its g and kappa.");
+            puts("Usage: nbt-demo [OUT.png] [--width W]\nRenders g = 0, 0.5, 0.9, 0.9 with multiple scattering, and g = 0.9, 0.95\n"
+                 "from g-sliced tables at a run-time g (columns) x kappa = 0.05, 0.2 (rows); each panel labelled\n"
+                 "with its g and kappa.");
             return 0;
         } else
             out = argv[i];
@@ -171,19 +243,24 @@ int main(int argc, char **argv)
         fprintf(stderr, "nbt-demo: --width %d is not accepted: 16..4096\n", pw);
         return 2;
     }
-    int ph = pw * 3 / 4, W = 4 * pw, H = 2 * ph;
+    enum { NCOL = 6 };
+    int ph = pw * 3 / 4, W = NCOL * pw, H = 2 * ph;
     char err[4096];
     if (egl_headless_open(err, sizeof err)) {
         fprintf(stderr, "nbt-demo: %s\n", err);
         return 1;
     }
-    nbt_gl_config cfg = {1, 1, 1, 1, 0, 0};
+    /* fixed-phase tables (one g per set) and g-sliced ones (g read from the uniform nbt_g) */
+    nbt_gl_config cfg = {1, 1, 1, 1, 0, 0, 0}, cfg_g = {1, 1, 1, 0, 0, 0, 1};
     char *src = nbt_gl_shader_source(&cfg, SCENE);
     GLuint prog = gl_fullscreen_program(src, err, sizeof err);
     free(src);
-    GLuint fbo = prog ? gl_float_target(pw, ph) : 0;
-    if (!prog || !fbo) {
-        fprintf(stderr, "nbt-demo: %s\n", prog ? "no RGBA32F render target" : err);
+    src = prog ? nbt_gl_shader_source(&cfg_g, SCENE) : NULL;
+    GLuint prog_g = src ? gl_fullscreen_program(src, err, sizeof err) : 0;
+    free(src);
+    GLuint fbo = prog_g ? gl_float_target(pw, ph) : 0;
+    if (!prog || !prog_g || !fbo) {
+        fprintf(stderr, "nbt-demo: %s\n", prog_g ? "no RGBA32F render target" : err);
         return 1;
     }
     unsigned char *img = malloc((size_t)W * H * 3);
@@ -192,67 +269,79 @@ int main(int argc, char **argv)
     double t0 = (double)clock() / CLOCKS_PER_SEC;
     for (int gi = 0; gi < 3; gi++) {
         nbt_phase *hp = gs[gi] == 0 ? nbt_phase_iso() : nbt_phase_hg(gs[gi]);
-        nbt_table *Ht = table(NBT_TABLE_H, 0, hp, 129), *J1 = table(NBT_TABLE_J, 1, hp, 65), *Jn = table(NBT_TABLE_J, 20, hp, 65);
-        if (!Ht || !J1 || !Jn) {
+        nbt_table *t[3] = {table(NBT_TABLE_H, 0, hp, 129), table(NBT_TABLE_J, 1, hp, 65), table(NBT_TABLE_J, 20, hp, 65)};
+        GLuint tex[3];
+        glUseProgram(prog);
+        if (!t[0] || !t[1] || !t[2] || bind_tables(prog, t, tex)) {
             fprintf(stderr, "nbt-demo: building the tables failed\n");
             return 1;
         }
-        glActiveTexture(GL_TEXTURE0);
-        GLuint tex[3] = {nbt_gl_upload_table(Ht), nbt_gl_upload_table(J1), nbt_gl_upload_table(Jn)};
-        static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
-        glUseProgram(prog);
-        for (int i = 0; i < 3; i++) {
-            glActiveTexture(GL_TEXTURE0 + (GLenum)i);
-            glBindTexture(GL_TEXTURE_2D, tex[i]);
-            glUniform1i(glGetUniformLocation(prog, names[i]), i);
-        }
         float w[4] = {1, 0, 0, 0};
         glUniform4fv(glGetUniformLocation(prog, "nbt_hw"), 1, w);
-        nbt_gl_set_table_axes(prog, "nbt_H", Ht);
-        nbt_gl_set_table_axes(prog, "nbt_J", J1);
-        glUniform2f(glGetUniformLocation(prog, "res"), (float)pw, (float)ph);
-        glUniform3f(glGetUniformLocation(prog, "light"), 1.6f, 2.6f, -4.5f);
-        glUniform1f(glGetUniformLocation(prog, "albedo"), 0.9f);
-        glUniform1f(glGetUniformLocation(prog, "I0"), 10.0f);
-        glUniform1f(glGetUniformLocation(prog, "exposure"), 1.5f);
+        scene_uniforms(prog, pw, ph);
         for (int ki = 0; ki < 2; ki++) {
             glUniform1f(glGetUniformLocation(prog, "kappa"), (float)ks[ki]);
             for (int ms = 0; ms < 1 + (gi == 2); ms++) {
                 glUniform1i(glGetUniformLocation(prog, "raw"), ms);
-                double r0 = (double)clock() / CLOCKS_PER_SEC;
-                gl_draw_fullscreen();
-                glReadPixels(0, 0, pw, ph, GL_RGBA, GL_FLOAT, px);
-                t_render += (double)clock() / CLOCKS_PER_SEC - r0;
+                t_render += draw(px, pw, ph);
                 if (ms && multiple_scattering(px, pw, ph, ks[ki], 0.9, 1.5) != 0) {
                     fprintf(stderr, "nbt-demo: multiple scattering failed\n");
                     return 1;
                 }
-                /* panel (gi + ms, ki): row 0 of the strip is kappa 0.05 (top) */
-                for (int y = 0; y < ph; y++)
-                    for (int x = 0; x < pw; x++)
-                        for (int c = 0; c < 3; c++) {
-                            float v = px[((size_t)y * pw + x) * 4 + c];
-                            int X = (gi + ms) * pw + x, Y = (1 - ki) * ph + y;
-                            img[((size_t)Y * W + X) * 3 + c] = (unsigned char)lrintf(255.0f * fminf(fmaxf(v, 0.0f), 1.0f));
-                        }
-            }
-        }
-        for (int ki = 0; ki < 2; ki++)
-            for (int ms = 0; ms < 1 + (gi == 2); ms++) {
+                put_panel(img, W, px, pw, ph, gi + ms, ki);
                 char lab[64];
                 snprintf(lab, sizeof lab, "g=%g kappa=%g%s", gs[gi], ks[ki], ms ? " +multiple" : "");
                 label(img, W, H, pw, ph, gi + ms, ki, pw >= 400 ? 2 : 1, lab);
             }
+        }
         glDeleteTextures(3, tex);
-        nbt_table_free(Ht);
-        nbt_table_free(J1);
-        nbt_table_free(Jn);
+        for (int i = 0; i < 3; i++)
+            nbt_table_free(t[i]);
         nbt_phase_free(hp);
     }
+    /* g-sliced: one set of tables over g in [0.8, 0.95] (4 slices, clustered at the ends), drawn at
+     * nbt_g = 0.9 (between slices) and 0.95 (the last one); the g = 0.9 panel is compared with the
+     * fixed-phase one (column 2) pixel by pixel */
+    nbt_axis gax = {0.8, 0.95, NBT_AXIS_COS, 0, 4};
+    nbt_table *t[3] = {assemble_gsliced(NBT_TABLE_H, 0, 129, &gax), assemble_gsliced(NBT_TABLE_J, 1, 65, &gax),
+                       assemble_gsliced(NBT_TABLE_J, 20, 65, &gax)};
+    GLuint tex[3];
+    glUseProgram(prog_g);
+    if (!t[0] || !t[1] || !t[2] || bind_tables(prog_g, t, tex)) {
+        fprintf(stderr, "nbt-demo: building the g-sliced tables failed\n");
+        return 1;
+    }
+    scene_uniforms(prog_g, pw, ph);
+    glUniform1i(glGetUniformLocation(prog_g, "raw"), 0);
+    double gsl[2] = {0.9, 0.95};
+    int dmax = 0;
+    for (int gi = 0; gi < 2; gi++) {
+        glUniform1f(glGetUniformLocation(prog_g, "nbt_g"), (float)gsl[gi]);
+        for (int ki = 0; ki < 2; ki++) {
+            glUniform1f(glGetUniformLocation(prog_g, "kappa"), (float)ks[ki]);
+            t_render += draw(px, pw, ph);
+            put_panel(img, W, px, pw, ph, 4 + gi, ki);
+            for (int y = 0; gi == 0 && y < ph; y++) /* against column 2 (fixed phase, g = 0.9), below the labels */
+                for (int x = 0; x < pw * 3; x++) {
+                    size_t row = (size_t)((1 - ki) * ph + y) * (size_t)W * 3;
+                    if (ph - 1 - y >= 11 * (pw >= 400 ? 2 : 1)) {
+                        int d = abs((int)img[row + (size_t)(4 * pw) * 3 + x] - (int)img[row + (size_t)(2 * pw) * 3 + x]);
+                        dmax = d > dmax ? d : dmax;
+                    }
+                }
+            char lab[64];
+            snprintf(lab, sizeof lab, "g=%g kappa=%g sliced", gsl[gi], ks[ki]);
+            label(img, W, H, pw, ph, 4 + gi, ki, pw >= 400 ? 2 : 1, lab);
+        }
+    }
+    glDeleteTextures(3, tex);
+    for (int i = 0; i < 3; i++)
+        nbt_table_free(t[i]);
     int rc = write_png(out, img, W, H);
-    fprintf(stderr, "nbt-demo: %s (%dx%d): 8 panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
-            "(%s, CPU figures are for relative comparisons only)\n", out, W, H,
-            (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER));
+    fprintf(stderr, "nbt-demo: %s (%dx%d): %d panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
+            "(%s, CPU figures are for relative comparisons only); g = 0.9 from g-sliced tables differs from the "
+            "fixed-phase panel by at most %d/255\n", out, W, H, 2 * NCOL,
+            (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER), dmax);
     free(img);
     free(px);
     egl_headless_close();

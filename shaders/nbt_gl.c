@@ -23,7 +23,7 @@ char *nbt_gl_shader_source_target(const nbt_gl_config *c, int target, const char
 {
     if (c->h_packs < 0 || c->h_packs > 4 || c->j1_packs < 0 || c->j1_packs > 4 || c->jn_packs < 0 ||
         c->jn_packs > 4 || (c->jn_packs > 0 && c->j1_packs == 0) ||
-        (c->fixed_phase && (c->h_packs > 1 || c->j1_packs > 1 || c->jn_packs > 1)))
+        ((c->fixed_phase || c->g_sliced) && (c->h_packs > 1 || c->j1_packs > 1 || c->jn_packs > 1)))
         return NULL;
     int w = c->h_packs > c->j1_packs ? c->h_packs : c->j1_packs;
     if (c->jn_packs > w)
@@ -32,21 +32,23 @@ char *nbt_gl_shader_source_target(const nbt_gl_config *c, int target, const char
      * uniforms for OpenGL and OpenGL ES (ES also needs default precisions, and
      * highp: the tables' values and axes need 32-bit floats); Vulkan allows
      * only blocks and samplers with explicit set/binding (bindings in gl.h) */
+    /* (ES has no default precision for sampler3D: nbt_lookup3 needs one) */
     static const char *const target_head[3] = {
         "#version 330 core\n#define NBT_U uniform\n#define NBT_BLOCK_BEGIN(name, b)\n#define NBT_BLOCK_END\n"
-        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n",
+        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n#define NBT_SAMPLER3D(name, b) uniform sampler3D name;\n",
         "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler2D;\n"
-        "#define NBT_U uniform\n#define NBT_BLOCK_BEGIN(name, b)\n#define NBT_BLOCK_END\n"
-        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n",
+        "precision highp sampler3D;\n#define NBT_U uniform\n#define NBT_BLOCK_BEGIN(name, b)\n#define NBT_BLOCK_END\n"
+        "#define NBT_SAMPLER(name, b) uniform sampler2D name;\n#define NBT_SAMPLER3D(name, b) uniform sampler3D name;\n",
         "#version 450\n#define NBT_VULKAN 1\n#define NBT_U\n"
         "#define NBT_BLOCK_BEGIN(name, b) layout(std140, set = 0, binding = b) uniform name {\n"
-        "#define NBT_BLOCK_END };\n#define NBT_SAMPLER(name, b) layout(set = 0, binding = b) uniform sampler2D name;\n"};
+        "#define NBT_BLOCK_END };\n#define NBT_SAMPLER(name, b) layout(set = 0, binding = b) uniform sampler2D name;\n"
+        "#define NBT_SAMPLER3D(name, b) layout(set = 0, binding = b) uniform sampler3D name;\n"};
     if (target < NBT_GL_TARGET_GL330 || target > NBT_GL_TARGET_VULKAN)
         return NULL;
     char head[1024];
-    int n = snprintf(head, sizeof head, "%s%s#define NBT_W_PACKS %d\n#define NBT_GAMMA_EPS %.9g\n",
-                     target_head[target], c->fixed_phase ? "#define NBT_FIXED_PHASE 1\n" : "", w > 0 ? w : 1,
-                     c->gamma_eps > 0 ? c->gamma_eps : 1e-3);
+    int n = snprintf(head, sizeof head, "%s%s%s#define NBT_W_PACKS %d\n#define NBT_GAMMA_EPS %.9g\n",
+                     target_head[target], c->fixed_phase ? "#define NBT_FIXED_PHASE 1\n" : "",
+                     c->g_sliced ? "#define NBT_G_SLICED 1\n" : "", w > 0 ? w : 1, c->gamma_eps > 0 ? c->gamma_eps : 1e-3);
     if (c->h_packs)
         n += snprintf(head + n, sizeof head - (size_t)n, "#define NBT_H_PACKS %d\n", c->h_packs);
     if (c->j1_packs)
@@ -77,27 +79,31 @@ void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w)
         w[k] = k < nterms ? (float)((2.0 * (double)k + 1.0) * b[k]) : 0.0f;
 }
 
+void nbt_gl_axis(const nbt_axis *a, float v[4], int *map)
+{
+    v[0] = (float)a->lo;
+    v[1] = (float)a->hi;
+    v[2] = (float)a->c;
+    v[3] = (float)a->n;
+    *map = a->map == NBT_AXIS_SQRT ? 1 : a->map == NBT_AXIS_LOG1P ? 2 : a->map == NBT_AXIS_COS ? 3
+         : a->map == NBT_AXIS_LOG1P_CBRT ? 4 : 0;
+}
+
 void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0, int *map1)
 {
-    float *a[2] = {ax0, ax1};
-    int *m[2] = {map0, map1};
-    for (int i = 0; i < 2; i++) {
-        a[i][0] = (float)t->axis[i].lo;
-        a[i][1] = (float)t->axis[i].hi;
-        a[i][2] = (float)t->axis[i].c;
-        a[i][3] = (float)t->axis[i].n;
-        *m[i] = t->axis[i].map == NBT_AXIS_SQRT ? 1 : t->axis[i].map == NBT_AXIS_LOG1P ? 2
-              : t->axis[i].map == NBT_AXIS_COS ? 3 : t->axis[i].map == NBT_AXIS_LOG1P_CBRT ? 4 : 0;
-    }
+    nbt_gl_axis(&t->axis[0], ax0, map0);
+    nbt_gl_axis(&t->axis[1], ax1, map1);
 }
 
 void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table *t)
 {
-    float a[2][4];
-    int m[2];
+    float a[3][4];
+    int m[3];
     char name[128];
-    nbt_gl_table_axes(t, a[0], a[1], &m[0], &m[1]);
-    for (int i = 0; i < 2; i++) {
+    int na = t->axis[2].n > 1 ? 3 : 2;
+    for (int i = 0; i < na; i++)
+        nbt_gl_axis(&t->axis[i], a[i], &m[i]);
+    for (int i = 0; i < na; i++) {
         snprintf(name, sizeof name, "%s_ax%d", prefix, i);
         glUniform4fv(glGetUniformLocation(program, name), 1, a[i]);
         snprintf(name, sizeof name, "%s_map%d", prefix, i);
@@ -105,29 +111,53 @@ void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table
     }
 }
 
+unsigned nbt_gl_table_target(const nbt_table *t)
+{
+    return t->axis[2].n > 1 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+}
+
 unsigned nbt_gl_upload_table(const nbt_table *t)
 {
-    size_t nx = t->axis[0].n, ny = t->axis[1].n;
-    float *rgba = calloc(nx * ny * 4, sizeof(float));
-    if (!rgba)
+    size_t nx = t->axis[0].n, ny = t->axis[1].n, nz = t->axis[2].n, nv = nx * ny * nz;
+    GLenum target = nbt_gl_table_target(t);
+    /* 2-D tables stay RGBA (the Legendre shaders dot all four channels);
+     * a one-channel 3-D table needs only R (its shaders read .r) */
+    int red = target == GL_TEXTURE_3D && t->nch == 1;
+    size_t nc = red ? 1 : 4;
+    float *px = calloc(nv * nc, sizeof(float));
+    if (!px)
         return 0;
-    for (size_t i = 0; i < nx * ny; i++)
+    for (size_t i = 0; i < nv; i++)
         for (size_t c = 0; c < t->nch; c++)
-            rgba[i * 4 + c] = t->data[i * t->nch + c];
+            px[i * nc + c] = t->data[i * t->nch + c];
     GLuint tex = 0;
     glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_2D, tex);
+    glBindTexture(target, tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)nx, (GLsizei)ny, 0, GL_RGBA, GL_FLOAT, rgba);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    free(rgba);
+    if (target == GL_TEXTURE_3D) {
+        GLint fmt = red ? (t->half ? GL_R16F : GL_R32F) : (t->half ? GL_RGBA16F : GL_RGBA32F);
+        glTexImage3D(GL_TEXTURE_3D, 0, fmt, (GLsizei)nx, (GLsizei)ny, (GLsizei)nz, 0, red ? GL_RED : GL_RGBA, GL_FLOAT, px);
+        glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    } else
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)nx, (GLsizei)ny, 0, GL_RGBA, GL_FLOAT, px);
+    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(target, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    free(px);
     if (glGetError() != GL_NO_ERROR) {
         glDeleteTextures(1, &tex);
         return 0;
     }
+    return tex;
+}
+
+unsigned nbt_gl_bind_table(unsigned program, const char *sampler, const nbt_table *t, unsigned unit)
+{
+    glActiveTexture(GL_TEXTURE0 + unit);
+    GLuint tex = nbt_gl_upload_table(t);
+    if (tex)
+        glUniform1i(glGetUniformLocation(program, sampler), (GLint)unit);
     return tex;
 }
 

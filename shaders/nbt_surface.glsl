@@ -4,9 +4,17 @@
 //       + kappa_s I0/(4 pi d) sum_k w_k [kd J_k^1(T, theta_s) + ks J_k^n(T, theta_r)],  T = kappa_t d
 // theta_s: normal to source; theta_r: mirror direction of the view to source.
 // Defines: NBT_J1_PACKS (1..4) diffuse tables; NBT_JN_PACKS (0..4) Phong
-// tables for one exponent n (0: no specular term). T beyond the table reads
-// its edge.
-NBT_SAMPLER(nbt_J1_0, 7)
+// tables for one exponent n (0: no specular term). With NBT_G_SLICED the
+// J^1 and J^n tables (at most one each) are g-sliced J_p^n(T, theta; g) of the
+// HG phase (sampler3D, channel R, axis 2 = g): nbt_surface_g(..., g) reads
+// them at any g, nbt_surface at the uniform nbt_g (g clamps to the tables' g
+// range). T beyond the table reads its edge.
+#ifdef NBT_G_SLICED
+#define NBT_JSAMPLER NBT_SAMPLER3D
+#else
+#define NBT_JSAMPLER NBT_SAMPLER
+#endif
+NBT_JSAMPLER(nbt_J1_0, 7)
 #if NBT_J1_PACKS > 1
 NBT_SAMPLER(nbt_J1_1, 8)
 #endif
@@ -19,9 +27,13 @@ NBT_SAMPLER(nbt_J1_3, 10)
 NBT_BLOCK_BEGIN(nbt_J_block, 2)
 NBT_U vec4 nbt_J_ax0, nbt_J_ax1; // T axis, theta axis (all J tables share them)
 NBT_U int nbt_J_map0, nbt_J_map1;
+#ifdef NBT_G_SLICED
+NBT_U vec4 nbt_J_ax2; // g axis
+NBT_U int nbt_J_map2;
+#endif
 NBT_BLOCK_END
 #if NBT_JN_PACKS > 0
-NBT_SAMPLER(nbt_Jn_0, 11)
+NBT_JSAMPLER(nbt_Jn_0, 11)
 #endif
 #if NBT_JN_PACKS > 1
 NBT_SAMPLER(nbt_Jn_1, 12)
@@ -33,7 +45,14 @@ NBT_SAMPLER(nbt_Jn_2, 13)
 NBT_SAMPLER(nbt_Jn_3, 14)
 #endif
 
+#ifdef NBT_G_SLICED
+#define NBT_JLOOK3(tex, T, th, g) nbt_lookup3(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r
+#define NBT_J1_SUM(T, th, g) NBT_JLOOK3(nbt_J1_0, T, th, g)
+#define NBT_JN_SUM(T, th, g) NBT_JLOOK3(nbt_Jn_0, T, th, g)
+#else
 #define NBT_JLOOK(tex, T, th) nbt_lookup(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, T, th)
+#define NBT_J1_SUM(T, th, g) nbt_j1_sum(T, th)
+#define NBT_JN_SUM(T, th, g) nbt_jn_sum(T, th)
 
 float nbt_j1_sum(float T, float th)
 {
@@ -66,16 +85,38 @@ float nbt_jn_sum(float T, float th)
     return s;
 }
 #endif
+#endif
+
+// gph: the HG g of g-sliced tables (unused otherwise)
+float nbt_surface_core(float kappa_s, float kappa_t, float I0, float dsp, float theta_s, float theta_r, float kd,
+                       float ks, float n, float gph)
+{
+    float T = kappa_t * dsp;
+    float direct = kd * max(cos(theta_s), 0.0);
+    float scat = kd * NBT_J1_SUM(T, theta_s, gph);
+#if NBT_JN_PACKS > 0
+    direct += ks * pow(max(cos(theta_r), 0.0), n);
+    scat += ks * NBT_JN_SUM(T, theta_r, gph);
+#endif
+    return I0 * exp(-T) / (dsp * dsp) * direct + kappa_s * I0 / (4.0 * NBT_PI * dsp) * scat;
+}
+
+#ifdef NBT_G_SLICED
+float nbt_surface_g(float kappa_s, float kappa_t, float I0, float dsp, float theta_s, float theta_r, float kd, float ks,
+                    float n, float g)
+{
+    return nbt_surface_core(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n, g);
+}
 
 float nbt_surface(float kappa_s, float kappa_t, float I0, float dsp, float theta_s, float theta_r, float kd, float ks,
                   float n)
 {
-    float T = kappa_t * dsp;
-    float direct = kd * max(cos(theta_s), 0.0);
-    float scat = kd * nbt_j1_sum(T, theta_s);
-#if NBT_JN_PACKS > 0
-    direct += ks * pow(max(cos(theta_r), 0.0), n);
-    scat += ks * nbt_jn_sum(T, theta_r);
-#endif
-    return I0 * exp(-T) / (dsp * dsp) * direct + kappa_s * I0 / (4.0 * NBT_PI * dsp) * scat;
+    return nbt_surface_core(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n, nbt_g);
 }
+#else
+float nbt_surface(float kappa_s, float kappa_t, float I0, float dsp, float theta_s, float theta_r, float kd, float ks,
+                  float n)
+{
+    return nbt_surface_core(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n, 0.0);
+}
+#endif

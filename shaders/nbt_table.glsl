@@ -3,6 +3,8 @@
 // 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
 // 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
+// nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
+// g), with the same convention on all three axes: libnbt's nbt_table_lookup3.
 const float NBT_PI = 3.14159265358979;
 
 float nbt_axis_unit(float x, vec4 a, int map)
@@ -12,8 +14,9 @@ float nbt_axis_unit(float x, vec4 a, int map)
         return sqrt(r);
     if (map == 2)
         return log(1.0 + a.z * r) / log(1.0 + a.z);
-    if (map == 3)
-        return acos(clamp(1.0 - 2.0 * r, -1.0, 1.0)) / NBT_PI;
+    if (map == 3) // acos(1 - 2r)/pi, as 2 atan(sqrt r, sqrt(1 - r))/pi: llvmpipe's acos is off by
+                  // up to 5e-5 in s (its atan 2e-6), and 1 - 2r loses r's low bits near r = 0
+        return 2.0 * atan(sqrt(r), sqrt(1.0 - r)) / NBT_PI;
     if (map == 4)
         return pow(log(1.0 + a.z * r) / log(1.0 + a.z), 1.0 / 3.0);
     return r;
@@ -29,4 +32,11 @@ vec4 nbt_lookup(sampler2D t, vec4 a0, int m0, vec4 a1, int m1, float x0, float x
 {
     return texture(t, vec2(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
                            nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w)));
+}
+
+vec4 nbt_lookup3(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2, float x0, float x1, float x2)
+{
+    return texture(t, vec3(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
+                           nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w),
+                           nbt_texcoord(nbt_axis_unit(x2, a2, m2), a2.w)));
 }

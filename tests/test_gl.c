@@ -106,13 +106,14 @@ static void validate(const nbt_gl_config *c0, const char *main_src)
             continue;
         }
         int rc = glslang(src, tflags[target]);
-        t_true(rc == 0, "glslangValidator accepts the %s variant h=%d j1=%d jn=%d fixed=%d beam=%d%s", tname[target],
-               c.h_packs, c.j1_packs, c.jn_packs, c.fixed_phase, c.beam, rc == 0 ? "" : " (is glslang-tools installed?)");
+        t_true(rc == 0, "glslangValidator accepts the %s variant h=%d j1=%d jn=%d fixed=%d beam=%d g-sliced=%d%s",
+               tname[target], c.h_packs, c.j1_packs, c.jn_packs, c.fixed_phase, c.beam, c.g_sliced,
+               rc == 0 ? "" : " (is glslang-tools installed?)");
         if (target == NBT_GL_TARGET_GL330) {
             char err[4096];
             unsigned p = gl_fullscreen_program(src, err, sizeof err);
-            t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d: %s", c.h_packs, c.j1_packs,
-                   c.jn_packs, c.fixed_phase, p ? "ok" : err);
+            t_true(p != 0, "GL compiles and links the variant h=%d j1=%d jn=%d fixed=%d g-sliced=%d: %s", c.h_packs,
+                   c.j1_packs, c.jn_packs, c.fixed_phase, c.g_sliced, p ? "ok" : err);
             if (p)
                 glDeleteProgram(p);
         }
@@ -124,7 +125,7 @@ static void validate(const nbt_gl_config *c0, const char *main_src)
  * loose uniform are errors (what the targets' headers exist to avoid) */
 static void validators_can_fail(const char *main_src)
 {
-    nbt_gl_config c = {1, 0, 0, 0, 0, 0};
+    nbt_gl_config c = {1, 0, 0, 0, 0, 0, 0};
     char *src = nbt_gl_shader_source_target(&c, NBT_GL_TARGET_ES300, main_src);
     char *p = strstr(src, "precision highp float;");
     memset(p, ' ', strlen("precision highp float;"));
@@ -134,6 +135,310 @@ static void validators_can_fail(const char *main_src)
     t_true(glslang(src, "-V -o /dev/null") != 0, "a loose uniform is rejected for Vulkan");
     free(src);
     t_true(nbt_gl_shader_source_target(&c, 3, NULL) == NULL, "target 3 rejected");
+}
+
+/* ---- g-sliced tables (sampler3D, run-time g) ---- */
+
+/* A g-sliced HG table H_p(u, v; g) or J_p^n(T, theta; g): slice m is the
+ * fixed-phase 2-D table of HG(g_m), g_m = node m of ax2, built by libnbt's
+ * 2-D builder and copied in (channel k = -1, phase "hg").
+ * Replaced by libnbt's g-sliced builder at merge. */
+static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, const nbt_axis *a0, const nbt_axis *a1,
+                                   const nbt_axis *a2)
+{
+    nbt_table *t = nbt_table_alloc3(kind, a0, a1, a2, 1);
+    if (!t)
+        return NULL;
+    t->k[0] = -1;
+    t->n = n;
+    snprintf(t->phase, sizeof t->phase, "hg");
+    size_t slice = a0->n * a1->n;
+    nbt_build_opts o = {1e-10, 0, 0};
+    for (size_t m = 0; m < a2->n; m++) {
+        nbt_table *s = nbt_table_alloc(kind, a0, a1, 1);
+        nbt_phase *hg = nbt_phase_hg(nbt_axis_node(a2, m));
+        s->k[0] = -1;
+        s->n = n;
+        nbt_status st = kind == NBT_TABLE_H ? nbt_h_table_build(s, hg, &o) : nbt_j_table_build(s, hg, &o);
+        if (st == NBT_OK)
+            memcpy(t->data + m * slice, s->data, slice * sizeof(float));
+        t->quad_err = fmax(t->quad_err, s->quad_err);
+        nbt_phase_free(hg);
+        nbt_table_free(s);
+        if (st != NBT_OK) {
+            nbt_table_free(t);
+            return NULL;
+        }
+    }
+    t->quad_tol = o.quad_tol;
+    for (size_t i = 0; i < nbt_table_size(t); i++)
+        t->max_abs[0] = fmax(t->max_abs[0], fabs(t->data[i]));
+    t->max_err[0] = NAN; /* not measured here */
+    return t;
+}
+
+/* What the g-sliced shaders compute, in double, from the same float tables:
+ * the fixed-phase formulas of nbt_airlight_table / nbt_surface_table with
+ * every lookup trilinear at g (nbt_table_lookup3).
+ * Switch to libnbt's g-sliced evaluation when it lands. */
+static double gs_airlight(const nbt_table *Ht, double gph, const nbt_airlight_geom *g)
+{
+    double h = g->dsv * sin(g->gamma), t = g->dsv * cos(g->gamma), u = g->kappa_t * h;
+    double th0 = g->gamma - M_PI_2, thd = atan2(g->dvp - t, h), a, c;
+    nbt_table_lookup3(Ht, u, thd, gph, &a);
+    nbt_table_lookup3(Ht, u, th0, gph, &c);
+    double s = a - c, lp = -g->kappa_t * t + log(g->kappa_s * g->I0 / (4.0 * M_PI * h));
+    return s == 0.0 ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
+}
+
+static double gs_surface(const nbt_table *J1, const nbt_table *Jn, double gph, const nbt_surface_geom *g)
+{
+    double T = g->kappa_t * g->dsp, j1, jn;
+    nbt_table_lookup3(J1, T, g->theta_s, gph, &j1);
+    nbt_table_lookup3(Jn, T, g->theta_r, gph, &jn);
+    double direct = g->I0 * exp(-T) / (g->dsp * g->dsp) *
+                    (g->kd * fmax(cos(g->theta_s), 0.0) + g->ks * pow(fmax(cos(g->theta_r), 0.0), g->n));
+    return direct + g->kappa_s * g->I0 / (4.0 * M_PI * g->dsp) * (g->kd * j1 + g->ks * jn);
+}
+
+/* How far float shading can move a point's unit coordinate on axis a: r =
+ * (x - lo)/(hi - lo) rounded (a few ulps relative, and ~eps absolute where
+ * the mapping forms 1 - 2r or 1 + c r in float) carried through the
+ * mapping's slope (steep for cos and cbrt near the ends), plus a few ulps of
+ * the mapping's own arithmetic. r exactly 0 or 1 (the ends, and clamped
+ * points) is exact in float. */
+static double unit_noise(const nbt_axis *a, double x)
+{
+    double r = (x - a->lo) / (a->hi - a->lo), s = nbt_axis_to_unit(a, x), e = 4 * FLT_EPSILON;
+    if (r <= 0 || r >= 1)
+        return e;
+    double dr = 4 * FLT_EPSILON * r + FLT_EPSILON, xs[2] = {fmax(r - dr, 0), fmin(r + dr, 1)};
+    for (int i = 0; i < 2; i++)
+        e = fmax(e, 4 * FLT_EPSILON + fabs(nbt_axis_to_unit(a, a->lo + xs[i] * (a->hi - a->lo)) - s));
+    return e;
+}
+
+static double data_maxabs(const nbt_table *t)
+{
+    double m = 0;
+    for (size_t i = 0; i < nbt_table_size(t); i++)
+        m = fmax(m, fabs(t->data[i]));
+    return m;
+}
+
+/* the largest difference between neighbouring values along each axis (any channel) */
+static void table_steps(const nbt_table *t, double step[3])
+{
+    size_t n[3] = {t->axis[0].n, t->axis[1].n, t->axis[2].n}, str[3] = {t->nch, t->nch * n[0], t->nch * n[0] * n[1]};
+    step[0] = step[1] = step[2] = 0;
+    for (size_t i = 0; i < nbt_table_size(t); i++) {
+        size_t idx[3] = {(i / str[0]) % n[0], (i / str[1]) % n[1], i / str[2]};
+        for (int a = 0; a < 3; a++)
+            if (idx[a] + 1 < n[a])
+                step[a] = fmax(step[a], fabs((double)t->data[i + str[a]] - t->data[i]));
+    }
+}
+
+/* The raw nbt_lookup3 against nbt_table_lookup3 at W x H points read from a
+ * texture: x0, x1 uniform over their ranges widened by 5% (clamping), x2 in
+ * turn a slice node, a midpoint between slices (unit coordinate), a random
+ * value, an end exactly, and beyond an end. */
+static void check_lookup3(nbt_table *t, const char *what)
+{
+    static const char *LK =
+        "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
+        "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
+        "  color = nbt_lookup3(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
+    char err[4096];
+    char *src = nbt_gl_shader_source(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, LK);
+    GLuint p = gl_fullscreen_program(src, err, sizeof err);
+    free(src);
+    t_true(p != 0, "lookup3 shader: %s", p ? "ok" : err);
+    if (!p)
+        return;
+    float *pt = malloc(W * H * 4 * sizeof(float)), *px = malloc(W * H * 4 * sizeof(float));
+    for (int i = 0; i < W * H; i++) {
+        float *q = pt + 4 * i;
+        for (int a = 0; a < 2; a++) {
+            const nbt_axis *ax = &t->axis[a];
+            q[a] = (float)(ax->lo + (ax->hi - ax->lo) * (1.1 * t_uniform() - 0.05));
+        }
+        const nbt_axis *g = &t->axis[2];
+        size_t m = (size_t)(t_uniform() * (double)(g->n - 1));
+        double span = g->hi - g->lo;
+        switch (i % 5) {
+        case 0: q[2] = (float)nbt_axis_node(g, m + (i % 2)); break;
+        case 1: q[2] = (float)nbt_axis_from_unit(g, (m + 0.5) / (double)(g->n - 1)); break;
+        case 2: q[2] = (float)(g->lo + span * t_uniform()); break;
+        case 3: q[2] = (float)(i % 2 ? g->hi : g->lo); break;
+        default: q[2] = (float)(i % 2 ? g->hi + 0.5 * span * t_uniform() : g->lo - 0.5 * span * t_uniform()); break;
+        }
+        q[3] = 0;
+    }
+    GLuint tex[2];
+    glUseProgram(p);
+    tex[0] = nbt_gl_bind_table(p, "tab", t, 12);
+    t_true(tex[0] != 0 && nbt_gl_table_target(t) == GL_TEXTURE_3D, "%s: uploaded as a 3-D texture", what);
+    glActiveTexture(GL_TEXTURE13);
+    glGenTextures(1, &tex[1]);
+    glBindTexture(GL_TEXTURE_2D, tex[1]);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, pt);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glUniform1i(glGetUniformLocation(p, "pts"), 13);
+    float a[3][4];
+    int map[3];
+    static const char *an[3] = {"a0", "a1", "a2"}, *mn[3] = {"m0", "m1", "m2"};
+    for (int i = 0; i < 3; i++) {
+        nbt_gl_axis(&t->axis[i], a[i], &map[i]);
+        glUniform4fv(glGetUniformLocation(p, an[i]), 1, a[i]);
+        glUniform1i(glGetUniformLocation(p, mn[i]), map[i]);
+    }
+    gl_draw_fullscreen();
+    glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+    t_true(glGetError() == GL_NO_ERROR, "%s: render and read back", what);
+    /* llvmpipe weights float textures in float (DESIGN.md): ~1e-7 of the
+     * scale per product, 8 of them; the rest is the float unit coordinate
+     * (unit_noise) times the texel count and the largest texel step */
+    double step[3], scale = data_maxabs(t), worst = 0, wcls[5] = {0};
+    table_steps(t, step);
+    for (int i = 0; i < W * H; i++) {
+        const float *q = pt + 4 * i;
+        double ref[NBT_TABLE_MAX_CH], tol = 2e-6 * scale;
+        nbt_table_lookup3(t, q[0], q[1], q[2], ref);
+        for (int ax = 0; ax < 3; ax++)
+            tol += unit_noise(&t->axis[ax], q[ax]) * (double)(t->axis[ax].n - 1) * step[ax];
+        for (size_t c = 0; c < t->nch; c++) {
+            double e = fabs(px[4 * i + c] - ref[c]) / tol;
+            worst = fmax(worst, e);
+            wcls[i % 5] = fmax(wcls[i % 5], e);
+        }
+    }
+    t_true(worst <= 1, "%s: nbt_lookup3 = nbt_table_lookup3 within 2e-6 of the scale + float coordinate noise "
+           "(worst %.2f of it; g at nodes %.2f, midpoints %.2f, random %.2f, ends %.2f, beyond %.2f)",
+           what, worst, wcls[0], wcls[1], wcls[2], wcls[3], wcls[4]);
+    glDeleteTextures(2, tex);
+    glDeleteProgram(p);
+    free(pt);
+    free(px);
+}
+
+/* random values: every texel independent, so a misplaced coordinate on any axis shows */
+static nbt_table *random_table3(const nbt_axis *a0, const nbt_axis *a1, const nbt_axis *a2, size_t nch)
+{
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, a0, a1, a2, nch);
+    for (size_t i = 0; i < nbt_table_size(t); i++)
+        t->data[i] = (float)(2 * t_uniform() - 1);
+    for (size_t c = 0; c < nch; c++)
+        t->k[c] = -1;
+    return t;
+}
+
+static void test_gsliced(void)
+{
+    /* the raw lookup: RGBA32F on (log1p_cbrt, cos, cos) and R16F on (linear, sqrt, log1p clustered at hi),
+     * sizes that differ per axis */
+    nbt_axis r0 = {0, 10, NBT_AXIS_LOG1P_CBRT, 10, 7}, r1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 5};
+    nbt_axis r2 = {-0.95, 0.95, NBT_AXIS_COS, 0, 6};
+    nbt_table *rt = random_table3(&r0, &r1, &r2, 4);
+    check_lookup3(rt, "RGBA32F 7x5x6");
+    nbt_table_free(rt);
+    nbt_axis q0 = {0.5, 3.5, NBT_AXIS_LINEAR, 0, 9}, q1 = {0, M_PI, NBT_AXIS_SQRT, 0, 4};
+    nbt_axis q2 = {-0.9, 0.97, NBT_AXIS_LOG1P, -0.9, 5};
+    rt = random_table3(&q0, &q1, &q2, 1);
+    nbt_table_round_half(rt);
+    check_lookup3(rt, "R16F 9x4x5");
+    nbt_table_free(rt);
+
+    /* airlight and surface radiance from g-sliced H, J^1, J^20 (HG, g nodes clustered at +-0.95) */
+    nbt_axis g2 = {-0.95, 0.95, NBT_AXIS_COS, 0, 9};
+    nbt_axis h0 = {0, 10, NBT_AXIS_LOG1P_CBRT, 10, 33}, h1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 33};
+    nbt_axis j0 = {0, 10, NBT_AXIS_LOG1P, 1000, 25}, j1 = {0, M_PI, NBT_AXIS_COS, 0, 25};
+    nbt_table *Hg = assemble_gsliced(NBT_TABLE_H, 0, &h0, &h1, &g2);
+    nbt_table *J1g = assemble_gsliced(NBT_TABLE_J, 1, &j0, &j1, &g2);
+    nbt_table *Jng = assemble_gsliced(NBT_TABLE_J, (int)NPH, &j0, &j1, &g2);
+    t_true(Hg && J1g && Jng, "g-sliced tables assembled");
+    if (!Hg || !J1g || !Jng)
+        return;
+    /* r, g: nbt_airlight / nbt_surface at the uniform nbt_g; b, a: nbt_airlight_g / nbt_surface_g
+     * at a g per row from -0.99 to 0.99 (both ends clamp) */
+    static const char *GS =
+        "uniform vec2 res;\n"
+        "out vec4 color;\n"
+        "void main() {\n"
+        "  vec2 f = (gl_FragCoord.xy - 0.5) / (res - 1.0);\n"
+        "  float gam = mix(0.05, 3.09, f.x), d = mix(0.5, 40.0, f.y), gr = mix(-0.99, 0.99, f.y);\n"
+        "  float ths = f.x * 3.14159265358979, thr = (1.0 - f.x) * 1.5;\n"
+        "  color.r = nbt_airlight(0.15, 0.2, 2.385, d, gam, 25.0);\n"
+        "  color.g = nbt_surface(0.15, 0.2, 2.385, d, ths, thr, 0.7, 0.3, 20.0);\n"
+        "  color.b = nbt_airlight_g(0.15, 0.2, 2.385, 6.0, gam, 25.0, gr);\n"
+        "  color.a = nbt_surface_g(0.15, 0.2, 2.385, 6.0, ths, thr, 0.7, 0.3, 20.0, gr);\n"
+        "}\n";
+    nbt_gl_config gc = {1, 1, 1, 0, 0, 0, 1};
+    char err[4096];
+    char *src = nbt_gl_shader_source(&gc, GS);
+    GLuint p = gl_fullscreen_program(src, err, sizeof err);
+    free(src);
+    t_true(p != 0, "g-sliced shader: %s", p ? "ok" : err);
+    const nbt_table *tabs[3] = {Hg, J1g, Jng};
+    static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
+    GLuint tex[3];
+    glUseProgram(p);
+    for (int i = 0; i < 3; i++)
+        tex[i] = nbt_gl_bind_table(p, names[i], tabs[i], 8 + (unsigned)i);
+    nbt_gl_set_table_axes(p, "nbt_H", Hg);
+    nbt_gl_set_table_axes(p, "nbt_J", J1g);
+    glUniform2f(glGetUniformLocation(p, "res"), W, H);
+    /* the uniform g: a slice node, the midpoint of the top cell (unit coordinate), 0.9, the range end
+     * 0.95, beyond it (0.99 reads the 0.95 slice), a negative node */
+    double gu[6] = {nbt_axis_node(&g2, 6), nbt_axis_from_unit(&g2, 7.5 / 8), 0.9, 0.95, 0.99, nbt_axis_node(&g2, 1)};
+    float *px = malloc(W * H * 4 * sizeof(float));
+    /* the float-coordinate noise of one lookup, as in the 2-D test: ~4 eps (N - 1) texels per axis
+     * times the table's scale */
+    double noise_h = 4 * FLT_EPSILON * (double)(h0.n + h1.n + g2.n - 3) * Hg->max_abs[0];
+    double noise_j = 4 * FLT_EPSILON * (double)(j0.n + j1.n + g2.n - 3);
+    for (int gi = 0; gi < 6; gi++) {
+        glUniform1f(glGetUniformLocation(p, "nbt_g"), (float)gu[gi]);
+        gl_draw_fullscreen();
+        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+        double gf = (float)gu[gi], worst[4] = {0};
+        int fin = 1;
+        for (int j = 0; j < H; j++)
+            for (int i = 0; i < W; i++) {
+                double fx = (double)i / (W - 1), fy = (double)j / (H - 1);
+                double gam = G0 + (G1 - G0) * fx, d = D0 + (D1 - D0) * fy, gr = (float)(-0.99 + 1.98 * fy);
+                const float *q = px + (j * W + i) * 4;
+                fin &= isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2]) && isfinite(q[3]);
+                nbt_airlight_geom ag = {KS, KT, I0, d, gam, DVP}, ag6 = {KS, KT, I0, 6.0, gam, DVP};
+                nbt_surface_geom sg = {KS, KT, I0, d, fx * M_PI, (1 - fx) * 1.5, KD, KSP, (int)NPH};
+                nbt_surface_geom sg6 = {KS, KT, I0, 6.0, fx * M_PI, (1 - fx) * 1.5, KD, KSP, (int)NPH};
+                /* as test 1: 1e-4 relative + the noise of two lookups times the prefactor (airlight),
+                 * of the weighted lookups (surface) */
+                double La = gs_airlight(Hg, gf, &ag), La6 = gs_airlight(Hg, gr, &ag6);
+                double Lp = gs_surface(J1g, Jng, gf, &sg), Lp6 = gs_surface(J1g, Jng, gr, &sg6);
+                double pre = KS * I0 * exp(-KT * d * cos(gam)) / (4 * M_PI * d * sin(gam));
+                double pre6 = KS * I0 * exp(-KT * 6.0 * cos(gam)) / (4 * M_PI * 6.0 * sin(gam));
+                double sj = KD * J1g->max_abs[0] + KSP * Jng->max_abs[0];
+                worst[0] = fmax(worst[0], fabs(q[0] - La) / (1e-4 * fabs(La) + 2 * noise_h * pre));
+                worst[1] = fmax(worst[1], fabs(q[1] - Lp) / (1e-4 * fabs(Lp) + noise_j * KS * I0 / (4 * M_PI * d) * sj));
+                worst[2] = fmax(worst[2], fabs(q[2] - La6) / (1e-4 * fabs(La6) + 2 * noise_h * pre6));
+                worst[3] = fmax(worst[3], fabs(q[3] - Lp6) / (1e-4 * fabs(Lp6) + noise_j * KS * I0 / (4 * M_PI * 6.0) * sj));
+            }
+        t_true(fin, "g-sliced, nbt_g = %.6g: every pixel finite", gf);
+        t_true(worst[0] <= 1 && worst[1] <= 1,
+               "g-sliced, nbt_g = %.6g: airlight and surface = CPU trilinear lookup within 1e-4 relative + float "
+               "lookup noise (worst %.2f, %.2f of it)", gf, worst[0], worst[1]);
+        if (gi == 0)
+            t_true(worst[2] <= 1 && worst[3] <= 1,
+                   "g-sliced, g per row -0.99..0.99 (nbt_airlight_g, nbt_surface_g): = CPU lookup within the same "
+                   "bound (worst %.2f, %.2f of it)", worst[2], worst[3]);
+    }
+    free(px);
+    glDeleteTextures(3, tex);
+    glDeleteProgram(p);
+    nbt_table_free(Hg);
+    nbt_table_free(J1g);
+    nbt_table_free(Jng);
 }
 
 int main(void)
@@ -151,17 +456,25 @@ int main(void)
     const char *just_beam = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3)); }\n";
     validators_can_fail(just_airlight);
     for (int h = 1; h <= 4; h++)
-        validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0}, just_airlight);
+        validate(&(nbt_gl_config){h, 0, 0, 0, 0, 0, 0}, just_airlight);
     for (int j = 1; j <= 4; j++)
-        validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0}, just_surface);
-    validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0}, just_airlight);
-    validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0}, just_beam);
+        validate(&(nbt_gl_config){0, j, j - 1, 0, 0, 0, 0}, just_surface);
+    validate(&(nbt_gl_config){1, 1, 1, 1, 0, 0, 0}, just_airlight);
+    validate(&(nbt_gl_config){0, 0, 0, 0, 1, 0, 0}, just_beam);
     const char *just_all = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30), "
                            "nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0), "
                            "nbt_beam_psi(nbt_beam_kernel_params(1.0, 0.9, 0.1, 2.0), 0.3), 1.0); }\n";
-    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0}, just_all);
-    t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
-    t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
+    validate(&(nbt_gl_config){2, 2, 2, 0, 1, 0, 0}, just_all);
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){5, 0, 0, 0, 0, 0, 0}, NULL) == NULL, "5 packs rejected");
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){2, 0, 0, 1, 0, 0, 0}, NULL) == NULL, "fixed phase with 2 packs rejected");
+    /* g-sliced (sampler3D tables, uniform nbt_g and the explicit-g functions) */
+    const char *just_g = "layout(location = 0) out vec4 color;\nvoid main() { color = vec4(nbt_airlight(0.1, 0.2, 1.0, 3.0, 0.5, 1e30), "
+                         "nbt_airlight_g(0.1, 0.2, 1.0, 3.0, 0.5, 1e30, 0.9), nbt_surface(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0), "
+                         "nbt_surface_g(0.1, 0.2, 1.0, 3.0, 0.5, 0.3, 0.7, 0.3, 20.0, 0.95)); }\n";
+    validate(&(nbt_gl_config){1, 1, 1, 0, 0, 0, 1}, just_g);
+    validate(&(nbt_gl_config){1, 0, 0, 0, 0, 0, 1}, just_airlight);
+    validate(&(nbt_gl_config){0, 1, 0, 1, 0, 0, 1}, just_surface);
+    t_true(nbt_gl_shader_source(&(nbt_gl_config){1, 2, 0, 0, 0, 0, 1}, NULL) == NULL, "g-sliced with 2 packs rejected");
 
     /* tables: orders 0..7 of H, J^1, J^20 */
     nbt_table *Ht[2], *J1t[2], *Jnt[2];
@@ -171,7 +484,7 @@ int main(void)
         Jnt[p] = build(NBT_TABLE_J, 20, p, 49);
     }
     t_true(Ht[0] && Ht[1] && J1t[0] && J1t[1] && Jnt[0] && Jnt[1], "tables built");
-    nbt_gl_config cfg = {2, 2, 2, 0, 1, 0};
+    nbt_gl_config cfg = {2, 2, 2, 0, 1, 0, 0};
     char *src = nbt_gl_shader_source(&cfg, MAIN);
     GLuint prog = gl_fullscreen_program(src, err, sizeof err);
     free(src);
@@ -277,7 +590,7 @@ int main(void)
             "  color.b = nbt_beam_fit_psi(1.0, 0.5, 0.03, mix(0.05, 25.0, f.x), mix(0.05, 1.5, f.y) * mix(0.05, 25.0, f.x));\n"
             "  color.a = nbt_beam_fit_psi(0.8, 0.97, 0.2, 12.5, mix(0.01, 12.5, f.x) * mix(0.1, 1.5, f.y));\n"
             "}\n";
-        nbt_gl_config bc = {0, 0, 0, 0, 1, 0};
+        nbt_gl_config bc = {0, 0, 0, 0, 1, 0, 0};
         /* the validators see a main without the test's loose uniform (Vulkan takes none) */
         validate(&bc, "layout(location = 0) out vec4 color;\n"
                       "void main() { color = vec4(nbt_beam_fit_psi(1.7, 0.9, 0.0685, 3.0, 0.9)); }\n");
@@ -355,6 +668,7 @@ int main(void)
         nbt_table_free(Jnt[p]);
     }
     nbt_phase_free(hg);
+    test_gsliced();
     egl_headless_close();
     return t_done();
 }
