@@ -337,7 +337,11 @@ nbt_status nbt_phase_moments(const nbt_phase *p, size_t kmax, double *b)
     } else {
         for (size_t i = 0; i < p->n && st == NBT_OK; i++) {
             gauss_mom_ctx c = {p->B[i], kmax};
-            st = nbt_quad_gk(ws, gauss_mom_f, &c, fdim, 0.0, NBT_PI, 1e-15, 1e-13, r, r + fdim);
+            /* past theta = 40 sqrt(B) the density is below e^-400: a narrow
+             * lobe integrated over [0, pi] was missed entirely (B = 1e-6 gave
+             * b_0 = 7e-18; found by fuzzing) */
+            double top = fmin(NBT_PI, 40.0 * sqrt(p->B[i]));
+            st = nbt_quad_gk(ws, gauss_mom_f, &c, fdim, 0.0, top, 1e-15, 1e-13, r, r + fdim);
             for (size_t k = 0; k <= kmax; k++)
                 b[k] = (i == 0 ? 0.0 : b[k]) + p->w[i] * r[k];
         }

@@ -86,6 +86,16 @@ int main(void)
     nbt_phase *gs = nbt_phase_gauss(1e-3);
     t_abs(nbt_phase_mean_cosine(gs), 1 - 2e-3 + 4.0 / 3.0 * 1e-6, 1e-8, "Gaussian B=1e-3 mean cosine");
     nbt_phase_free(gs);
+    /* a lobe far narrower than [0, pi] (fuzzing found b_0 = 7e-18 at B = 1e-6):
+     * O(B^3) = 1e-18, the quadrature tolerance ~1e-13 */
+    for (double Bn = 1e-6; Bn > 1e-13; Bn *= 1e-3) {
+        double bn[2];
+        gs = nbt_phase_gauss(Bn);
+        t_true(gs && nbt_phase_moments(gs, 1, bn) == NBT_OK, "Gaussian B=%g moments", Bn);
+        t_abs(bn[0], 1, 1e-12, "Gaussian B=%g b_0", Bn);
+        t_abs(bn[1], 1 - 2 * Bn + 4.0 / 3.0 * Bn * Bn, 1e-12, "Gaussian B=%g mean cosine", Bn);
+        nbt_phase_free(gs);
+    }
     /* the Legendre series reproduces HG */
     {
         size_t N = 80;
