@@ -40,37 +40,20 @@ static double now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* A g-sliced HG table H_p(u, v; g): slice m is the fixed-phase 2-D table of
- * HG(g_m), g_m = node m of a2, built by libnbt's 2-D builder and copied in.
- * Replaced by libnbt's g-sliced builder at merge. */
+/* A g-sliced HG table H_p(u, v; g) on the given axes, built by libnbt. */
 static nbt_table *assemble_gsliced(const nbt_axis *a0, const nbt_axis *a1, const nbt_axis *a2)
 {
     nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, a0, a1, a2, 1);
-    if (!t)
-        return NULL;
-    t->k[0] = -1;
-    snprintf(t->phase, sizeof t->phase, "hg");
-    size_t slice = a0->n * a1->n;
     nbt_build_opts o = {1e-10, 0, 0};
-    for (size_t m = 0; m < a2->n; m++) {
-        nbt_table *s = nbt_table_alloc(NBT_TABLE_H, a0, a1, 1);
-        nbt_phase *hg = nbt_phase_hg(nbt_axis_node(a2, m));
-        s->k[0] = -1;
-        nbt_status st = nbt_h_table_build(s, hg, &o);
-        if (st == NBT_OK)
-            memcpy(t->data + m * slice, s->data, slice * sizeof(float));
-        nbt_phase_free(hg);
-        nbt_table_free(s);
-        if (st != NBT_OK) {
-            nbt_table_free(t);
-            return NULL;
-        }
+    if (t && nbt_gslice_fill(t, &o) != NBT_OK) {
+        nbt_table_free(t);
+        t = NULL;
     }
     return t;
 }
 
-/* the shader's formula in double from the same table (as tests/test_gl.c);
- * switch to libnbt's g-sliced evaluation when it lands */
+/* the shader's formula in double from the same table (as tests/test_gl.c):
+ * the lookup alone, without nbt_airlight_table_g's fallback */
 static double cpu_airlight(const nbt_table *Ht, double gph, const nbt_airlight_geom *g)
 {
     double h = g->dsv * sin(g->gamma), t = g->dsv * cos(g->gamma), u = g->kappa_t * h;

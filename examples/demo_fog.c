@@ -71,29 +71,20 @@ static nbt_table *table(nbt_table_kind kind, int n, const nbt_phase *ph, size_t 
     return t;
 }
 
-/* A g-sliced table over gax: slice m is the fixed-phase table of HG(g_m),
- * g_m = node m of gax, built as above and copied in (channel k = -1, phase
- * "hg"). Replaced by libnbt's g-sliced builder at merge. */
+/* A g-sliced table over gax on the axes of table() above, built by libnbt
+ * (nbt_gslice_fill). */
 static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, size_t N, const nbt_axis *gax)
 {
-    nbt_table *t = NULL;
-    for (size_t m = 0; m < gax->n; m++) {
-        nbt_phase *hg = nbt_phase_hg(nbt_axis_node(gax, m));
-        nbt_table *s = table(kind, n, hg, N);
-        nbt_phase_free(hg);
-        if (s && !t && (t = nbt_table_alloc3(kind, &s->axis[0], &s->axis[1], gax, 1))) {
-            t->k[0] = -1;
-            t->n = n;
-            snprintf(t->phase, sizeof t->phase, "hg");
-        }
-        if (!s || !t) {
-            nbt_table_free(s);
+    nbt_axis a0 = {0, 12, NBT_AXIS_LOG1P, 1000, N};
+    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, N} : (nbt_axis){0, M_PI, NBT_AXIS_COS, 0, N};
+    nbt_table *t = nbt_table_alloc3(kind, &a0, &a1, gax, 1);
+    nbt_build_opts o = {1e-9, 0, 0};
+    if (t) {
+        t->n = n;
+        if (nbt_gslice_fill(t, &o) != NBT_OK) {
             nbt_table_free(t);
-            return NULL;
+            t = NULL;
         }
-        size_t slice = s->axis[0].n * s->axis[1].n;
-        memcpy(t->data + m * slice, s->data, slice * sizeof(float));
-        nbt_table_free(s);
     }
     return t;
 }

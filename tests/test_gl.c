@@ -139,48 +139,28 @@ static void validators_can_fail(const char *main_src)
 
 /* ---- g-sliced tables (sampler3D, run-time g) ---- */
 
-/* A g-sliced HG table H_p(u, v; g) or J_p^n(T, theta; g): slice m is the
- * fixed-phase 2-D table of HG(g_m), g_m = node m of ax2, built by libnbt's
- * 2-D builder and copied in (channel k = -1, phase "hg").
- * Replaced by libnbt's g-sliced builder at merge. */
+/* A g-sliced HG table H_p(u, v; g) or J_p^n(T, theta; g) on the given
+ * axes, built by libnbt (nbt_gslice_fill; its error is test_gslice's). */
 static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, const nbt_axis *a0, const nbt_axis *a1,
                                    const nbt_axis *a2)
 {
     nbt_table *t = nbt_table_alloc3(kind, a0, a1, a2, 1);
-    if (!t)
-        return NULL;
-    t->k[0] = -1;
-    t->n = n;
-    snprintf(t->phase, sizeof t->phase, "hg");
-    size_t slice = a0->n * a1->n;
     nbt_build_opts o = {1e-10, 0, 0};
-    for (size_t m = 0; m < a2->n; m++) {
-        nbt_table *s = nbt_table_alloc(kind, a0, a1, 1);
-        nbt_phase *hg = nbt_phase_hg(nbt_axis_node(a2, m));
-        s->k[0] = -1;
-        s->n = n;
-        nbt_status st = kind == NBT_TABLE_H ? nbt_h_table_build(s, hg, &o) : nbt_j_table_build(s, hg, &o);
-        if (st == NBT_OK)
-            memcpy(t->data + m * slice, s->data, slice * sizeof(float));
-        t->quad_err = fmax(t->quad_err, s->quad_err);
-        nbt_phase_free(hg);
-        nbt_table_free(s);
-        if (st != NBT_OK) {
+    if (t) {
+        t->n = n;
+        if (nbt_gslice_fill(t, &o) != NBT_OK) {
             nbt_table_free(t);
-            return NULL;
+            t = NULL;
         }
     }
-    t->quad_tol = o.quad_tol;
-    for (size_t i = 0; i < nbt_table_size(t); i++)
-        t->max_abs[0] = fmax(t->max_abs[0], fabs(t->data[i]));
-    t->max_err[0] = NAN; /* not measured here */
     return t;
 }
 
 /* What the g-sliced shaders compute, in double, from the same float tables:
  * the fixed-phase formulas of nbt_airlight_table / nbt_surface_table with
  * every lookup trilinear at g (nbt_table_lookup3).
- * Switch to libnbt's g-sliced evaluation when it lands. */
+ * (libnbt's nbt_airlight_table_g also falls back to the ray integral where
+ * its bound is poor; a shader cannot, so the lookup alone is compared.) */
 static double gs_airlight(const nbt_table *Ht, double gph, const nbt_airlight_geom *g)
 {
     double h = g->dsv * sin(g->gamma), t = g->dsv * cos(g->gamma), u = g->kappa_t * h;
