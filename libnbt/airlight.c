@@ -362,9 +362,32 @@ int nbt__table_series_diff(const nbt_table *const *tables, size_t ntables, const
     return outside;
 }
 
-/* Where the lookup's recorded-error bound exceeds this fraction of its value,
- * the table route integrates along the ray instead (see nbt/airlight.h). */
-#define TABLE_RAY_FRAC 0.1
+void nbt__airlight_from_diff(const void *geom, double h, double t, double s, double w, double *La, double *abserr)
+{
+    const nbt_airlight_geom *g = geom;
+    /* e^{-kt t} may overflow where t < 0 while s is tiny: combine in logs */
+    double lp = -g->kappa_t * t + log(g->kappa_s * g->I0 / (4.0 * NBT_PI * h));
+    int zero = g->kappa_s == 0.0 || g->I0 == 0.0;
+    *La = s == 0.0 || zero ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
+    *abserr = zero ? 0.0 : (w > 0 ? exp(lp + log(w)) : (w == 0 ? 0.0 : NAN));
+}
+
+nbt_status nbt__airlight_ray_or_lookup(const nbt_phase *p, const double *b, size_t nterms, const void *geom,
+                                       double h, double Lt, double Et, int outside, double *La, double *abserr)
+{
+    double Lr, Er;
+    nbt_status st = nbt__airlight_ray(p, b, nterms, geom, 1e-10, &Lr, &Er);
+    if (st != NBT_OK && st != NBT_ETOL)
+        return st;
+    if (st == NBT_ETOL && h > 0.0 && !(Er < Et)) {
+        *La = Lt;
+        *abserr = Et;
+        return outside ? NBT_ETOL : NBT_OK;
+    }
+    *La = Lr;
+    *abserr = Er;
+    return st;
+}
 
 nbt_status nbt_airlight_table_e(const nbt_table *const *tables, size_t ntables, const double *b,
                                 size_t nterms, const nbt_phase *fixed, const nbt_airlight_geom *g,
@@ -404,13 +427,9 @@ nbt_status nbt_airlight_table_e(const nbt_table *const *tables, size_t ntables, 
                 double wk = k < 0 ? 1.0 : ((size_t)k < nterms ? (2.0 * k + 1.0) * b[k] : 0.0);
                 w += 2.0 * fabs(wk) * tables[i]->max_err[c]; /* two lookups per channel */
             }
-        /* e^{-kt t} may overflow where t < 0 while s is tiny: combine in logs */
-        double lp = -g->kappa_t * t + log(g->kappa_s * g->I0 / (4.0 * NBT_PI * h));
-        int zero = g->kappa_s == 0.0 || g->I0 == 0.0;
-        Lt = s == 0.0 || zero ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
-        Et = zero ? 0.0 : (w > 0 ? exp(lp + log(w)) : (w == 0 ? 0.0 : NAN));
+        nbt__airlight_from_diff(g, h, t, s, w, &Lt, &Et);
         /* max_err not measured (NaN): the lookup is all there is */
-        if (isnan(Et) || Et <= TABLE_RAY_FRAC * fabs(Lt)) {
+        if (isnan(Et) || Et <= NBT__TABLE_RAY_FRAC * fabs(Lt)) {
             *La = Lt;
             *abserr = Et;
             return outside ? NBT_ETOL : NBT_OK;
@@ -419,7 +438,7 @@ nbt_status nbt_airlight_table_e(const nbt_table *const *tables, size_t ntables, 
     /* Near the source axis (gamma -> 0 or pi, h -> 0) the airlight is the
      * small difference of two lookups divided by h: the bound above grows as
      * 1/h while the airlight stays finite. There (and wherever the bound
-     * exceeds TABLE_RAY_FRAC of the value) integrate along the ray with the
+     * exceeds NBT__TABLE_RAY_FRAC of the value) integrate along the ray with the
      * phase the tables hold: the channels' truncated series, or the fixed
      * phase (given, or parsed from the table's name). */
     nbt_phase *own = NULL;
@@ -450,19 +469,9 @@ nbt_status nbt_airlight_table_e(const nbt_table *const *tables, size_t ntables, 
                     bk[k] = b[k];
             }
     }
-    double Lr, Er;
-    st = nbt__airlight_ray(ph, bk, bk ? K + 1 : 0, g, 1e-10, &Lr, &Er);
+    st = nbt__airlight_ray_or_lookup(ph, bk, bk ? K + 1 : 0, g, h, Lt, Et, outside, La, abserr);
     free(bk);
     nbt_phase_free(own);
-    if (st != NBT_OK && st != NBT_ETOL)
-        return st;
-    if (st == NBT_ETOL && h > 0.0 && !(Er < Et)) {
-        *La = Lt;
-        *abserr = Et;
-        return outside ? NBT_ETOL : NBT_OK;
-    }
-    *La = Lr;
-    *abserr = Er;
     return st;
 }
 

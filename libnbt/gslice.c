@@ -112,13 +112,6 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1024};
 #define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])
 
-static size_t ggrow(size_t n)
-{
-    for (size_t i = 0; i < NGSIZES; i++)
-        if (GSIZES[i] > n)
-            return GSIZES[i];
-    return 0;
-}
 
 static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
 {
@@ -251,7 +244,7 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
         double rel = (*out)->max_err[0] / (*out)->max_abs[0];
         if (r->tol == 0 || rel <= r->tol)
             break;
-        size_t n2 = ggrow(ng);
+        size_t n2 = nbt__ladder_next(GSIZES, NGSIZES, ng);
         nbt_table_free(*out);
         *out = NULL;
         if (attempt >= 2 || n2 == 0)
@@ -377,8 +370,6 @@ static nbt_status check_g(const nbt_table *t, double g, nbt_table_kind kind)
     return NBT_OK;
 }
 
-#define TABLE_RAY_FRAC 0.1
-
 nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                 double *abserr)
 {
@@ -397,12 +388,8 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
         nbt_table_lookup3(t, u, thd, g, &a);
         nbt_table_lookup3(t, u, th0, g, &b);
         double s = a - b, w = 2.0 * t->max_err[0];
-        /* e^{-kt t} may overflow where t < 0 while s is tiny: combine in logs */
-        double lp = -geo->kappa_t * tt + log(geo->kappa_s * geo->I0 / (4.0 * NBT_PI * h));
-        int zero = geo->kappa_s == 0.0 || geo->I0 == 0.0;
-        Lt = s == 0.0 || zero ? 0.0 : copysign(exp(lp + log(fabs(s))), s);
-        Et = zero ? 0.0 : (w > 0 ? exp(lp + log(w)) : (w == 0 ? 0.0 : NAN));
-        if (isnan(Et) || Et <= TABLE_RAY_FRAC * fabs(Lt)) {
+        nbt__airlight_from_diff(geo, h, tt, s, w, &Lt, &Et);
+        if (isnan(Et) || Et <= NBT__TABLE_RAY_FRAC * fabs(Lt)) {
             *La = Lt;
             *abserr = Et;
             return outside ? NBT_ETOL : NBT_OK;
@@ -411,18 +398,8 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
     nbt_phase *p = nbt_phase_hg(g);
     if (!p)
         NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");
-    double Lr, Er;
-    st = nbt__airlight_ray(p, NULL, 0, geo, 1e-10, &Lr, &Er);
+    st = nbt__airlight_ray_or_lookup(p, NULL, 0, geo, h, Lt, Et, outside, La, abserr);
     nbt_phase_free(p);
-    if (st != NBT_OK && st != NBT_ETOL)
-        return st;
-    if (st == NBT_ETOL && h > 0.0 && !(Er < Et)) {
-        *La = Lt;
-        *abserr = Et;
-        return outside ? NBT_ETOL : NBT_OK;
-    }
-    *La = Lr;
-    *abserr = Er;
     return st;
 }
 
@@ -463,7 +440,7 @@ nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specul
     double f = geo->kappa_s * geo->I0 / (4.0 * NBT_PI * geo->dsp);
     *Lp = surface_direct_term(geo) + f * (geo->kd * sd + geo->ks * ss);
     *abserr = f * (geo->kd * ed + geo->ks * es);
-    if (fallback_tol > 0 && !(*abserr <= TABLE_RAY_FRAC * fabs(*Lp))) {
+    if (fallback_tol > 0 && !(*abserr <= NBT__TABLE_RAY_FRAC * fabs(*Lp))) {
         nbt_phase *p = nbt_phase_hg(g);
         if (!p)
             NBT_FAIL(NBT_ENOMEM, "surface: out of memory");

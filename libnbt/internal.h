@@ -75,6 +75,29 @@ void nbt__segfix_eval(const nbt__segfix *F, const nbt__weights *w, double u, dou
 nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
                              const void *geom, double tol, double *La, double *err);
 
+/* The first size on a ladder (increasing, n entries) above x; 0 past its end. */
+static inline size_t nbt__ladder_next(const size_t *ladder, size_t n, size_t x)
+{
+    for (size_t i = 0; i < n; i++)
+        if (ladder[i] > x)
+            return ladder[i];
+    return 0;
+}
+
+/* The airlight table routes (Legendre packs, fixed phase, g-sliced): where
+ * the lookup's recorded-error bound exceeds NBT__TABLE_RAY_FRAC of its value
+ * they integrate along the ray instead (see nbt/airlight.h). */
+#define NBT__TABLE_RAY_FRAC 0.1
+/* L_a from the tables' difference s = sum_k w_k [H_k(u, theta_d) - H_k(u, theta_0)]
+ * and w, the bound of s's error (h = d_sv sin gamma > 0, t = d_sv cos gamma):
+ * the prefactor kappa_s I0 e^{-kappa_t t}/(4 pi h) combined in logs. */
+void nbt__airlight_from_diff(const void *geom, double h, double t, double s, double w, double *La, double *abserr);
+/* The ray integral with phase p (or the series b) where the lookup (Lt, Et)
+ * was not good enough; keeps the lookup where the ray quadrature did not
+ * converge to better than Et. outside: the lookup clamped u (NBT_ETOL). */
+nbt_status nbt__airlight_ray_or_lookup(const nbt_phase *p, const double *b, size_t nterms, const void *geom,
+                                       double h, double Lt, double Et, int outside, double *La, double *abserr);
+
 /* Sum over the tables' channels of (2k+1) b_k [T(x0, y1) - T(x0, y0)]
  * (fixed-phase channels weight 1; y0 = NAN: no subtraction). Returns 1 if x0
  * lies outside a table's first axis. */

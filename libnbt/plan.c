@@ -247,13 +247,6 @@ static void free_packs(nbt_table **t, size_t count)
 static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049};
 #define NSIZES (sizeof SIZES / sizeof SIZES[0])
 
-static size_t grow(size_t N)
-{
-    for (size_t i = 0; i < NSIZES; i++)
-        if (SIZES[i] > N)
-            return SIZES[i];
-    return 0;
-}
 
 /* Axes by rule (measured by exhaustive builds, doc/tables.md). u/T:
  * log1p_cbrt with c = max(xmax, 10): u ~ s^3 near 0 makes the u log u
@@ -575,7 +568,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
         out->rel_err = set_error(out->t, out->count);
         if (r->tol <= 0 || out->rel_err <= r->tol)
             break;
-        size_t next = grow(a0.n > a1.n ? a0.n : a1.n);
+        size_t next = nbt__ladder_next(SIZES, NSIZES, a0.n > a1.n ? a0.n : a1.n);
         if (next == 0) {
             double worst = out->rel_err;
             nbt_tableset_free(out);
