@@ -390,10 +390,7 @@ int cmd_kernel(int argc, char **argv)
             die("out of memory");
         size_t nres = 0;
         for (size_t q = 0; q < nruns; q++) {
-            double num = 0, den = 0;
-            for (size_t j = 0; j < runs[q].nplanes; j++)
-                kernel_rms_parts(&runs[q], j, 0, 0, &num, &den);
-            c.scale[q] = 1 / sqrt(den);
+            c.scale[q] = 1 / sqrt(run_rms_den(&runs[q]));
             nres += runs[q].nplanes * runs[q].nbins;
             /* albedo and width terms only where the runs differ in them */
             if (runs[q].albedo != runs[0].albedo)

@@ -228,9 +228,7 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
         die("out of memory");
     size_t nres = 0;
     for (size_t q = 0; q < nruns; q++) {
-        double num = 0, den = 0;
-        for (size_t j = 0; j < runs[q].nplanes; j++)
-            kernel_rms_parts(&runs[q], j, 0, 0, &num, &den);
+        double den = run_rms_den(&runs[q]);
         if (!(den > 0))
             die_usage("%s: no photons counted: cannot fit", runs[q].name);
         c.scale[q] = 1 / sqrt(den);

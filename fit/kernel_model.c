@@ -94,3 +94,11 @@ void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, do
     double p[2] = {alpha, beta};
     shape_rms_parts(d, j, 1, p, num, den);
 }
+
+double run_rms_den(const psi_data *d)
+{
+    double num = 0, den = 0;
+    for (size_t j = 0; j < d->nplanes; j++)
+        kernel_rms_parts(d, j, 0, 0, &num, &den);
+    return den;
+}

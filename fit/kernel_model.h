@@ -28,5 +28,8 @@ double shape_annulus(int shape, const double *p, double lo, double hi, double *g
 void shape_rms_parts(const psi_data *d, size_t j, int shape, const double *p, double *num, double *den);
 /* The same for one erfc kernel alpha/r G(r/beta). */
 void kernel_rms_parts(const psi_data *d, size_t j, double alpha, double beta, double *num, double *den);
+/* sum (2 pi r_c mc)^2 over all planes of d: a fit over several runs scales
+ * run d's residuals by 1/sqrt of it, so every run counts by its RMS metric */
+double run_rms_den(const psi_data *d);
 
 #endif
