@@ -68,7 +68,7 @@ typedef struct {
     int slab;
     int single;         /* one layer, density > 0: leaving it ends the photon */
     nbt_phase_kind skind; /* HG or GAUSS: sampled inline (sparam = g or B); else ISO marks the general sampler */
-    double sparam, sinv;
+    double sparam, sinv; /* sinv: HG 1/(2g); Gaussian: the truncation 1 - e^{-pi^2/4B} */
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
     double *acc;        /* NBATCH * stride */
     size_t b0, nbatch;  /* this part runs batches [b0, b0 + nbatch) */
@@ -118,12 +118,9 @@ static inline double sample_mu(const mc_ctx *c, rng_t *rs)
         double mu = (1.0 + g * g - f * f) * c->sinv; /* sinv = 1/(2g) */
         return mu > 1.0 ? 1.0 : (mu < -1.0 ? -1.0 : mu);
     }
-    if (c->skind == NBT_PHASE_GAUSS) {
-        for (;;) {
-            double th = sqrt(-4.0 * c->sparam * log1p(-rng_u(rs)));
-            if (th < NBT_PI)
-                return cos(th);
-        }
+    if (c->skind == NBT_PHASE_GAUSS) { /* as nbt__phase_sample_mu: inverse CDF of theta^2 < pi^2 */
+        double th = sqrt(-4.0 * c->sparam * log1p(-c->sinv * rng_u(rs)));
+        return cos(fmin(th, NBT_PI));
     }
     /* a copy goes to the general sampler, so that the photon's own state
      * never has its address taken and can stay in registers */
@@ -429,7 +426,9 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
     c.binscale = malloc((cf->nplanes + 1) * sizeof(double));
     if (!nbt__phase_sample_param(cf->phase, &c.skind, &c.sparam))
         c.skind = NBT_PHASE_ISO;
-    c.sinv = c.skind == NBT_PHASE_HG ? 0.5 / c.sparam : 0.0;
+    c.sinv = c.skind == NBT_PHASE_HG      ? 0.5 / c.sparam
+           : c.skind == NBT_PHASE_GAUSS ? -expm1(-NBT_PI * NBT_PI / (4.0 * c.sparam))
+                                        : 0.0;
     c.stride = cf->nplanes * (cf->r_bins + 2) + 3;
     if (!c.b || !c.rho || !c.kinv || !c.binscale) {
         free(c.b);

@@ -407,12 +407,13 @@ double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void 
             while (i + 1 < p->n && u >= c)
                 c += p->w[++i];
         }
-        /* theta = |s|, s 2-D Gaussian with per-component variance 2B; theta >= pi rejected */
-        for (;;) {
-            double th = sqrt(-4.0 * p->B[i] * log1p(-uniform(rs)));
-            if (th < NBT_PI)
-                return cos(th);
-        }
+        /* theta = |s|, s 2-D Gaussian with per-component variance 2B, given
+         * theta < pi: theta^2 is exponential with mean 4B truncated at pi^2,
+         * sampled by its inverse CDF (rejecting theta >= pi instead took
+         * ~400 draws per sample at B = 1000) */
+        double a = -expm1(-NBT_PI * NBT_PI / (4.0 * p->B[i]));
+        double th = sqrt(-4.0 * p->B[i] * log1p(-a * uniform(rs)));
+        return cos(fmin(th, NBT_PI));
     }
     case NBT_PHASE_TABLE: {
         double u = uniform(rs);

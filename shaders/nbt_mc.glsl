@@ -149,11 +149,10 @@ void main()
                         mu = clamp((1.0 + g * g - f * f) / (2.0 * g), -1.0, 1.0);
                     }
                 } else {
-                    float th;
-                    do
-                        th = sqrt(-4.0 * u_param * log(1.0 - rnd()));
-                    while (th >= 3.14159265);
-                    mu = cos(th);
+                    // theta^2 exponential with mean 4B truncated at pi^2, by its inverse CDF
+                    float a = 1.0 - exp(-9.8696044 / (4.0 * u_param));
+                    float th = sqrt(-4.0 * u_param * log(1.0 - a * rnd()));
+                    mu = cos(min(th, 3.14159265));
                 }
                 float st = sqrt(max(0.0, 1.0 - mu * mu)), phi = 6.2831853 * rnd(), cp = cos(phi), sp = sin(phi);
                 if (abs(u.z) > 0.99999) {

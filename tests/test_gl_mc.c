@@ -12,6 +12,7 @@
 #include <nbt/gl_mc.h>
 #include "../examples/egl_headless.h"
 #include "testutil.h"
+#include "mcref.h"
 
 /* the GL driver leaks at eglTerminate: no leak report for this program */
 const char *__asan_default_options(void);
@@ -120,6 +121,27 @@ int main(void)
     nbt_mc_result_free(ci);
     nbt_mc_result_free(g1);
     nbt_mc_result_free(cpu);
+
+    /* a wide Gaussian (B = 1000), whose truncation at theta = pi matters:
+     * single-scattering slab reflectance against the quadrature of
+     * tests/mcref.h within 4 standard errors */
+    nbt_phase *gw = nbt_phase_gauss(1000);
+    memset(&c, 0, sizeof c);
+    c.sigma_t = 1;
+    c.albedo = 1;
+    c.phase = gw;
+    c.slab = 0.5;
+    c.order_max = 1;
+    c.photons = 400000;
+    c.seed = 12;
+    t_true(nbt_gl_mc_run(&c, 64, 0, &g1) == NBT_OK && g1, "GPU wide Gaussian slab run");
+    if (g1) {
+        double ref = mcref_slab_r1(gw, 0.5, 1.0);
+        t_abs(g1->R, ref, 4 * g1->R_se + 1e-9, "GPU B = 1000: single-scattering slab R %.5f = %.5f (se %.1e)", g1->R, ref,
+              g1->R_se);
+        nbt_mc_result_free(g1);
+    }
+    nbt_phase_free(gw);
 
     /* refusals */
     nbt_phase *ray = nbt_phase_rayleigh();
