@@ -227,33 +227,17 @@ static void mcml_like(long n, double mua, double mus, double g, double d, double
  * z = 1..10 in a half-space (Gaussian phase, B = 0.274: 60 degrees) */
 static nbt_mc_config slab_case(const nbt_phase *p, double albedo, uint64_t photons)
 {
-    nbt_mc_config c;
-    memset(&c, 0, sizeof c);
-    c.sigma_t = 1;
-    c.albedo = albedo;
-    c.phase = p;
-    c.slab = 2;
-    c.photons = photons;
-    c.seed = 1;
-    c.threads = 1;
-    return c;
+    return (nbt_mc_config){
+        .sigma_t = 1, .albedo = albedo, .phase = p, .slab = 2, .photons = photons, .seed = 1, .threads = 1
+    };
 }
 
 static nbt_mc_config planes_case(const nbt_phase *p, const double *z10, uint64_t photons)
 {
-    nbt_mc_config c;
-    memset(&c, 0, sizeof c);
-    c.sigma_t = 1;
-    c.albedo = 0.9;
-    c.phase = p;
-    c.nplanes = 10;
-    c.z_planes = z10;
-    c.r_bins = 50;
-    c.r_max_scale = 1;
-    c.photons = photons;
-    c.seed = 1;
-    c.threads = 1;
-    return c;
+    return (nbt_mc_config){
+        .sigma_t = 1, .albedo = 0.9, .phase = p, .nplanes = 10, .z_planes = z10, .r_bins = 50, .r_max_scale = 1,
+        .photons = photons, .seed = 1, .threads = 1
+    };
 }
 
 static nbt_mc_result *best_of_3(const nbt_mc_config *c)

@@ -57,14 +57,7 @@ int main(void)
         return t_done();
     }
     nbt_phase *hg = nbt_phase_hg(0.75);
-    nbt_mc_config c;
-    memset(&c, 0, sizeof c);
-    c.sigma_t = 1;
-    c.albedo = 0.9;
-    c.phase = hg;
-    c.slab = 2;
-    c.photons = 400000;
-    c.seed = 2385;
+    nbt_mc_config c = {.sigma_t = 1, .albedo = 0.9, .phase = hg, .slab = 2, .photons = 400000, .seed = 2385};
     nbt_mc_result *g1 = NULL, *g2 = NULL, *cpu = NULL;
     t_true(nbt_gl_mc_run(&c, 64, 0, &g1) == NBT_OK && g1, "GPU slab run");
     if (!g1)
@@ -82,16 +75,10 @@ int main(void)
      * counter (another random stream) within 4 combined standard errors */
     nbt_phase *ga = nbt_phase_gauss(0.12);
     double planes[3] = {0.7, 1.9, 3.1};
-    memset(&c, 0, sizeof c);
-    c.sigma_t = 1.1;
-    c.albedo = 0.8;
-    c.phase = ga;
-    c.nplanes = 3;
-    c.z_planes = planes;
-    c.r_bins = 12;
-    c.r_max_scale = 1.2;
-    c.photons = 200000;
-    c.seed = 99;
+    c = (nbt_mc_config){
+        .sigma_t = 1.1, .albedo = 0.8, .phase = ga, .nplanes = 3, .z_planes = planes, .r_bins = 12, .r_max_scale = 1.2,
+        .photons = 200000, .seed = 99
+    };
     t_true(nbt_gl_mc_run(&c, 64, 0, &g1) == NBT_OK && nbt_mc_run(&c, &cpu) == NBT_OK, "GPU and CPU plane runs");
     int nbad = 0, mbad = 0;
     for (size_t j = 0; j < 3; j++) {
@@ -126,14 +113,9 @@ int main(void)
      * single-scattering slab reflectance against the quadrature of
      * tests/mcref.h within 4 standard errors */
     nbt_phase *gw = nbt_phase_gauss(1000);
-    memset(&c, 0, sizeof c);
-    c.sigma_t = 1;
-    c.albedo = 1;
-    c.phase = gw;
-    c.slab = 0.5;
-    c.order_max = 1;
-    c.photons = 400000;
-    c.seed = 12;
+    c = (nbt_mc_config){
+        .sigma_t = 1, .albedo = 1, .phase = gw, .slab = 0.5, .order_max = 1, .photons = 400000, .seed = 12
+    };
     t_true(nbt_gl_mc_run(&c, 64, 0, &g1) == NBT_OK && g1, "GPU wide Gaussian slab run");
     if (g1) {
         double ref = mcref_slab_r1(gw, 0.5, 1.0);
