@@ -26,8 +26,8 @@ static void ramp(double x, unsigned char *rgb)
     if (i > 3)
         i = 3;
     double f = p - i;
-    for (int k = 0; k < 3; k++)
-        rgb[k] = (unsigned char)lround(c[i][k] + f * (c[i + 1][k] - c[i][k]));
+    for (int k = 0; k < 3; k++) /* round to nearest (the value is >= 0) */
+        rgb[k] = (unsigned char)(c[i][k] + f * (c[i + 1][k] - c[i][k]) + 0.5);
 }
 
 /* libpng reports errors by longjmp: keep that to a function whose locals do
@@ -45,6 +45,11 @@ static int write_png(FILE *f, const unsigned char *img, size_t W, size_t H)
     png_init_io(png, f);
     png_set_IHDR(png, info, (png_uint_32)W, (png_uint_32)H, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    /* deflate's fastest level and the "up" filter (rows of a preview repeat
+     * their neighbours): 2-3x the size of level 6 with adaptive filters at a
+     * third of the time (measured on the default scene's previews) */
+    png_set_compression_level(png, 1);
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
     png_write_info(png, info);
     for (size_t r = 0; r < H; r++)
         png_write_row(png, (png_const_bytep)(img + r * W * 3));
@@ -204,16 +209,16 @@ int preview_write_png(const nbt_table *t, const char *path)
     int y0 = PREVIEW_TOP;
     for (int k = 0; k < nc; k++) {
         int x0 = PREVIEW_LEFT + k * (PW + PREVIEW_GAP);
-        for (int j = 0; j < PH; j++)
+        for (int j = 0; j < PH; j++) { /* the panel lies inside the canvas */
+            unsigned char *row = c.px + ((size_t)(y0 + j) * (size_t)c.w + (size_t)x0) * 3;
             for (int i = 0; i < PW; i++) {
                 double f = val[((size_t)k * PH + (size_t)j) * PW + (size_t)i];
-                unsigned char rgb[3];
                 if (isfinite(f))
-                    ramp((f - lo) / span, rgb);
+                    ramp((f - lo) / span, row + 3 * i);
                 else
-                    memcpy(rgb, GREY, 3);
-                put(&c, x0 + i, y0 + j, rgb);
+                    memcpy(row + 3 * i, GREY, 3);
             }
+        }
         /* frame, panel title */
         rect(&c, x0 - 1, y0 - 1, PW + 2, 1, BLACK);
         rect(&c, x0 - 1, y0 + PH, PW + 2, 1, BLACK);
