@@ -45,6 +45,25 @@ static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts
     return st;
 }
 
+/* The slices at g[0..m-1] over t's axes 0 and 1, in t's value form, as 2-D
+ * one-channel tables (quad_err, max_abs and, with o->measure_error, max_err
+ * set): the one place that knows how a kind and form are built. */
+static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
+                               nbt_table **out)
+{
+    nbt_status st = NBT_OK;
+    for (size_t i = 0; i < m; i++)
+        out[i] = NULL;
+    for (size_t i = 0; i < m && st == NBT_OK; i++)
+        st = build_slice(t, g[i], o, &out[i]);
+    if (st != NBT_OK)
+        for (size_t i = 0; i < m; i++) {
+            nbt_table_free(out[i]);
+            out[i] = NULL;
+        }
+    return st;
+}
+
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 {
     if (t->kind != NBT_TABLE_H && t->kind != NBT_TABLE_J)
@@ -62,40 +81,51 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
         t->n = 0;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
     double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
-    nbt_status st = NBT_OK;
+    double *gs = calloc(ng, sizeof *gs);
+    nbt_table **sl = calloc(ng, sizeof *sl);
+    if (!gs || !sl) {
+        free(gs);
+        free(sl);
+        NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory");
+    }
+    for (size_t m = 0; m < ng; m++)
+        gs[m] = nbt_axis_node(&t->axis[2], m);
+    nbt_status st = build_slices(t, gs, ng, o, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
-        nbt_table *s;
-        st = build_slice(t, nbt_axis_node(&t->axis[2], m), o, &s);
-        if (st != NBT_OK)
-            break;
-        memcpy(t->data + m * ns, s->data, ns * sizeof(float));
+        memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
         if (o->measure_error)
-            slice_err = fmax(slice_err, s->max_err[0]);
-        qerr = fmax(qerr, s->quad_err);
-        amax = fmax(amax, s->max_abs[0]);
-        nbt_table_free(s);
+            slice_err = fmax(slice_err, sl[m]->max_err[0]);
+        qerr = fmax(qerr, sl[m]->quad_err);
+        amax = fmax(amax, sl[m]->max_abs[0]);
+    }
+    for (size_t m = 0; m < ng; m++) {
+        nbt_table_free(sl[m]);
+        sl[m] = NULL;
     }
     /* the interpolation in g: exact slices at every g midpoint against the
-     * trilinear lookup at every (u, v) node */
+     * lookup at every (u, v) node */
     nbt_build_opts om = *o;
     om.measure_error = 0;
+    if (st == NBT_OK && o->measure_error) {
+        for (size_t m = 0; m + 1 < ng; m++)
+            gs[m] = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
+        st = build_slices(t, gs, ng - 1, &om, sl);
+    }
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
-        double gm = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
-        nbt_table *s;
-        st = build_slice(t, gm, &om, &s);
-        if (st != NBT_OK)
-            break;
         for (size_t j = 0; j < ny; j++) {
             double y = nbt_axis_node(&t->axis[1], j);
             for (size_t i = 0; i < nx; i++) {
                 double v;
-                nbt_table_lookup3(t, nbt_axis_node(&t->axis[0], i), y, gm, &v);
-                gerr = fmax(gerr, fabs(v - (double)s->data[j * nx + i]));
+                nbt_table_lookup3(t, nbt_axis_node(&t->axis[0], i), y, gs[m], &v);
+                gerr = fmax(gerr, fabs(v - (double)sl[m]->data[j * nx + i]));
             }
         }
-        qerr = fmax(qerr, s->quad_err);
-        nbt_table_free(s);
+        qerr = fmax(qerr, sl[m]->quad_err);
     }
+    for (size_t m = 0; m < ng; m++)
+        nbt_table_free(sl[m]);
+    free(sl);
+    free(gs);
     if (st != NBT_OK)
         return st;
     t->quad_tol = o->quad_tol;

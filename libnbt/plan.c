@@ -516,18 +516,6 @@ static int same_axis(const nbt_axis *a, const nbt_axis *b)
     return a->lo == b->lo && a->hi == b->hi && a->map == b->map && a->c == b->c && a->n == b->n;
 }
 
-static nbt_table *table_copy(const nbt_table *t)
-{
-    nbt_table *c = nbt_table_alloc(t->kind, &t->axis[0], &t->axis[1], t->nch);
-    if (!c)
-        return NULL;
-    float *d = c->data;
-    *c = *t;
-    c->data = d;
-    memcpy(d, t->data, nbt_table_size(t) * sizeof(float));
-    return c;
-}
-
 void nbt_tableset_free(nbt_tableset *ts)
 {
     free_packs(ts->t, ts->count);
@@ -554,7 +542,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
         if (cache) {
             /* a proxy is this very build: copy it */
             for (size_t q = 0; q < ps->npacks && st == NBT_OK; q++)
-                if (!(out->t[q] = table_copy(cache[q])))
+                if (!(out->t[q] = nbt_table_dup(cache[q])))
                     st = NBT_ENOMEM;
             if (st != NBT_OK)
                 free_packs(out->t, ps->npacks);

@@ -11,6 +11,10 @@
 
 double nbt_axis_to_unit(const nbt_axis *a, double x)
 {
+    if (a->map == NBT_AXIS_ATANH) {
+        double s = (atanh(fmin(fmax(x, a->lo), a->hi)) - atanh(a->lo)) / (atanh(a->hi) - atanh(a->lo));
+        return !(s > 0.0) ? 0.0 : s >= 1.0 ? 1.0 : s;
+    }
     double r = (x - a->lo) / (a->hi - a->lo);
     if (!(r > 0.0))
         return 0.0;
@@ -46,6 +50,12 @@ double nbt_axis_from_unit(const nbt_axis *a, double s)
     case NBT_AXIS_COS:
         r = 0.5 * (1.0 - cos(NBT_PI * s));
         break;
+    case NBT_AXIS_ATANH:
+        if (s <= 0.0)
+            return a->lo;
+        if (s >= 1.0)
+            return a->hi;
+        return tanh(atanh(a->lo) + s * (atanh(a->hi) - atanh(a->lo)));
     default:
         r = s;
     }
@@ -62,7 +72,7 @@ double nbt_axis_node(const nbt_axis *a, size_t i)
 const char *nbt_axis_map_name(nbt_axis_map m)
 {
     return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos"
-         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : "linear";
+         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : m == NBT_AXIS_ATANH ? "atanh" : "linear";
 }
 
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
@@ -77,6 +87,26 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
         *m = NBT_AXIS_COS;
     else if (!strcmp(name, "log1p_cbrt"))
         *m = NBT_AXIS_LOG1P_CBRT;
+    else if (!strcmp(name, "atanh"))
+        *m = NBT_AXIS_ATANH;
+    else
+        return NBT_EFORMAT;
+    return NBT_OK;
+}
+
+const char *nbt_table_form_name(nbt_table_form f)
+{
+    switch (f) {
+    case NBT_FORM_PLAIN:
+    default:
+        return "plain";
+    }
+}
+
+nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f)
+{
+    if (!strcmp(name, "plain"))
+        *f = NBT_FORM_PLAIN;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -99,7 +129,8 @@ static int axis_ok(const nbt_axis *a)
 {
     return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&
            (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c))) &&
-           (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c)));
+           (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c))) &&
+           (a->map != NBT_AXIS_ATANH || (a->lo > -1.0 && a->hi < 1.0));
 }
 
 nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,
@@ -116,12 +147,45 @@ nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_
     t->axis[1] = *ax1;
     t->axis[2] = *ax2;
     t->nch = nch;
+    t->interp2 = 1;
     t->data = calloc(nbt_table_size(t), sizeof(float));
-    if (!t->data) {
-        free(t);
+    if (ax2->n > 1) {
+        size_t ne = (ax2->n - 1) * nch;
+        t->cell_err = malloc(ne * sizeof *t->cell_err);
+        for (size_t i = 0; t->cell_err && i < ne; i++)
+            t->cell_err[i] = NAN;
+    }
+    if (!t->data || (ax2->n > 1 && !t->cell_err)) {
+        nbt_table_free(t);
         return NULL;
     }
     return t;
+}
+
+nbt_table *nbt_table_dup(const nbt_table *t)
+{
+    nbt_table *c = nbt_table_alloc3(t->kind, &t->axis[0], &t->axis[1], &t->axis[2], t->nch);
+    if (!c)
+        return NULL;
+    float *d = c->data;
+    double *e = c->cell_err;
+    *c = *t;
+    c->data = d;
+    c->cell_err = e;
+    memcpy(d, t->data, nbt_table_size(t) * sizeof(float));
+    if (e)
+        memcpy(e, t->cell_err, (t->axis[2].n - 1) * t->nch * sizeof *e);
+    return c;
+}
+
+double nbt_table_err_at(const nbt_table *t, size_t c, double x2)
+{
+    if (!t->cell_err || c >= t->nch)
+        return c < t->nch ? t->max_err[c] : NAN;
+    double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);
+    size_t m = (size_t)fmin(floor(p), (double)(t->axis[2].n - 2));
+    double e = t->cell_err[m * t->nch + c];
+    return isnan(e) ? t->max_err[c] : e;
 }
 
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
@@ -140,6 +204,7 @@ void nbt_table_free(nbt_table *t)
     if (!t)
         return;
     free(t->data);
+    free(t->cell_err);
     free(t);
 }
 
@@ -183,6 +248,20 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
     cell(&t->axis[1], x1, &j, &fy);
     if (t->axis[2].n < 2) {
         lookup_slice(t, 0, i, fx, j, fy, out);
+        return;
+    }
+    if (t->interp2 == 2 && t->axis[2].n >= 3) {
+        /* quadratic through the nearest slice and its two neighbours */
+        double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);
+        double mc = fmin(fmax(floor(p + 0.5), 1.0), (double)(t->axis[2].n - 2)), tt = p - mc;
+        double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)}, s[NBT_TABLE_MAX_CH];
+        for (size_t c = 0; c < t->nch; c++)
+            out[c] = 0.0;
+        for (int q = 0; q < 3; q++) {
+            lookup_slice(t, (size_t)mc - 1 + (size_t)q, i, fx, j, fy, s);
+            for (size_t c = 0; c < t->nch; c++)
+                out[c] += w[q] * s[c];
+        }
         return;
     }
     cell(&t->axis[2], x2, &m, &fz);

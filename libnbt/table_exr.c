@@ -63,6 +63,33 @@ static const char *axis_attr(int a, const char *what, char *buf, size_t n)
     return buf;
 }
 
+/* per g cell errors, one float vector per channel, rounded up so that they
+ * still bound; written only where every cell was recorded */
+static exr_result_t write_cell_err(exr_context_t ctx, int part, const nbt_table *t)
+{
+    size_t ncell = t->axis[2].n - 1, nc = t->nch;
+    for (size_t i = 0; i < ncell * nc; i++)
+        if (!(t->cell_err[i] >= 0.0))
+            return EXR_ERR_SUCCESS;
+    float *v = malloc(ncell * sizeof *v);
+    if (!v)
+        return EXR_ERR_OUT_OF_MEMORY;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    char an[64];
+    for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++) {
+        for (size_t m = 0; m < ncell; m++) {
+            double e = t->cell_err[m * nc + c];
+            v[m] = (float)e;
+            if ((double)v[m] < e)
+                v[m] = nextafterf(v[m], INFINITY);
+        }
+        snprintf(an, sizeof an, "nbt.cell_err.%s", CH[c]);
+        rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)ncell, v);
+    }
+    free(v);
+    return rv;
+}
+
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp)
 {
     /* a 3-D table: its slices are scan lines one after another */
@@ -109,6 +136,8 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
         rv = exr_attr_set_string(ctx, part, axis_attr(a, "name", an, sizeof an), nbt_table_axis_name(t->kind, a));
         if (rv == EXR_ERR_SUCCESS && a == 2)
             rv = exr_attr_set_int(ctx, part, axis_attr(a, "n", an, sizeof an), (int32_t)ax->n);
+        if (rv == EXR_ERR_SUCCESS && a == 2)
+            rv = exr_attr_set_int(ctx, part, axis_attr(a, "interp", an, sizeof an), t->interp2 == 2 ? 2 : 1);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
         if (rv == EXR_ERR_SUCCESS)
@@ -124,7 +153,9 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
                                  "scanline 0 = axis1.lo; 3-D (nbt.axis2.n slices): scanline m*axis1.n + y "
                                  "= node y of slice m; sqrt: s = sqrt(r), log1p: s = log1p(c r)/log1p(c), "
                                  "cos: s = acos(1-2r)/pi, log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), "
-                                 "r = (x-lo)/(hi-lo)");
+                                 "r = (x-lo)/(hi-lo); atanh: s = (atanh x - atanh lo)/(atanh hi - atanh lo); "
+                                 "axis2.interp 2: quadratic in s2 through slices m-1, m, m+1, "
+                                 "m = round(s2 (N-1)) clamped to [1, N-2]");
     size_t off = 0;
     buf[0] = '\0';
     for (size_t c = 0; c < nc; c++)
@@ -146,6 +177,10 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_double(ctx, part, an, t->max_abs[c]);
     }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string(ctx, part, "nbt.form", nbt_table_form_name(t->form));
+    if (rv == EXR_ERR_SUCCESS && nax == 3)
+        rv = write_cell_err(ctx, part, t);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.version", nbt_version());
     if (rv == EXR_ERR_SUCCESS)
@@ -307,6 +342,32 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         exr_attr_get_double(ctx, 0, an, &t->max_err[c]);
         snprintf(an, sizeof an, "nbt.max_abs.%s", CH[c]);
         exr_attr_get_double(ctx, 0, an, &t->max_abs[c]);
+    }
+    if (exr_attr_get_string(ctx, 0, "nbt.form", &len, &s) == EXR_ERR_SUCCESS &&
+        nbt_table_form_parse(s, &t->form) != NBT_OK) {
+        st = rd_fail(err, errlen, path, "unknown nbt.form (written by a newer nbt?)");
+        goto done;
+    }
+    if (nax == 3) {
+        int32_t ip = 1, ne;
+        const float *ce;
+        if (exr_attr_get_int(ctx, 0, axis_attr(2, "interp", an, sizeof an), &ip) == EXR_ERR_SUCCESS &&
+            !(ip == 1 || (ip == 2 && ax[2].n >= 3))) {
+            st = rd_fail(err, errlen, path, "nbt.axis2.interp must be 1 or 2 (2 needs at least 3 slices)");
+            goto done;
+        }
+        t->interp2 = ip;
+        for (size_t c = 0; c < nc; c++) {
+            snprintf(an, sizeof an, "nbt.cell_err.%s", CH[c]);
+            if (exr_attr_get_float_vector(ctx, 0, an, &ne, &ce) != EXR_ERR_SUCCESS)
+                continue;
+            if ((size_t)ne != ax[2].n - 1) {
+                st = rd_fail(err, errlen, path, "an nbt.cell_err vector does not have one value per g cell");
+                goto done;
+            }
+            for (size_t m = 0; m < (size_t)ne; m++)
+                t->cell_err[m * nc + c] = ce[m];
+        }
     }
     size_t nx = ax[0].n, ny = ax[1].n * ax[2].n, bpe = half ? 2 : 4;
     pix = malloc(nx * ny * nc * bpe);

@@ -1,14 +1,19 @@
 // shaders/nbt_table.glsl: node-aligned table lookup, exactly as libnbt writes
 // tables. An axis is vec4(lo, hi, c, n) plus a mapping code: 0 linear,
 // 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
-// 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0).
+// 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0), 5 atanh
+// (uniform in atanh x, -1 < lo < hi < 1).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
 // nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
-// g), with the same convention on all three axes: libnbt's nbt_table_lookup3.
+// g), with the same convention on all three axes: libnbt's nbt_table_lookup3;
+// nbt_lookup3q is its quadratic-in-g variant (interp2 = 2): three bilinear
+// fetches at the centres of the slices nearest to x2.
 const float NBT_PI = 3.14159265358979;
 
 float nbt_axis_unit(float x, vec4 a, int map)
 {
+    if (map == 5)
+        return clamp((atanh(clamp(x, a.x, a.y)) - atanh(a.x)) / (atanh(a.y) - atanh(a.x)), 0.0, 1.0);
     float r = clamp((x - a.x) / (a.y - a.x), 0.0, 1.0);
     if (map == 1)
         return sqrt(r);
@@ -39,4 +44,14 @@ vec4 nbt_lookup3(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2,
     return texture(t, vec3(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w),
                            nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w),
                            nbt_texcoord(nbt_axis_unit(x2, a2, m2), a2.w)));
+}
+
+vec4 nbt_lookup3q(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2, float x0, float x1, float x2)
+{
+    vec2 st = vec2(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w), nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w));
+    float p = nbt_axis_unit(x2, a2, m2) * (a2.w - 1.0);
+    float mc = clamp(floor(p + 0.5), 1.0, a2.w - 2.0), q = p - mc;
+    return 0.5 * q * (q - 1.0) * texture(t, vec3(st, (mc - 0.5) / a2.w))
+         + (1.0 - q * q) * texture(t, vec3(st, (mc + 0.5) / a2.w))
+         + 0.5 * q * (q + 1.0) * texture(t, vec3(st, (mc + 1.5) / a2.w));
 }

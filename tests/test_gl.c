@@ -229,8 +229,12 @@ static void check_lookup3(nbt_table *t, const char *what)
         "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
         "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
         "  color = nbt_lookup3(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
+    static const char *LKQ =
+        "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
+        "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
+        "  color = nbt_lookup3q(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
     char err[4096];
-    char *src = nbt_gl_shader_source(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, LK);
+    char *src = nbt_gl_shader_source(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, t->interp2 == 2 ? LKQ : LK);
     GLuint p = gl_fullscreen_program(src, err, sizeof err);
     free(src);
     t_true(p != 0, "lookup3 shader: %s", p ? "ok" : err);
@@ -248,7 +252,9 @@ static void check_lookup3(nbt_table *t, const char *what)
         double span = g->hi - g->lo;
         switch (i % 5) {
         case 0: q[2] = (float)nbt_axis_node(g, m + (i % 2)); break;
-        case 1: q[2] = (float)nbt_axis_from_unit(g, (m + 0.5) / (double)(g->n - 1)); break;
+        /* quadratic in g switches its three slices at midpoints (a jump of
+         * the order of its error; random data make it O(1)): a quarter off */
+        case 1: q[2] = (float)nbt_axis_from_unit(g, (m + (t->interp2 == 2 ? 0.25 : 0.5)) / (double)(g->n - 1)); break;
         case 2: q[2] = (float)(g->lo + span * t_uniform()); break;
         case 3: q[2] = (float)(i % 2 ? g->hi : g->lo); break;
         default: q[2] = (float)(i % 2 ? g->hi + 0.5 * span * t_uniform() : g->lo - 0.5 * span * t_uniform()); break;
@@ -278,16 +284,18 @@ static void check_lookup3(nbt_table *t, const char *what)
     glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
     t_true(glGetError() == GL_NO_ERROR, "%s: render and read back", what);
     /* llvmpipe weights float textures in float (DESIGN.md): ~1e-7 of the
-     * scale per product, 8 of them; the rest is the float unit coordinate
-     * (unit_noise) times the texel count and the largest texel step */
-    double step[3], scale = data_maxabs(t), worst = 0, wcls[5] = {0};
+     * scale per product, 8 of them (quadratic in g: 3 bilinear fetches and
+     * weights, 1.5x that); the rest is the float unit coordinate (unit_noise)
+     * times the texel count and the largest texel step (quadratic: the
+     * weights' slope in g, up to 3 steps) */
+    double step[3], scale = data_maxabs(t), worst = 0, wcls[5] = {0}, q2 = t->interp2 == 2 ? 1.5 : 1.0;
     table_steps(t, step);
     for (int i = 0; i < W * H; i++) {
         const float *q = pt + 4 * i;
-        double ref[NBT_TABLE_MAX_CH], tol = 2e-6 * scale;
+        double ref[NBT_TABLE_MAX_CH], tol = 2e-6 * q2 * scale;
         nbt_table_lookup3(t, q[0], q[1], q[2], ref);
         for (int ax = 0; ax < 3; ax++)
-            tol += unit_noise(&t->axis[ax], q[ax]) * (double)(t->axis[ax].n - 1) * step[ax];
+            tol += unit_noise(&t->axis[ax], q[ax]) * (double)(t->axis[ax].n - 1) * step[ax] * (ax == 2 ? 2 * q2 : 1);
         for (size_t c = 0; c < t->nch; c++) {
             double e = fabs(px[4 * i + c] - ref[c]) / tol;
             worst = fmax(worst, e);
@@ -328,6 +336,12 @@ static void test_gsliced(void)
     rt = random_table3(&q0, &q1, &q2, 1);
     nbt_table_round_half(rt);
     check_lookup3(rt, "R16F 9x4x5");
+    nbt_table_free(rt);
+    /* quadratic in g on an atanh g axis (nbt_lookup3q, map code 5) */
+    nbt_axis w2 = {-0.95, 0.9, NBT_AXIS_ATANH, 0, 7};
+    rt = random_table3(&r0, &q1, &w2, 2);
+    rt->interp2 = 2;
+    check_lookup3(rt, "RG32F 7x4x7 atanh, quadratic in g");
     nbt_table_free(rt);
 
     /* airlight and surface radiance from g-sliced H, J^1, J^20 (HG, g nodes clustered at +-0.95) */

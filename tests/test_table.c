@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdint.h>
 #include <unistd.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
@@ -39,8 +40,37 @@ static int same_tables(const nbt_table *a, const nbt_table *b)
     for (size_t c = 0; c < a->nch; c++)
         if (a->k[c] != b->k[c] || a->max_err[c] != b->max_err[c] || a->max_abs[c] != b->max_abs[c])
             return 0;
+    if (a->form != b->form || a->interp2 != b->interp2 || !a->cell_err != !b->cell_err)
+        return 0;
+    for (size_t i = 0; a->cell_err && i < (a->axis[2].n - 1) * a->nch; i++) /* NaN: not recorded */
+        if (!(a->cell_err[i] == b->cell_err[i] || (isnan(a->cell_err[i]) && isnan(b->cell_err[i]))))
+            return 0;
     return !memcmp(a->data, b->data, nbt_table_size(a) * sizeof(float)) &&
            a->quad_tol == b->quad_tol && a->quad_err == b->quad_err;
+}
+
+/* Replace the first occurrence of `from` in a file by `to` (same length), or
+ * with to == NULL set the int32 value of the int attribute named `from`:
+ * corrupts one header attribute of an EXR for the reader's error paths. */
+static int patch_file(const char *path, const char *from, const char *to, int32_t ival)
+{
+    FILE *f = fopen(path, "r+b");
+    if (!f)
+        return 0;
+    static char buf[1 << 16];
+    size_t n = fread(buf, 1, sizeof buf, f), fl = strlen(from) + 1;
+    int ok = 0;
+    for (size_t i = 0; i + fl + 12 <= n && !ok; i++)
+        if (!memcmp(buf + i, from, fl - (to != NULL))) {
+            size_t at = to ? i : i + fl + 4 + 4; /* name, "int", size */
+            if (to)
+                memcpy(buf + at, to, fl - 1);
+            else
+                memcpy(buf + at, &ival, 4);
+            ok = fseek(f, 0, SEEK_SET) == 0 && fwrite(buf, 1, n, f) == n;
+        }
+    fclose(f);
+    return ok;
 }
 
 static int quad_fn(double x0, double x1, double *out, void *ctx)
@@ -338,6 +368,80 @@ int main(void)
         t_true(nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &(nbt_axis){-0.9, 0.9, NBT_AXIS_COS, 0, 0}, 1) == NULL,
                "alloc3: empty slice axis rejected");
         nbt_table_free(t3);
+    }
+
+    /* ---- the atanh g axis, quadratic interpolation in g, per-cell errors ---- */
+    {
+        nbt_axis ga = {-0.95, 0.9, NBT_AXIS_ATANH, 0, 7};
+        double wr = 0;
+        for (int i = 0; i < 7; i++) {
+            double s = i / 6.0, x = nbt_axis_from_unit(&ga, s);
+            /* atanh x = atanh lo + s (atanh hi - atanh lo), and back */
+            wr = fmax(wr, fabs(atanh(x) - (atanh(-0.95) + s * (atanh(0.9) - atanh(-0.95)))));
+            wr = fmax(wr, fabs(nbt_axis_to_unit(&ga, x) - s));
+        }
+        t_abs(wr, 0, 1e-14, "atanh axis: nodes uniform in atanh g, to_unit inverts from_unit");
+        t_true(nbt_axis_node(&ga, 0) == -0.95 && nbt_axis_node(&ga, 6) == 0.9 && nbt_axis_to_unit(&ga, 0.95) == 1.0 &&
+                   nbt_axis_to_unit(&ga, -1.0) == 0.0, "atanh axis: ends exact, clamps beyond them");
+        nbt_axis ao = {-0.95, 1.0, NBT_AXIS_ATANH, 0, 5};
+        t_true(nbt_table_alloc(NBT_TABLE_H, &ao, &ga, 1) == NULL, "atanh axis reaching 1 rejected");
+        /* values quadratic in s2 (and bilinear in s0, s1): the quadratic
+         * lookup reproduces them exactly anywhere, the trilinear one not */
+        nbt_axis b0 = {0, 4, NBT_AXIS_SQRT, 0, 5}, b1 = {0, 1, NBT_AXIS_LINEAR, 0, 4};
+        nbt_table *q = nbt_table_alloc3(NBT_TABLE_J, &b0, &b1, &ga, 1);
+        t_true(q && q->interp2 == 1 && q->cell_err && isnan(q->cell_err[5]), "alloc3: linear in g, no cell errors");
+#define QF(s0, s1, s2) (0.3 + (s0) * (s1) - 1.7 * (s2) + 2.9 * (s2) * (s2) * (1 + (s0)))
+        for (size_t m = 0; m < 7; m++)
+            for (size_t j = 0; j < 4; j++)
+                for (size_t i = 0; i < 5; i++)
+                    q->data[(m * 4 + j) * 5 + i] = (float)QF(i / 4.0, j / 3.0, m / 6.0);
+        q->interp2 = 2;
+        double wq = 0, wl = 0, o;
+        for (int rep = 0; rep < 300; rep++) {
+            double x0 = 4 * t_uniform(), x1 = t_uniform(), x2 = -0.95 + 1.85 * t_uniform();
+            double e = QF(nbt_axis_to_unit(&b0, x0), nbt_axis_to_unit(&b1, x1), nbt_axis_to_unit(&ga, x2));
+            nbt_table_lookup3(q, x0, x1, x2, &o);
+            wq = fmax(wq, fabs(o - e));
+            q->interp2 = 1;
+            nbt_table_lookup3(q, x0, x1, x2, &o);
+            q->interp2 = 2;
+            wl = fmax(wl, fabs(o - e));
+        }
+#undef QF
+        /* float node values: 4 ulp of |values| <= 3 */
+        t_abs(wq, 0, 2e-6, "quadratic-in-g lookup reproduces a function quadratic in g's unit coordinate");
+        t_true(wl > 1e-2, "the trilinear lookup does not (worst %.2g): the check above can fail", wl);
+        q->max_err[0] = 0.25;
+        for (size_t m = 0; m < 6; m++)
+            q->cell_err[m] = 0.01 * (double)(m + 1);
+        t_true(nbt_table_err_at(q, 0, -0.95) == 0.01 && nbt_table_err_at(q, 0, 0.9) == 0.06 &&
+                   nbt_table_err_at(q, 0, 5.0) == 0.06 && nbt_table_err_at(q, 0, nbt_axis_from_unit(&ga, 2.5 / 6)) == 0.03,
+               "err_at: the cell's recorded error, clamped to the axis");
+        q->cell_err[3] = NAN;
+        t_true(nbt_table_err_at(q, 0, nbt_axis_from_unit(&ga, 3.5 / 6)) == 0.25, "err_at: max_err where not recorded");
+        q->cell_err[3] = 1.0 / 3.0; /* not a float: the file rounds it up */
+        nbt_table *d = nbt_table_dup(q);
+        t_true(d && same_tables(q, d) && d->data != q->data && d->cell_err != q->cell_err, "dup: a deep copy");
+        nbt_table_free(d);
+        char pq[64];
+        snprintf(pq, sizeof pq, "/tmp/nbt_test_tableq_%ld.exr", (long)getpid());
+        nbt_table *rq = NULL;
+        t_true(nbt_table_write_exr(q, pq, NBT_EXR_NONE) == NBT_OK && nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_OK,
+               "quadratic, atanh table written and read: %s", rq ? "ok" : err);
+        int same = rq && rq->interp2 == 2 && rq->form == NBT_FORM_PLAIN && rq->axis[2].map == NBT_AXIS_ATANH;
+        for (size_t m = 0; rq && m < 6; m++)
+            same = same && rq->cell_err[m] >= q->cell_err[m] && rq->cell_err[m] - q->cell_err[m] <= 1e-7 * q->cell_err[m];
+        t_true(same && rq && !memcmp(rq->data, q->data, nbt_table_size(q) * sizeof(float)),
+               "EXR keeps interp2, form, atanh and the cell errors (rounded up to float)");
+        nbt_table_free(rq);
+        rq = NULL;
+        t_true(patch_file(pq, "nbt.axis2.interp", NULL, 3) && nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_EFORMAT &&
+                   !rq && strstr(err, "interp"), "interp 3 refused: %s", err);
+        t_true(nbt_table_write_exr(q, pq, NBT_EXR_NONE) == NBT_OK && patch_file(pq, "plain", "plein", 0) &&
+                   nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_EFORMAT && !rq && strstr(err, "nbt.form"),
+               "an unknown value form refused: %s", err);
+        unlink(pq);
+        nbt_table_free(q);
     }
 
     /* ---- tabulating a function: f = x0^2 + 3 x1 on uniform axes has bilinear

@@ -15,14 +15,24 @@
  *           which turns the (x - lo) log(x - lo) behaviour of H and J at
  *           u, T = 0 into a C^2 function of s: bilinear error falls as N^-2
  *           (doc/tables.md); log-like spacing far from lo
+ *   atanh:  s = (atanh x - atanh lo)/(atanh hi - atanh lo), -1 < lo < hi < 1:
+ *           uniform in atanh x, nodes clustered towards +-1 (the HG asymmetry
+ *           g, whose forward peak narrows like 1 - |g|)
  *
  * 3-D tables (g-sliced): a third axis (axis[2]) holds slices, e.g. the HG
  * asymmetry g of H_p and J_p^n tables that serve a phase chosen at run time.
  * Slice m is a 2-D table at x2 = node m of axis[2]; the data are slices one
  * after another, exactly the layout glTexImage3D takes (x fastest, then y,
  * then slice), and the lookup is the trilinear one of a sampler3D with the
- * same node-aligned texture coordinates on all three axes. A 2-D table has
- * axis[2].n == 1. */
+ * same node-aligned texture coordinates on all three axes (interp2 = 1), or
+ * quadratic in the slice coordinate through the three nearest slices
+ * (interp2 = 2: three bilinear fetches at slice centres, the same weights in
+ * GLSL). A 2-D table has axis[2].n == 1.
+ *
+ * Value forms (nbt_table_form): what a table's values are. PLAIN: the
+ * quantity itself (H_k, J_k^n, ...). Other forms store a transformed value
+ * that interpolates better; their definitions are in doc/tables.md, and a
+ * reader that does not know a form refuses the file. */
 #ifndef NBT_TABLE_H_INCLUDED
 #define NBT_TABLE_H_INCLUDED
 
@@ -33,7 +43,14 @@
 extern "C" {
 #endif
 
-typedef enum { NBT_AXIS_LINEAR, NBT_AXIS_SQRT, NBT_AXIS_LOG1P, NBT_AXIS_COS, NBT_AXIS_LOG1P_CBRT } nbt_axis_map;
+typedef enum {
+    NBT_AXIS_LINEAR,
+    NBT_AXIS_SQRT,
+    NBT_AXIS_LOG1P,
+    NBT_AXIS_COS,
+    NBT_AXIS_LOG1P_CBRT,
+    NBT_AXIS_ATANH,
+} nbt_axis_map;
 
 typedef struct {
     double lo, hi;      /* range, lo < hi */
@@ -48,12 +65,20 @@ double nbt_axis_to_unit(const nbt_axis *a, double x);
 double nbt_axis_from_unit(const nbt_axis *a, double s);
 /* Physical value of node i. */
 double nbt_axis_node(const nbt_axis *a, size_t i);
-/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt"; parse returns NBT_EFORMAT
+/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh"; parse returns NBT_EFORMAT
  * for other names (so an older reader refuses a file with a newer mapping). */
 const char *nbt_axis_map_name(nbt_axis_map m);
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
 #define NBT_TABLE_MAX_CH 4
+
+typedef enum {
+    NBT_FORM_PLAIN,
+} nbt_table_form;
+
+/* "plain", ...; parse returns NBT_EFORMAT for other names. */
+const char *nbt_table_form_name(nbt_table_form f);
+nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f);
 
 /* H: airlight H_k(u, v); J: surface J_k^n(T, theta); PSI: photon counts
  * Psi(r/z, z) with its standard error (nbt-fit mc), bins at the nodes;
@@ -82,6 +107,11 @@ typedef struct {
     double max_err[NBT_TABLE_MAX_CH];  /* estimated max |bilinear - exact| per channel */
     double max_abs[NBT_TABLE_MAX_CH];  /* max |value| per channel (scale for max_err) */
     int half;              /* values rounded to half precision (written as HALF) */
+    nbt_table_form form;   /* what the values are (PLAIN unless a builder says otherwise) */
+    int interp2;           /* axis 2 interpolation: 1 linear, 2 quadratic (needs axis[2].n >= 3) */
+    double *cell_err;      /* 3-D tables: (axis[2].n - 1) * nch values, cell_err[m * nch + c]
+                              bounds |lookup3 - exact| of channel c for x2 between nodes m
+                              and m + 1; NaN: not recorded (max_err applies). NULL for 2-D. */
     float *data;           /* data[((ig * axis[1].n + iy) * axis[0].n + ix) * nch + c] */
 } nbt_table;
 
@@ -92,6 +122,8 @@ nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_a
 nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,
                             size_t nch);
 void nbt_table_free(nbt_table *t);
+/* A deep copy (data and cell_err), or NULL on no memory. */
+nbt_table *nbt_table_dup(const nbt_table *t);
 /* Values in the table: axis[0].n axis[1].n axis[2].n nch. */
 size_t nbt_table_size(const nbt_table *t);
 
@@ -99,9 +131,19 @@ size_t nbt_table_size(const nbt_table *t);
  * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch
  * values. On a 3-D table: slice 0 (x2 = axis[2].lo). */
 void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
-/* Trilinear interpolation at (x0, x1, x2), as a sampler3D with CLAMP_TO_EDGE
- * does (x2 clamps to axis[2]'s range); on a 2-D table x2 is ignored. */
+/* Interpolation at (x0, x1, x2): trilinear, as a sampler3D with CLAMP_TO_EDGE
+ * does (interp2 = 1), or bilinear in (x0, x1) and quadratic in the unit
+ * coordinate of x2 through the slices nearest to it (interp2 = 2: p = s2 (n-1),
+ * m = round(p) clamped to [1, n-2], t = p - m, weights t(t-1)/2, 1 - t^2,
+ * t(t+1)/2 on slices m-1, m, m+1; the stencil moves at midpoints between
+ * slices, where the value jumps by the order of the interpolation error,
+ * which the recorded error bounds on either side). x2 clamps to axis[2]'s range; on a 2-D
+ * table x2 is ignored. */
 void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out);
+
+/* The recorded error bound of channel c at x2: cell_err of the cell holding
+ * x2 (clamped to the axis) where recorded, else max_err[c]. */
+double nbt_table_err_at(const nbt_table *t, size_t c, double x2);
 
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);
@@ -125,7 +167,9 @@ typedef enum { NBT_EXR_ZIP, NBT_EXR_NONE } nbt_exr_compression;
  * channels R, G, B, A in order, with nbt.* header attributes describing the
  * table completely. A 3-D table is one image axis[1].n axis[2].n scan lines
  * high, its slices one above the other (scan line m axis[1].n + y), with
- * nbt.axis2.* attributes (name, map, lo, hi, c, n) naming the slice axis. Writes to a temporary file and renames it, so a failed
+ * nbt.axis2.* attributes (name, map, lo, hi, c, n, interp) naming the slice
+ * axis and nbt.cell_err.R.. (float vectors, rounded up) where recorded;
+ * nbt.form names the value form. Writes to a temporary file and renames it, so a failed
  * write leaves nothing behind. */
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp);
 
