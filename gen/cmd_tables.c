@@ -57,7 +57,7 @@ nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_l
 
 static void axis_desc(const nbt_axis *a, const char *name, char *buf, size_t n)
 {
-    if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT)
+    if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT || a->map == NBT_AXIS_ASINH)
         snprintf(buf, n, "%s:%s(c=%g)[%g,%g]", name, nbt_axis_map_name(a->map), a->c, a->lo, a->hi);
     else
         snprintf(buf, n, "%s:%s[%g,%g]", name, nbt_axis_map_name(a->map), a->lo, a->hi);
@@ -222,7 +222,7 @@ static void tables_help(const char *cmd)
            "Tabulates %s on a node-aligned grid and writes OpenEXR (+ PNG preview).\n"
            "  -o FILE.exr    output (default ./%s.exr; more than 4 orders: FILE_k0-3.exr, ...)\n"
            "  --size WxH     nodes per axis (2..4096); mappings by the planner's rule: log1p_cbrt (u/T),\n"
-           "                 cos (v/theta; linear for J^1)\n"
+           "                 cos (v/theta; asinh(c=1) for J^1)\n"
            "  --tol EPS      target max interpolation error relative to the largest value of the\n"
            "                 first pack (H_0/J_0), default 1e-3; mappings and size are chosen to meet it,\n"
            "                 measured at all cell and edge midpoints\n"

@@ -166,7 +166,7 @@ static void test_plan_tables(void)
     t_true(h->axis[0].n == h->axis[1].n && h->axis[1].map == NBT_AXIS_COS, "H: square, v cos-mapped");
     t_true(j->axis[0].n == 40 && j->axis[1].n == 24 && j->axis[0].hi == 4.25 && j->axis[1].hi == M_PI,
            "J^1 at the fixed size 40x24 over T in [0, 4.25], theta in [0, pi]");
-    t_true(j->axis[1].map == NBT_AXIS_LINEAR, "J^1: theta linear (the rule)");
+    t_true(j->axis[1].map == NBT_AXIS_ASINH && j->axis[1].c == 1.0, "J^1: theta asinh(c = 1) (the rule)");
     t_true(h->pred_err <= 5e-3 && h->pred_err > 0 && h->pred_seconds > 0 && j->pred_seconds > 0,
            "predictions: H error %.3g <= tol, costs %.3g s and %.3g s", h->pred_err, h->pred_seconds,
            j->pred_seconds);

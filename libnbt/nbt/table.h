@@ -18,6 +18,10 @@
  *   atanh:  s = (atanh x - atanh lo)/(atanh hi - atanh lo), -1 < lo < hi < 1:
  *           uniform in atanh x, nodes clustered towards +-1 (the HG asymmetry
  *           g, whose forward peak narrows like 1 - |g|)
+ *   asinh:  s = 1/2 + asinh(c (2r - 1))/(2 asinh c), 0 < c <= 1000: nodes
+ *           c/asinh(c) times denser at the middle of the range than linear,
+ *           sqrt(1 + c^2) times sparser at its ends (theta of J^1: its
+ *           Lambert horizon at pi/2, doc/tables.md)
  *
  * 3-D tables (g-sliced): a third axis (axis[2]) holds slices, e.g. the HG
  * asymmetry g of H_p and J_p^n tables that serve a phase chosen at run time.
@@ -50,12 +54,14 @@ typedef enum {
     NBT_AXIS_COS,
     NBT_AXIS_LOG1P_CBRT,
     NBT_AXIS_ATANH,
+    NBT_AXIS_ASINH,
 } nbt_axis_map;
 
 typedef struct {
     double lo, hi;      /* range, lo < hi */
     nbt_axis_map map;
-    double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0) */
+    double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0);
+                           ASINH: clustering at the middle, 0 < c <= 1000 */
     size_t n;           /* number of nodes, >= 2 */
 } nbt_axis;
 
@@ -65,7 +71,7 @@ double nbt_axis_to_unit(const nbt_axis *a, double x);
 double nbt_axis_from_unit(const nbt_axis *a, double s);
 /* Physical value of node i. */
 double nbt_axis_node(const nbt_axis *a, size_t i);
-/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh"; parse returns NBT_EFORMAT
+/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh", "asinh"; parse returns NBT_EFORMAT
  * for other names (so an older reader refuses a file with a newer mapping). */
 const char *nbt_axis_map_name(nbt_axis_map m);
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
