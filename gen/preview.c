@@ -183,17 +183,27 @@ int preview_write_png(const nbt_table *t, const char *path)
     memset(c.px, 255, (size_t)c.w * (size_t)c.h * 3);
     const nbt_axis *ax = &t->axis[0], *ay = &t->axis[1];
     /* the table's own bilinear lookup at each pixel centre, pixels linear in the physical
-     * coordinates (the table's mapping only decides where its nodes sit) */
-    double lo = INFINITY, hi = -INFINITY, v[NBT_TABLE_MAX_CH];
+     * coordinates (the table's mapping only decides where its nodes sit); a 2-D table on
+     * the whole pixel grid at once (each coordinate mapped once, not once per pixel) */
+    double lo = INFINITY, hi = -INFINITY, v[NBT_TABLE_MAX_CH], xs[PW], ys[PH];
+    for (int i = 0; i < PW; i++)
+        xs[i] = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
+    for (int j = 0; j < PH; j++)
+        ys[j] = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
+    double *grid = sliced ? NULL : malloc((size_t)PW * PH * t->nch * sizeof *grid);
+    if ((!sliced && !grid) || (grid && nbt_table_lookup_grid(t, xs, PW, ys, PH, grid) != NBT_OK)) {
+        free(grid);
+        free(c.px);
+        free(val);
+        return -1;
+    }
     for (int j = 0; j < PH; j++) {
-        double y = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
         for (int i = 0; i < PW; i++) {
-            double x = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
             if (sliced) {
-                nbt_table_lookup3(t, x, y, panel_slice(t, 0), &v[0]);
-                nbt_table_lookup3(t, x, y, panel_slice(t, 1), &v[1]);
+                nbt_table_lookup3(t, xs[i], ys[j], panel_slice(t, 0), &v[0]);
+                nbt_table_lookup3(t, xs[i], ys[j], panel_slice(t, 1), &v[1]);
             } else
-                nbt_table_lookup(t, x, y, v);
+                memcpy(v, grid + ((size_t)j * PW + (size_t)i) * t->nch, t->nch * sizeof *v);
             for (int k = 0; k < nc; k++) {
                 val[((size_t)k * PH + (size_t)j) * PW + (size_t)i] = (float)v[k];
                 if (isfinite(v[k])) {
@@ -203,6 +213,7 @@ int preview_write_png(const nbt_table *t, const char *path)
             }
         }
     }
+    free(grid);
     if (!(lo <= hi))
         lo = hi = 0;
     double span = hi > lo ? hi - lo : 1.0;

@@ -249,6 +249,28 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
     lookup_slice(t, 0, i, fx, j, fy, out);
 }
 
+nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0, const double *x1, size_t n1,
+                                 double *out)
+{
+    size_t *ij = malloc((n0 + n1) * sizeof *ij);
+    double *f = malloc((n0 + n1) * sizeof *f);
+    if (!ij || !f) {
+        free(ij);
+        free(f);
+        return NBT_ENOMEM;
+    }
+    for (size_t i = 0; i < n0; i++)
+        cell(&t->axis[0], x0[i], &ij[i], &f[i]);
+    for (size_t j = 0; j < n1; j++)
+        cell(&t->axis[1], x1[j], &ij[n0 + j], &f[n0 + j]);
+    for (size_t j = 0; j < n1; j++)
+        for (size_t i = 0; i < n0; i++)
+            lookup_slice(t, 0, ij[i], f[i], ij[n0 + j], f[n0 + j], out + (j * n0 + i) * t->nch);
+    free(ij);
+    free(f);
+    return NBT_OK;
+}
+
 void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out)
 {
     size_t i, j, m;

@@ -169,6 +169,20 @@ int main(void)
             worst = fmax(worst, fabs(v[c] - hand_bilinear(t, x0, x1, c)));
     }
     t_abs(worst, 0, 1e-14, "lookup equals the GPU-style bilinear at 500 points (in and out of range)");
+    /* the grid lookup (previews): the same bilinear at every grid point */
+    {
+        double gx[23], gy[17], gv[23 * 17 * 3], gw = 0;
+        for (int i = 0; i < 23; i++)
+            gx[i] = -1 + 12 * t_uniform();
+        for (int j = 0; j < 17; j++)
+            gy[j] = -0.5 + 4 * t_uniform();
+        t_true(nbt_table_lookup_grid(t, gx, 23, gy, 17, gv) == NBT_OK, "grid lookup runs");
+        for (int j = 0; j < 17; j++)
+            for (int i = 0; i < 23; i++)
+                for (size_t c = 0; c < 3; c++)
+                    gw = fmax(gw, fabs(gv[(j * 23 + i) * 3 + c] - hand_bilinear(t, gx[i], gy[j], c)));
+        t_abs(gw, 0, 1e-14, "grid lookup equals the GPU-style bilinear at 23 x 17 points (in and out of range)");
+    }
     double v[4];
     nbt_table_lookup(t, nbt_axis_node(&maps[2], 3), nbt_axis_node(&maps[3], 5), v);
     t_abs(v[1], t->data[(5 * 9 + 3) * 3 + 1], 1e-6, "lookup at a node returns the node value");

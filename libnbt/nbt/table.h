@@ -137,6 +137,11 @@ size_t nbt_table_size(const nbt_table *t);
  * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch
  * values. On a 3-D table: slice 0 (x2 = axis[2].lo). */
 void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
+/* nbt_table_lookup at every point of the grid x0[i], x1[j] (out[(j n0 + i)
+ * nch + c]), the same values, with each coordinate's mapping evaluated once
+ * instead of once per point (resampling, previews). NBT_OK or NBT_ENOMEM. */
+nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0, const double *x1, size_t n1,
+                                 double *out);
 /* Interpolation at (x0, x1, x2): trilinear, as a sampler3D with CLAMP_TO_EDGE
  * does (interp2 = 1), or bilinear in (x0, x1) and quadratic in the unit
  * coordinate of x2 through the slices nearest to it (interp2 = 2: p = s2 (n-1),
