@@ -211,6 +211,34 @@ static void test_plan_tables(void)
     t_true(nbt_plan_tables(rq, 0, 1, &p, err, sizeof err) == NBT_EINVAL, "no requests rejected");
 }
 
+/* The default scene's Phong set, J_0..3^20 over T in [0, 10] at 1e-3: theta
+ * on the rule's log1p(c = n) (cos needed 97^2: 5.8e-3 at 33^2, 2.6e-3 at
+ * 49^2; log1p 1.6e-3 and 7.1e-4), so 49^2 suffices; the recorded error
+ * bounds nbt_jk at random points. */
+static void test_plan_phong(void)
+{
+    nbt_plan_request rq = {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0};
+    nbt_plan *p = NULL;
+    char err[512];
+    nbt_status st = nbt_plan_tables(&rq, 1, 2, &p, err, sizeof err);
+    t_true(st == NBT_OK, "J^20 planned (%s)", st ? err : "ok");
+    if (st != NBT_OK)
+        return;
+    const nbt_plan_set *j = nbt_plan_get(p, 0);
+    t_true(j->axis[1].map == NBT_AXIS_LOG1P && j->axis[1].c == 20.0, "J^20: theta log1p(c = n = 20) (the rule)");
+    nbt_tableset ts;
+    st = nbt_plan_execute(p, 0, &ts, err, sizeof err);
+    t_true(st == NBT_OK && ts.t[0]->axis[0].n <= 49 && ts.t[0]->axis[1].n <= 49 && ts.rel_err <= 1e-3,
+           "J^20 at 1e-3 on %zux%zu <= 49^2 (measured %.3g)", st ? 0 : ts.t[0]->axis[0].n,
+           st ? 0 : ts.t[0]->axis[1].n, st ? 0.0 : ts.rel_err);
+    if (st == NBT_OK) {
+        double r = worst_ratio(&ts, 40);
+        t_true(r <= 1.25, "J^20: random points within 1.25x the recorded error (worst %.2f)", r);
+        nbt_tableset_free(&ts);
+    }
+    nbt_plan_free(p);
+}
+
 static void test_plan_scene(void)
 {
     nbt_scene s = street();
@@ -228,6 +256,7 @@ static void test_plan_scene(void)
         const nbt_plan_set *a = nbt_plan_get(p, 0), *b = nbt_plan_get(p, 1);
         t_true(a->req.kind == NBT_TABLE_H && b->req.kind == NBT_TABLE_J && b->req.n == 20,
                "sets: H, then J^20 (phong = 20)");
+        t_true(b->axis[1].map == NBT_AXIS_LOG1P && b->axis[1].c == 20.0, "J^20 theta on log1p(c = 20)");
         t_rel(a->axis[0].hi, 12.0, 1e-15, "u range = max kappa_t x max distance");
         t_true(a->req.tol == l.table_tol && a->req.nterms == l.nterms && a->npacks == (l.nterms + 3) / 4,
                "H set: the budget's orders and target");
@@ -288,5 +317,6 @@ int main(void)
     test_legendre();
     test_plan_tables();
     test_plan_scene();
+    test_plan_phong();
     return t_done();
 }
