@@ -19,7 +19,12 @@ struct nbt_plan {
     nbt_table **cache;    /* per set: the npacks tables built at 33^2 and 65^2 while planning (reused by execute) */
     nbt_plan_legendre leg;
     unsigned nthreads;
+    nbt__jcache *gc;      /* G rows shared by the plan's J builds (proxies and sets) */
 };
+
+/* Memory for shared G rows: a 49^2 J build of 4 orders holds ~3 MB of them,
+ * the default scene's builds ~10 MB; past the cap rows are recomputed. */
+#define JCACHE_BYTES ((size_t)64 << 20)
 
 static double now_s(void)
 {
@@ -179,7 +184,7 @@ static size_t npacks_of(const nbt_plan_request *r)
 /* Packs [0, count) of r on the given axes, in one pass (every order
  * integrated once), error measured. */
 static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt_axis *a0, const nbt_axis *a1,
-                              double qtol, unsigned nthreads, nbt_table **out)
+                              double qtol, unsigned nthreads, nbt__jcache *gc, nbt_table **out)
 {
     for (size_t i = 0; i < count; i++) {
         size_t nch = 1;
@@ -205,7 +210,7 @@ static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt
     }
     nbt_build_opts o = {qtol, 1, nthreads};
     nbt_status st = r->kind == NBT_TABLE_H ? nbt_h_table_build_set(out, count, r->phase, &o)
-                                           : nbt_j_table_build_set(out, count, r->phase, &o);
+                                           : nbt__j_table_build_set_gc(out, count, r->phase, &o, gc);
     if (st != NBT_OK)
         for (size_t i = 0; i < count; i++) {
             nbt_table_free(out[i]);
@@ -347,7 +352,8 @@ static size_t ladder_size(double e33, double p, double tol)
  * proxy is the set, or cheap next to it), else the conservative rate is
  * taken. Both builds are kept for execution at those sizes (cache: 2 x
  * NBT_PLAN_MAX_PACKS slots). */
-static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_plan_set *ps, nbt_table **cache)
+static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jcache *gc, nbt_plan_set *ps,
+                           nbt_table **cache)
 {
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
@@ -374,7 +380,7 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_pla
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
         nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
         double t0 = now_s();
-        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
+        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, gc, t);
         secs[q] = now_s() - t0;
         if (st != NBT_OK)
             return st;
@@ -406,7 +412,8 @@ static nbt_status plan_alloc(size_t n, unsigned nthreads, nbt_plan **out)
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     p->sets = calloc(n, sizeof *p->sets);
     p->cache = calloc(2 * n * NBT_PLAN_MAX_PACKS, sizeof *p->cache);
-    if (!p->sets || !p->cache) {
+    p->gc = nbt__jcache_alloc(JCACHE_BYTES);
+    if (!p->sets || !p->cache || !p->gc) {
         nbt_plan_free(p);
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     }
@@ -431,7 +438,7 @@ nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nt
     if (st != NBT_OK)
         return failf(err, errlen, st, "plan: out of memory");
     for (size_t i = 0; i < nreq && st == NBT_OK; i++, p->count++)
-        st = plan_set(&req[i], nthreads, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
+        st = plan_set(&req[i], nthreads, p->gc, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
     if (st != NBT_OK) {
         nbt_plan_free(p);
         return failf(err, errlen, st, "plan: the proxy builds failed: %s", nbt_strerror(st));
@@ -499,6 +506,7 @@ void nbt_plan_free(nbt_plan *p)
                 free_packs(p->cache + (2 * i + (size_t)q) * NBT_PLAN_MAX_PACKS, p->sets[i].npacks);
     free(p->cache);
     free(p->sets);
+    nbt__jcache_free(p->gc);
     free(p);
 }
 
@@ -556,7 +564,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
             if (st != NBT_OK)
                 free_packs(out->t, ps->npacks);
         } else
-            st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, p->nthreads, out->t);
+            st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, p->nthreads, p->gc, out->t);
         if (st != NBT_OK)
             return failf(err, errlen, st, "building the %s table failed: %s", r->kind == NBT_TABLE_H ? "H" : "J",
                          nbt_strerror(st));
