@@ -149,7 +149,9 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
                     snprintf(path, len, "%s_k%d-%d.%s", stems[s], t->k[0], t->k[t->nch - 1], png ? "png" : "exr");
             }
         }
-    if (rc == 0) {
+    if (rc != 0)
+        fprintf(stderr, "nbt-gen: out of memory writing the tables\n");
+    else {
         out_run(job, n);
         for (size_t i = 0; i < n; i++)
             if (!job[i].skip && !job[i].ok) {
