@@ -46,13 +46,17 @@ int cmd_info(int argc, char **argv)
     printf("kind        %s\n", nbt_table_kind_name(t->kind));
     if (t->kind == NBT_TABLE_J)
         printf("n           %d\n", t->n);
-    for (int a = 0; a < 2; a++)
-        printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(t->axis[a].map),
-               t->axis[a].map == NBT_AXIS_LOG1P || t->axis[a].map == NBT_AXIS_LOG1P_CBRT ? "(c)" : "", t->axis[a].lo,
-               t->axis[a].hi, t->axis[a].n);
-    if (t->axis[0].map == NBT_AXIS_LOG1P || t->axis[1].map == NBT_AXIS_LOG1P || t->axis[0].map == NBT_AXIS_LOG1P_CBRT ||
-        t->axis[1].map == NBT_AXIS_LOG1P_CBRT)
-        printf("log1p c     %g %g\n", t->axis[0].c, t->axis[1].c);
+    int has_c = 0, is_asinh = 0;
+    for (int a = 0; a < 2; a++) {
+        nbt_axis_map m = t->axis[a].map;
+        int withc = m == NBT_AXIS_LOG1P || m == NBT_AXIS_LOG1P_CBRT || m == NBT_AXIS_ASINH;
+        has_c |= withc;
+        is_asinh |= m == NBT_AXIS_ASINH;
+        printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(m), withc ? "(c)" : "",
+               t->axis[a].lo, t->axis[a].hi, t->axis[a].n);
+    }
+    if (has_c)
+        printf("%-11s %g %g\n", is_asinh ? "map c" : "log1p c", t->axis[0].c, t->axis[1].c);
     if (t->axis[2].n >= 2)
         printf("axis2       %s %s [%.17g, %.17g] %zu slices (3-D: trilinear lookup, a sampler3D)\n",
                nbt_table_axis_name(t->kind, 2), nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,

@@ -20,6 +20,9 @@ int cmd_kernel(int argc, char **argv);
  * line per table to stdout. All or nothing: on failure the files written by
  * this call are removed. Returns 0 or 1. */
 int tableset_write(const nbt_tableset *ts, const char *path_stem, int preview);
+/* The same for nsets sets at once (stems[i] for ts[i]), all or nothing over
+ * all of them; the files are written in parallel, the lines printed in order. */
+int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview);
 
 double now_seconds(void);
 

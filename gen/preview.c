@@ -26,8 +26,8 @@ static void ramp(double x, unsigned char *rgb)
     if (i > 3)
         i = 3;
     double f = p - i;
-    for (int k = 0; k < 3; k++)
-        rgb[k] = (unsigned char)lround(c[i][k] + f * (c[i + 1][k] - c[i][k]));
+    for (int k = 0; k < 3; k++) /* round to nearest (the value is >= 0) */
+        rgb[k] = (unsigned char)(c[i][k] + f * (c[i + 1][k] - c[i][k]) + 0.5);
 }
 
 /* libpng reports errors by longjmp: keep that to a function whose locals do
@@ -45,6 +45,11 @@ static int write_png(FILE *f, const unsigned char *img, size_t W, size_t H)
     png_init_io(png, f);
     png_set_IHDR(png, info, (png_uint_32)W, (png_uint_32)H, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    /* deflate's fastest level and the "up" filter (rows of a preview repeat
+     * their neighbours): 2-3x the size of level 6 with adaptive filters at a
+     * third of the time (measured on the default scene's previews) */
+    png_set_compression_level(png, 1);
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
     png_write_info(png, info);
     for (size_t r = 0; r < H; r++)
         png_write_row(png, (png_const_bytep)(img + r * W * 3));
@@ -178,17 +183,27 @@ int preview_write_png(const nbt_table *t, const char *path)
     memset(c.px, 255, (size_t)c.w * (size_t)c.h * 3);
     const nbt_axis *ax = &t->axis[0], *ay = &t->axis[1];
     /* the table's own bilinear lookup at each pixel centre, pixels linear in the physical
-     * coordinates (the table's mapping only decides where its nodes sit) */
-    double lo = INFINITY, hi = -INFINITY, v[NBT_TABLE_MAX_CH];
+     * coordinates (the table's mapping only decides where its nodes sit); a 2-D table on
+     * the whole pixel grid at once (each coordinate mapped once, not once per pixel) */
+    double lo = INFINITY, hi = -INFINITY, v[NBT_TABLE_MAX_CH], xs[PW], ys[PH];
+    for (int i = 0; i < PW; i++)
+        xs[i] = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
+    for (int j = 0; j < PH; j++)
+        ys[j] = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
+    double *grid = sliced ? NULL : malloc((size_t)PW * PH * t->nch * sizeof *grid);
+    if ((!sliced && !grid) || (grid && nbt_table_lookup_grid(t, xs, PW, ys, PH, grid) != NBT_OK)) {
+        free(grid);
+        free(c.px);
+        free(val);
+        return -1;
+    }
     for (int j = 0; j < PH; j++) {
-        double y = ay->hi - (ay->hi - ay->lo) * (j + 0.5) / PH;
         for (int i = 0; i < PW; i++) {
-            double x = ax->lo + (ax->hi - ax->lo) * (i + 0.5) / PW;
             if (sliced) {
-                nbt_table_lookup3(t, x, y, panel_slice(t, 0), &v[0]);
-                nbt_table_lookup3(t, x, y, panel_slice(t, 1), &v[1]);
+                nbt_table_lookup3(t, xs[i], ys[j], panel_slice(t, 0), &v[0]);
+                nbt_table_lookup3(t, xs[i], ys[j], panel_slice(t, 1), &v[1]);
             } else
-                nbt_table_lookup(t, x, y, v);
+                memcpy(v, grid + ((size_t)j * PW + (size_t)i) * t->nch, t->nch * sizeof *v);
             for (int k = 0; k < nc; k++) {
                 val[((size_t)k * PH + (size_t)j) * PW + (size_t)i] = (float)v[k];
                 if (isfinite(v[k])) {
@@ -198,22 +213,23 @@ int preview_write_png(const nbt_table *t, const char *path)
             }
         }
     }
+    free(grid);
     if (!(lo <= hi))
         lo = hi = 0;
     double span = hi > lo ? hi - lo : 1.0;
     int y0 = PREVIEW_TOP;
     for (int k = 0; k < nc; k++) {
         int x0 = PREVIEW_LEFT + k * (PW + PREVIEW_GAP);
-        for (int j = 0; j < PH; j++)
+        for (int j = 0; j < PH; j++) { /* the panel lies inside the canvas */
+            unsigned char *row = c.px + ((size_t)(y0 + j) * (size_t)c.w + (size_t)x0) * 3;
             for (int i = 0; i < PW; i++) {
                 double f = val[((size_t)k * PH + (size_t)j) * PW + (size_t)i];
-                unsigned char rgb[3];
                 if (isfinite(f))
-                    ramp((f - lo) / span, rgb);
+                    ramp((f - lo) / span, row + 3 * i);
                 else
-                    memcpy(rgb, GREY, 3);
-                put(&c, x0 + i, y0 + j, rgb);
+                    memcpy(row + 3 * i, GREY, 3);
             }
+        }
         /* frame, panel title */
         rect(&c, x0 - 1, y0 - 1, PW + 2, 1, BLACK);
         rect(&c, x0 - 1, y0 + PH, PW + 2, 1, BLACK);

@@ -119,6 +119,27 @@ typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);
 nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx);
 unsigned nbt__nthreads(unsigned requested, size_t n);
 
+#include <nbt/airlight.h>
+/* G rows of J builds, shared between builds (libnbt/jcache.c): a row is
+ * G_k(T, g_q) for k < fdim at all Q panel nodes, which depend on T, the
+ * panel layout (ngeo, nhi, split; len = Q fdim values) and the quadrature
+ * tolerance, not on n or theta. Legendre channels only. get copies a stored
+ * row into row and its error bound into *err (1) or returns 0; put stores a
+ * copy until max_bytes are held. Both are thread-safe. */
+typedef struct {
+    double T, tol;
+    size_t len, ngeo, nhi, fdim;
+    int split;
+} nbt__jkey;
+typedef struct nbt__jcache nbt__jcache;
+nbt__jcache *nbt__jcache_alloc(size_t max_bytes);
+void nbt__jcache_free(nbt__jcache *c);
+int nbt__jcache_get(nbt__jcache *c, const nbt__jkey *k, double *row, double *err);
+void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, double err);
+/* nbt_j_table_build_set with G rows taken from and added to gc (may be NULL) */
+nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed,
+                                     const nbt_build_opts *o, nbt__jcache *gc);
+
 /* An EXR header can claim any data window. Before allocating for it, the
  * pixels' raw size must be one the file could hold: ZIP (deflate) compresses
  * by at most 1032:1 and the other codecs by less on real data, so raw bytes

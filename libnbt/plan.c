@@ -19,7 +19,12 @@ struct nbt_plan {
     nbt_table **cache;    /* per set: the npacks tables built at 33^2 and 65^2 while planning (reused by execute) */
     nbt_plan_legendre leg;
     unsigned nthreads;
+    nbt__jcache *gc;      /* G rows shared by the plan's J builds (proxies and sets) */
 };
+
+/* Memory for shared G rows: a 49^2 J build of 4 orders holds ~3 MB of them,
+ * the default scene's builds ~10 MB; past the cap rows are recomputed. */
+#define JCACHE_BYTES ((size_t)64 << 20)
 
 static double now_s(void)
 {
@@ -179,7 +184,7 @@ static size_t npacks_of(const nbt_plan_request *r)
 /* Packs [0, count) of r on the given axes, in one pass (every order
  * integrated once), error measured. */
 static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt_axis *a0, const nbt_axis *a1,
-                              double qtol, unsigned nthreads, nbt_table **out)
+                              double qtol, unsigned nthreads, nbt__jcache *gc, nbt_table **out)
 {
     for (size_t i = 0; i < count; i++) {
         size_t nch = 1;
@@ -205,7 +210,7 @@ static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt
     }
     nbt_build_opts o = {qtol, 1, nthreads};
     nbt_status st = r->kind == NBT_TABLE_H ? nbt_h_table_build_set(out, count, r->phase, &o)
-                                           : nbt_j_table_build_set(out, count, r->phase, &o);
+                                           : nbt__j_table_build_set_gc(out, count, r->phase, &o, gc);
     if (st != NBT_OK)
         for (size_t i = 0; i < count; i++) {
             nbt_table_free(out[i]);
@@ -252,8 +257,16 @@ static const size_t SIZES[] = {33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 102
  * log1p_cbrt with c = max(xmax, 10): u ~ s^3 near 0 makes the u log u
  * behaviour of H and J C^2 in s, so bilinear error falls as N^-2; the
  * strength c ~ xmax was the best or within 3% for H over xmax = 1 .. 1000
- * and for J^1, J^20 at xmax = 10. v/theta: cos for H and Phong lobes
- * (narrow features at both ends), linear for J^1 (smooth cosine kernel). */
+ * and for J^1, J^20 at xmax = 10. v/theta: cos for H (narrow features
+ * at both ends); log1p with c = min(n, 300) for Phong lobes: J^n's feature
+ * is the lobe (width ~ n^-1/2) about theta = 0 where the source is, and
+ * clustering there alone beat cos 3.4-3.7x for n = 20 (33^2: 1.60e-3 vs
+ * 5.83e-3; 49^2: 7.1e-4 vs 2.6e-3), 2.4-11x for n = 2 .. 1000 (best c
+ * ~ n up to 100, 300 at n = 1000); asinh with c = 1 for J^1: its Lambert
+ * horizon at theta = pi/2 behaves like (theta - pi/2)^2 log|theta - pi/2|,
+ * which on linear nodes converged as N^-2 log N (65 -> 129: 3.39); nodes
+ * 1.13x denser there and 1.25x sparser at the ends gave 3.97, smaller
+ * errors from 65^2 on and 10-25% larger ones at 33^2-49^2. */
 static nbt_axis make_axis(const nbt_plan_request *r, int which, size_t n)
 {
     nbt_axis a = {0, 0, NBT_AXIS_LINEAR, 0, n};
@@ -264,7 +277,8 @@ static nbt_axis make_axis(const nbt_plan_request *r, int which, size_t n)
     } else {
         a.lo = r->kind == NBT_TABLE_H ? -NBT_PI_2 : 0;
         a.hi = r->kind == NBT_TABLE_H ? NBT_PI_2 : NBT_PI;
-        a.map = r->kind == NBT_TABLE_J && r->n == 1 ? NBT_AXIS_LINEAR : NBT_AXIS_COS;
+        a.map = r->kind == NBT_TABLE_H ? NBT_AXIS_COS : r->n == 1 ? NBT_AXIS_ASINH : NBT_AXIS_LOG1P;
+        a.c = a.map == NBT_AXIS_ASINH ? 1.0 : a.map == NBT_AXIS_LOG1P ? fmin((double)r->n, 300.0) : 0.0;
     }
     return a;
 }
@@ -338,7 +352,8 @@ static size_t ladder_size(double e33, double p, double tol)
  * proxy is the set, or cheap next to it), else the conservative rate is
  * taken. Both builds are kept for execution at those sizes (cache: 2 x
  * NBT_PLAN_MAX_PACKS slots). */
-static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_plan_set *ps, nbt_table **cache)
+static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jcache *gc, nbt_plan_set *ps,
+                           nbt_table **cache)
 {
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
@@ -365,7 +380,7 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt_pla
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
         nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
         double t0 = now_s();
-        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, t);
+        nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, gc, t);
         secs[q] = now_s() - t0;
         if (st != NBT_OK)
             return st;
@@ -397,7 +412,8 @@ static nbt_status plan_alloc(size_t n, unsigned nthreads, nbt_plan **out)
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     p->sets = calloc(n, sizeof *p->sets);
     p->cache = calloc(2 * n * NBT_PLAN_MAX_PACKS, sizeof *p->cache);
-    if (!p->sets || !p->cache) {
+    p->gc = nbt__jcache_alloc(JCACHE_BYTES);
+    if (!p->sets || !p->cache || !p->gc) {
         nbt_plan_free(p);
         NBT_FAIL(NBT_ENOMEM, "plan: out of memory");
     }
@@ -422,7 +438,7 @@ nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nt
     if (st != NBT_OK)
         return failf(err, errlen, st, "plan: out of memory");
     for (size_t i = 0; i < nreq && st == NBT_OK; i++, p->count++)
-        st = plan_set(&req[i], nthreads, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
+        st = plan_set(&req[i], nthreads, p->gc, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
     if (st != NBT_OK) {
         nbt_plan_free(p);
         return failf(err, errlen, st, "plan: the proxy builds failed: %s", nbt_strerror(st));
@@ -490,6 +506,7 @@ void nbt_plan_free(nbt_plan *p)
                 free_packs(p->cache + (2 * i + (size_t)q) * NBT_PLAN_MAX_PACKS, p->sets[i].npacks);
     free(p->cache);
     free(p->sets);
+    nbt__jcache_free(p->gc);
     free(p);
 }
 
@@ -547,7 +564,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
             if (st != NBT_OK)
                 free_packs(out->t, ps->npacks);
         } else
-            st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, p->nthreads, out->t);
+            st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, p->nthreads, p->gc, out->t);
         if (st != NBT_OK)
             return failf(err, errlen, st, "building the %s table failed: %s", r->kind == NBT_TABLE_H ? "H" : "J",
                          nbt_strerror(st));

@@ -419,6 +419,9 @@ typedef struct {
     int checked;                /* the check ran (on the node rows, once per build) */
     nbt__segfix *sf;            /* fixed rules for G (Legendre channels), or NULL */
     double check_err;           /* its result, added to later passes */
+    nbt__jcache *gc;            /* G rows shared with other builds (Legendre channels), or NULL */
+    size_t ngeo, nhi;           /* the panel layout (the rows' key) */
+    unsigned char *have;        /* rows of the current pass taken from gc */
 } jfill_ctx;
 
 /* g(y) on panel p, dg/dy, and the inverse */
@@ -481,6 +484,8 @@ static nbt_status j_grow(size_t i, unsigned thread, void *vp)
 {
     jfill_ctx *c = vp;
     double e = 0, *err = c->buf[thread];
+    if (c->have && c->have[i])
+        return NBT_OK;
     for (size_t q = 0; q < c->P->Q; q++) {
         double *G = c->G + (i * c->P->Q + q) * c->fdim;
         if (c->sf) {
@@ -629,14 +634,31 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
     c->M = malloc(ny * P->Q * sizeof(double));
     c->rowerr = calloc(nx, sizeof(double));
+    int share = c->gc && c->sf;
+    c->have = share ? calloc(nx, 1) : NULL;
     nbt_status st = NBT_ENOMEM;
-    if (c->G && c->M && c->rowerr) {
+    if (c->G && c->M && c->rowerr && (!share || c->have)) {
+        /* rows another build of the plan computed are copied, the others
+         * computed and offered to the later builds */
+        size_t len = P->Q * c->fdim;
+        nbt__jkey key = {0, c->tol, len, c->ngeo, c->nhi, c->fdim, P == &c->fine};
+        for (size_t i = 0; share && i < nx; i++) {
+            key.T = xs[i];
+            c->have[i] = (unsigned char)nbt__jcache_get(c->gc, &key, c->G + i * len, &c->rowerr[i]);
+        }
         st = nbt__parallel_for(nx, c->nt, j_grow, c);
+        for (size_t i = 0; share && st == NBT_OK && i < nx; i++)
+            if (!c->have[i]) {
+                key.T = xs[i];
+                nbt__jcache_put(c->gc, &key, c->G + i * len, c->rowerr[i]);
+            }
         if (st == NBT_OK)
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
     }
+    free(c->have);
+    c->have = NULL;
     double e = 0;
     for (size_t i = 0; i < nx && c->rowerr; i++)
         e = fmax(e, c->rowerr[i]);
@@ -689,10 +711,11 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
     return st;
 }
 
-nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const nbt_build_opts *o)
+nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed,
+                                     const nbt_build_opts *o, nbt__jcache *gc)
 {
     int *kmap;
-    jfill_ctx c = {.tol = o->quad_tol};
+    jfill_ctx c = {.tol = o->quad_tol, .gc = gc};
     c.w.phase = fixed;
     nbt_status st = nbt__table_set_prepare(ts, ntab, fixed, &kmap, &c.nch, &c.w.kmax);
     if (st != NBT_OK)
@@ -730,6 +753,8 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     size_t nhi = 0;
     while (mc < 0 && nhi < 20 && NBT_PI / 8 * ldexp(1.0, -(int)nhi) > hpk)
         nhi++;
+    c.ngeo = ngeo;
+    c.nhi = nhi;
     size_t m = J_PANEL_NODES;
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
     c.rm = nbt_gl_rule_alloc(2 * m + 8);
@@ -774,6 +799,11 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "J table: out of memory");
     return st;
+}
+
+nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const nbt_build_opts *o)
+{
+    return nbt__j_table_build_set_gc(ts, ntab, fixed, o, NULL);
 }
 
 nbt_status nbt_j_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)

@@ -29,6 +29,8 @@ double nbt_axis_to_unit(const nbt_axis *a, double x)
         return cbrt(log1p(a->c * r) / log1p(a->c));
     case NBT_AXIS_COS:
         return acos(1.0 - 2.0 * r) / NBT_PI;
+    case NBT_AXIS_ASINH:
+        return 0.5 + 0.5 * asinh(a->c * (2.0 * r - 1.0)) / asinh(a->c);
     default:
         return r;
     }
@@ -49,6 +51,9 @@ double nbt_axis_from_unit(const nbt_axis *a, double s)
         break;
     case NBT_AXIS_COS:
         r = 0.5 * (1.0 - cos(NBT_PI * s));
+        break;
+    case NBT_AXIS_ASINH:
+        r = 0.5 + 0.5 * sinh((2.0 * s - 1.0) * asinh(a->c)) / a->c;
         break;
     case NBT_AXIS_ATANH:
         if (s <= 0.0)
@@ -72,7 +77,8 @@ double nbt_axis_node(const nbt_axis *a, size_t i)
 const char *nbt_axis_map_name(nbt_axis_map m)
 {
     return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos"
-         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : m == NBT_AXIS_ATANH ? "atanh" : "linear";
+         : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : m == NBT_AXIS_ATANH ? "atanh"
+         : m == NBT_AXIS_ASINH ? "asinh" : "linear";
 }
 
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
@@ -89,6 +95,8 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
         *m = NBT_AXIS_LOG1P_CBRT;
     else if (!strcmp(name, "atanh"))
         *m = NBT_AXIS_ATANH;
+    else if (!strcmp(name, "asinh"))
+        *m = NBT_AXIS_ASINH;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -130,7 +138,8 @@ static int axis_ok(const nbt_axis *a)
     return a->n >= 2 && a->n <= 65536 && isfinite(a->lo) && isfinite(a->hi) && a->lo < a->hi &&
            (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c))) &&
            (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c))) &&
-           (a->map != NBT_AXIS_ATANH || (a->lo > -1.0 && a->hi < 1.0));
+           (a->map != NBT_AXIS_ATANH || (a->lo > -1.0 && a->hi < 1.0)) &&
+           (a->map != NBT_AXIS_ASINH || (a->c > 0 && a->c <= 1e3));
 }
 
 nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,
@@ -238,6 +247,28 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
     cell(&t->axis[0], x0, &i, &fx);
     cell(&t->axis[1], x1, &j, &fy);
     lookup_slice(t, 0, i, fx, j, fy, out);
+}
+
+nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0, const double *x1, size_t n1,
+                                 double *out)
+{
+    size_t *ij = malloc((n0 + n1) * sizeof *ij);
+    double *f = malloc((n0 + n1) * sizeof *f);
+    if (!ij || !f) {
+        free(ij);
+        free(f);
+        return NBT_ENOMEM;
+    }
+    for (size_t i = 0; i < n0; i++)
+        cell(&t->axis[0], x0[i], &ij[i], &f[i]);
+    for (size_t j = 0; j < n1; j++)
+        cell(&t->axis[1], x1[j], &ij[n0 + j], &f[n0 + j]);
+    for (size_t j = 0; j < n1; j++)
+        for (size_t i = 0; i < n0; i++)
+            lookup_slice(t, 0, ij[i], f[i], ij[n0 + j], f[n0 + j], out + (j * n0 + i) * t->nch);
+    free(ij);
+    free(f);
+    return NBT_OK;
 }
 
 void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out)

@@ -2,7 +2,8 @@
 // tables. An axis is vec4(lo, hi, c, n) plus a mapping code: 0 linear,
 // 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
 // 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0), 5 atanh
-// (uniform in atanh x, -1 < lo < hi < 1).
+// (uniform in atanh x, -1 < lo < hi < 1), 6 asinh (nodes clustered at the
+// middle of the range, c > 0).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
 // nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
 // g), with the same convention on all three axes: libnbt's nbt_table_lookup3;
@@ -24,6 +25,10 @@ float nbt_axis_unit(float x, vec4 a, int map)
         return 2.0 * atan(sqrt(r), sqrt(1.0 - r)) / NBT_PI;
     if (map == 4)
         return pow(log(1.0 + a.z * r) / log(1.0 + a.z), 1.0 / 3.0);
+    if (map == 6) { // asinh by its odd log form: no cancellation for z < 0
+        float z = a.z * abs(2.0 * r - 1.0);
+        return 0.5 + 0.5 * sign(r - 0.5) * log(z + sqrt(z * z + 1.0)) / log(a.z + sqrt(a.z * a.z + 1.0));
+    }
     return r;
 }
 

@@ -343,6 +343,12 @@ static void test_gsliced(void)
     rt->interp2 = 2;
     check_lookup3(rt, "RG32F 7x4x7 atanh, quadratic in g");
     nbt_table_free(rt);
+    /* asinh (map code 6): theta of J^1 as the planner writes it (c = 1), and
+     * strongly clustered (c = 20) on the slice axis */
+    nbt_axis s1 = {0, M_PI, NBT_AXIS_ASINH, 1, 9}, s2 = {-1, 2, NBT_AXIS_ASINH, 20, 6};
+    rt = random_table3(&r0, &s1, &s2, 3);
+    check_lookup3(rt, "RGB32F 7x9x6 asinh (c = 1, 20)");
+    nbt_table_free(rt);
 
     /* airlight and surface radiance from g-sliced H, J^1, J^20 (HG, g nodes clustered at +-0.95) */
     nbt_axis g2 = {-0.95, 0.95, NBT_AXIS_COS, 0, 9};

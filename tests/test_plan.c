@@ -166,7 +166,7 @@ static void test_plan_tables(void)
     t_true(h->axis[0].n == h->axis[1].n && h->axis[1].map == NBT_AXIS_COS, "H: square, v cos-mapped");
     t_true(j->axis[0].n == 40 && j->axis[1].n == 24 && j->axis[0].hi == 4.25 && j->axis[1].hi == M_PI,
            "J^1 at the fixed size 40x24 over T in [0, 4.25], theta in [0, pi]");
-    t_true(j->axis[1].map == NBT_AXIS_LINEAR, "J^1: theta linear (the rule)");
+    t_true(j->axis[1].map == NBT_AXIS_ASINH && j->axis[1].c == 1.0, "J^1: theta asinh(c = 1) (the rule)");
     t_true(h->pred_err <= 5e-3 && h->pred_err > 0 && h->pred_seconds > 0 && j->pred_seconds > 0,
            "predictions: H error %.3g <= tol, costs %.3g s and %.3g s", h->pred_err, h->pred_seconds,
            j->pred_seconds);
@@ -211,6 +211,76 @@ static void test_plan_tables(void)
     t_true(nbt_plan_tables(rq, 0, 1, &p, err, sizeof err) == NBT_EINVAL, "no requests rejected");
 }
 
+/* The default scene's Phong set, J_0..3^20 over T in [0, 10] at 1e-3: theta
+ * on the rule's log1p(c = n) (cos needed 97^2: 5.8e-3 at 33^2, 2.6e-3 at
+ * 49^2; log1p 1.6e-3 and 7.1e-4), so 49^2 suffices; the recorded error
+ * bounds nbt_jk at random points. */
+static void test_plan_phong(void)
+{
+    nbt_plan_request rq = {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0};
+    nbt_plan *p = NULL;
+    char err[512];
+    nbt_status st = nbt_plan_tables(&rq, 1, 2, &p, err, sizeof err);
+    t_true(st == NBT_OK, "J^20 planned (%s)", st ? err : "ok");
+    if (st != NBT_OK)
+        return;
+    const nbt_plan_set *j = nbt_plan_get(p, 0);
+    t_true(j->axis[1].map == NBT_AXIS_LOG1P && j->axis[1].c == 20.0, "J^20: theta log1p(c = n = 20) (the rule)");
+    nbt_tableset ts;
+    st = nbt_plan_execute(p, 0, &ts, err, sizeof err);
+    t_true(st == NBT_OK && ts.t[0]->axis[0].n <= 49 && ts.t[0]->axis[1].n <= 49 && ts.rel_err <= 1e-3,
+           "J^20 at 1e-3 on %zux%zu <= 49^2 (measured %.3g)", st ? 0 : ts.t[0]->axis[0].n,
+           st ? 0 : ts.t[0]->axis[1].n, st ? 0.0 : ts.rel_err);
+    if (st == NBT_OK) {
+        double r = worst_ratio(&ts, 40);
+        t_true(r <= 1.25, "J^20: random points within 1.25x the recorded error (worst %.2f)", r);
+        nbt_tableset_free(&ts);
+    }
+    nbt_plan_free(p);
+}
+
+/* A plan's J builds share G rows (n- and theta-independent): J^1 and J^20
+ * over the same T range, planned and executed in one plan, must equal
+ * tables built alone on the same axes, value for value, and record the
+ * same errors. */
+static void test_plan_shared_rows(void)
+{
+    nbt_plan_request rq[2] = {{NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
+                              {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0}};
+    nbt_plan *p = NULL;
+    char err[512];
+    nbt_tableset ts[2];
+    nbt_status st = nbt_plan_tables(rq, 2, 2, &p, err, sizeof err);
+    if (st == NBT_OK)
+        st = nbt_plan_execute_all(p, ts, err, sizeof err);
+    t_true(st == NBT_OK, "J^1 and J^20 in one plan (%s)", st ? err : "ok");
+    if (st != NBT_OK) {
+        nbt_plan_free(p);
+        return;
+    }
+    double diff = 0, ediff = 0;
+    for (int s = 0; s < 2; s++) {
+        const nbt_table *a = ts[s].t[0];
+        nbt_table *b = nbt_table_alloc(NBT_TABLE_J, &a->axis[0], &a->axis[1], 4);
+        for (int c = 0; c < 4; c++)
+            b->k[c] = c;
+        b->n = a->n;
+        nbt_build_opts o = {a->quad_tol, 1, 1};
+        if (nbt_j_table_build(b, NULL, &o) != NBT_OK)
+            diff = INFINITY;
+        for (size_t i = 0; i < nbt_table_size(a); i++)
+            diff = fmax(diff, fabs((double)a->data[i] - b->data[i]));
+        for (int c = 0; c < 4; c++)
+            ediff = fmax(ediff, fabs(a->max_err[c] - b->max_err[c]));
+        ediff = fmax(ediff, fabs(a->quad_err - b->quad_err));
+        nbt_table_free(b);
+        nbt_tableset_free(&ts[s]);
+    }
+    t_true(diff == 0 && ediff == 0, "shared G rows: values and recorded errors equal a lone build (max diff %.3g, %.3g)",
+           diff, ediff);
+    nbt_plan_free(p);
+}
+
 static void test_plan_scene(void)
 {
     nbt_scene s = street();
@@ -228,6 +298,7 @@ static void test_plan_scene(void)
         const nbt_plan_set *a = nbt_plan_get(p, 0), *b = nbt_plan_get(p, 1);
         t_true(a->req.kind == NBT_TABLE_H && b->req.kind == NBT_TABLE_J && b->req.n == 20,
                "sets: H, then J^20 (phong = 20)");
+        t_true(b->axis[1].map == NBT_AXIS_LOG1P && b->axis[1].c == 20.0, "J^20 theta on log1p(c = 20)");
         t_rel(a->axis[0].hi, 12.0, 1e-15, "u range = max kappa_t x max distance");
         t_true(a->req.tol == l.table_tol && a->req.nterms == l.nterms && a->npacks == (l.nterms + 3) / 4,
                "H set: the budget's orders and target");
@@ -288,5 +359,7 @@ int main(void)
     test_legendre();
     test_plan_tables();
     test_plan_scene();
+    test_plan_phong();
+    test_plan_shared_rows();
     return t_done();
 }

@@ -114,6 +114,9 @@ nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nt
  * NULL, gets the number, 513 meaning more than 512). */
 nbt_status nbt_plan_scene(const nbt_scene *s, unsigned nthreads, nbt_plan **out, size_t *needed, char *err,
                           size_t errlen);
+/* A plan keeps its proxy tables and the G rows its J builds computed (J^n
+ * sets on one T axis share them; up to 64 MB, then rows are recomputed)
+ * until it is freed. */
 void nbt_plan_free(nbt_plan *p);
 
 size_t nbt_plan_count(const nbt_plan *p);

@@ -18,6 +18,10 @@
  *   atanh:  s = (atanh x - atanh lo)/(atanh hi - atanh lo), -1 < lo < hi < 1:
  *           uniform in atanh x, nodes clustered towards +-1 (the HG asymmetry
  *           g, whose forward peak narrows like 1 - |g|)
+ *   asinh:  s = 1/2 + asinh(c (2r - 1))/(2 asinh c), 0 < c <= 1000: nodes
+ *           c/asinh(c) times denser at the middle of the range than linear,
+ *           sqrt(1 + c^2) times sparser at its ends (theta of J^1: its
+ *           Lambert horizon at pi/2, doc/tables.md)
  *
  * 3-D tables (g-sliced): a third axis (axis[2]) holds slices, e.g. the HG
  * asymmetry g of H_p and J_p^n tables that serve a phase chosen at run time.
@@ -50,12 +54,14 @@ typedef enum {
     NBT_AXIS_COS,
     NBT_AXIS_LOG1P_CBRT,
     NBT_AXIS_ATANH,
+    NBT_AXIS_ASINH,
 } nbt_axis_map;
 
 typedef struct {
     double lo, hi;      /* range, lo < hi */
     nbt_axis_map map;
-    double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0) */
+    double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0);
+                           ASINH: clustering at the middle, 0 < c <= 1000 */
     size_t n;           /* number of nodes, >= 2 */
 } nbt_axis;
 
@@ -65,7 +71,7 @@ double nbt_axis_to_unit(const nbt_axis *a, double x);
 double nbt_axis_from_unit(const nbt_axis *a, double s);
 /* Physical value of node i. */
 double nbt_axis_node(const nbt_axis *a, size_t i);
-/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh"; parse returns NBT_EFORMAT
+/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh", "asinh"; parse returns NBT_EFORMAT
  * for other names (so an older reader refuses a file with a newer mapping). */
 const char *nbt_axis_map_name(nbt_axis_map m);
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
@@ -131,6 +137,11 @@ size_t nbt_table_size(const nbt_table *t);
  * CLAMP_TO_EDGE does at texture coordinate (s*(n-1)+0.5)/n; out has nch
  * values. On a 3-D table: slice 0 (x2 = axis[2].lo). */
 void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out);
+/* nbt_table_lookup at every point of the grid x0[i], x1[j] (out[(j n0 + i)
+ * nch + c]), the same values, with each coordinate's mapping evaluated once
+ * instead of once per point (resampling, previews). NBT_OK or NBT_ENOMEM. */
+nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0, const double *x1, size_t n1,
+                                 double *out);
 /* Interpolation at (x0, x1, x2): trilinear, as a sampler3D with CLAMP_TO_EDGE
  * does (interp2 = 1), or bilinear in (x0, x1) and quadratic in the unit
  * coordinate of x2 through the slices nearest to it (interp2 = 2: p = s2 (n-1),
