@@ -9,6 +9,7 @@
 #include <nbt/gslice.h>
 #include <nbt/plan.h>
 #include "internal.h"
+#include "gslice_tail.h"
 
 static double now_s(void)
 {
@@ -19,8 +20,8 @@ static double now_s(void)
 
 int nbt_table_is_gslice(const nbt_table *t)
 {
-    return t && (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J) && t->axis[2].n >= 2 && t->nch == 1 &&
-           t->k[0] == -1 && !strcmp(t->phase, "hg");
+    return t && (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J) && t->axis[2].n >= 2 &&
+           (t->nch == 1 || (t->nch == 2 && t->form == NBT_FORM_TAIL)) && t->k[0] == -1 && !strcmp(t->phase, "hg");
 }
 
 /* One fixed-phase slice at g over the table's axes 0 and 1. */
@@ -66,6 +67,13 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
 
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 {
+    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : NBT_FORM_PLAIN, o);
+}
+
+nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o)
+{
+    if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H))
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: the tail form is for H tables only");
     if (t->kind != NBT_TABLE_H && t->kind != NBT_TABLE_J)
         NBT_FAIL(NBT_EINVAL, "g-sliced table: the kind must be H or J");
     if (t->axis[2].n < 2)
@@ -79,6 +87,9 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
     snprintf(t->phase, sizeof t->phase, "hg");
     if (t->kind == NBT_TABLE_H)
         t->n = 0;
+    if (form == NBT_FORM_TAIL)
+        return nbt__tail_fill(t, o);
+    t->form = NBT_FORM_PLAIN;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
     double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
     double *gs = calloc(ng, sizeof *gs);
@@ -143,9 +154,10 @@ static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 38
 #define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])
 
 
+/* H (tail form): uniform in atanh g, quadratic; J: cos */
 static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
 {
-    return (nbt_axis){r->g[0], r->g[1], NBT_AXIS_COS, 0, n};
+    return (nbt_axis){r->g[0], r->g[1], r->kind == NBT_TABLE_H ? NBT_AXIS_ATANH : NBT_AXIS_COS, 0, n};
 }
 
 static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t errlen)
@@ -411,7 +423,16 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
     double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma);
     double Lt = NAN, Et = INFINITY;
     int outside = 0;
-    if (h > 0.0) {
+    if (h > 0.0 && t->form == NBT_FORM_TAIL) {
+        int gauss;
+        outside = geo->kappa_t * h > t->axis[0].hi;
+        nbt__airlight_tail(t, g, geo, &Lt, &Et, &gauss);
+        if (isnan(Et) || Et <= NBT_TAIL_RAY_TOL * fabs(Lt)) {
+            *La = Lt;
+            *abserr = Et;
+            return outside ? NBT_ETOL : NBT_OK;
+        }
+    } else if (h > 0.0) {
         double u = geo->kappa_t * h, th0 = geo->gamma - NBT_PI_2;
         double thd = isinf(geo->dvp) ? NBT_PI_2 : atan2(geo->dvp - tt, h), a, b;
         outside = u > t->axis[0].hi;

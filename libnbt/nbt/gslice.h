@@ -41,6 +41,15 @@ extern "C" {
  * NBT_EINVAL for a 2-D table or another kind, NBT_EDOM for a g axis
  * outside the range. */
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
+/* The same in a given value form: nbt_gslice_fill is this with
+ * NBT_FORM_TAIL for H and NBT_FORM_PLAIN for J. TAIL (H only; axis[1] must
+ * be [-pi/2, pi/2], axis[0] start at 0) stores R = C(u, v; g) W(u, v),
+ * C the scaled tail integral of nbt/table.h, W = 1 + s/2 + u s^2/2,
+ * s = tan(pi/4 + v/2) (R(u, pi/2) = 4 pi p_g(-1)), sets interp2 = 2
+ * (3 slices or more) and records the error relative to the value: cell_err
+ * per g cell, max_err their largest (doc/tables.md). PLAIN as described
+ * above. NBT_EINVAL for TAIL on a J table. */
+nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o);
 
 /* An error-driven g-sliced table. */
 typedef struct {
