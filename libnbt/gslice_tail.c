@@ -309,7 +309,10 @@ nbt_status nbt__airlight_tail(const nbt_table *t, double g, const void *geom, do
     double c0 = isinf(w0) ? 0.0 : exp(r0[0]) / w0, cd = isinf(wd) ? 0.0 : exp(rd[0]) / wd;
     double A = exp(-kt * geo->dsv);
     double dsp = hypot(geo->dvp - tf, h), B = isinf(geo->dvp) ? 0.0 : exp(-kt * (dsp + geo->dvp));
-    double e0 = nbt__tail_err_at(t, u, th0, g), ed = isinf(wd) ? 0.0 : nbt__tail_err_at(t, u, thd, g);
+    /* theta_0 = pi/2 (gamma = pi in double): C = 0 times an infinite
+     * prefactor, no bound */
+    double e0 = isinf(w0) ? INFINITY : nbt__tail_err_at(t, u, th0, g);
+    double ed = isinf(wd) ? 0.0 : nbt__tail_err_at(t, u, thd, g);
     *used_gauss = 0;
     if (B * cd > NBT_TAIL_SHORT * A * c0) {
         /* the two terms nearly cancel: the segment by a fixed Gauss rule in

@@ -119,14 +119,27 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
 /* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
 int nbt_table_is_gslice(const nbt_table *t);
 
-/* Airlight from a g-sliced H table at run-time g (nbt/airlight.h's L_a with
- * the trilinear lookup, as a shader does) and its bound: 2 max_err times the
- * prefactor. The fallback policy is nbt_airlight_table_e's: where the bound
- * exceeds 10% of the value (or on the source axis) the ray integral with
- * HG(g) is returned with its error estimate. NBT_EDOM for g outside the
+/* Airlight from a g-sliced H table at run-time g: the lookup of
+ * nbt_airlight_table_g_lookup and its bound. Tail form: where the bound
+ * exceeds 1e-3 of the value (or on the source axis) the ray integral with
+ * HG(g) is returned with its error estimate. Plain form (older files): the
+ * trilinear difference, bound 2 max_err times the prefactor, with
+ * nbt_airlight_table_e's fallback policy (bound beyond 10% of the value). NBT_EDOM for g outside the
  * table's g range (no extrapolation), NBT_ETOL for u beyond its u range. */
 nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                 double *abserr);
+/* The lookup alone, exactly the shader's arithmetic (shaders/nbt_airlight.glsl,
+ * NBT_G_SLICED), no fallback: for a tail-form table
+ *   L_a = kappa_s I0/(4 pi h) [e^{-kappa_t d_sv} C(u, theta_0) - e^{-kappa_t (d_sp + d_vp)} C(u, theta_d)]
+ * with C = exp(lookup)/W, or, where the second term exceeds 0.25 of the
+ * first, the 16-point Gauss-Legendre rule over [theta_0, theta_d] in HG's
+ * angle phi (doc/tables.md); abserr: the error map's bound (Gauss: twice
+ * the difference from 32 points); a plain table: the difference of two
+ * lookups, bound 2 max_err times the prefactor. NBT_EDOM on the source
+ * axis (h = 0) and for g outside the range, NBT_ETOL for u beyond it (the
+ * value is the clamped lookup's). */
+nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
+                                       double *abserr);
 
 /* Surface radiance from g-sliced J tables at run-time g: diffuse (n = 1)
  * and specular (n = geo->n) tables (either may be NULL when kd resp. ks is
