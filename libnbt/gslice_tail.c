@@ -167,9 +167,13 @@ nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
 {
     if (!(t->axis[1].lo == -NBT_PI_2 && t->axis[1].hi == NBT_PI_2) || t->axis[0].lo != 0.0)
         NBT_FAIL(NBT_EDOM, "g-sliced H table (tail form): axes must be u in [0, hi], v in [-pi/2, pi/2]");
+    if (t->axis[2].n < 3)
+        NBT_FAIL(NBT_EINVAL, "g-sliced H table (tail form): the g axis needs at least 3 nodes (quadratic in g)");
     const nbt_axis *ag = &t->axis[2];
-    size_t nu = t->axis[0].n, nv = t->axis[1].n, ng = ag->n, nv2 = 2 * nv - 1, ns = nu * nv2;
     int meas = o->measure_error;
+    /* measuring: v refined (node rows are the even ones) */
+    size_t nu = t->axis[0].n, nv = t->axis[1].n, ng = ag->n, vstep = meas ? 2 : 1, nv2 = vstep * (nv - 1) + 1;
+    size_t ns = nu * nv2;
     /* two channels: log R and, when measured, the error map */
     float *d2 = realloc(t->data, nu * nv * ng * 2 * sizeof(float));
     if (d2)
@@ -188,7 +192,7 @@ nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
         for (size_t i = 0; i < nu; i++)
             us[i] = nbt_axis_node(&t->axis[0], i);
         for (size_t j = 0; j < nv2; j++)
-            vs2[j] = j % 2 == 0 ? nbt_axis_node(&t->axis[1], j / 2)
+            vs2[j] = j % vstep == 0 ? nbt_axis_node(&t->axis[1], j / vstep)
                                 : nbt_axis_from_unit(&t->axis[1], (double)j / (double)(nv2 - 1));
         for (size_t m = 0; m < ng; m++)
             gs[m] = nbt_axis_node(ag, m);
@@ -200,13 +204,13 @@ nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
     for (size_t m = 0; st == NBT_OK && m < ng; m++)
         for (size_t j = 0; j < nv; j++)
             for (size_t i = 0; i < nu; i++) {
-                double r = ex[m * ns + 2 * j * nu + i];
+                double r = ex[m * ns + vstep * j * nu + i];
                 t->data[((m * nv + j) * nu + i) * 2] = (float)log(r);
                 t->data[((m * nv + j) * nu + i) * 2 + 1] = NAN;
                 amax = fmax(amax, r);
             }
     t->form = NBT_FORM_TAIL;
-    t->interp2 = ng >= 3 ? 2 : 1;
+    t->interp2 = 2;
     for (size_t m = 0; c2 && m + 1 < ng; m++)
         t->cell_err[2 * m] = t->cell_err[2 * m + 1] = NAN;
     double *ce = NULL;
@@ -318,9 +322,13 @@ nbt_status nbt__airlight_tail(const nbt_table *t, double g, const void *geom, do
         /* the two terms nearly cancel: the segment by a fixed Gauss rule in
          * phi (the shader's), its error from the rule with twice the nodes */
         *used_gauss = 1;
-        double p0 = nbt__tail_phi(nbt__s_of_t(th0), g), pd = nbt__tail_phi(nbt__s_of_t(thd), g);
-        double s1 = nbt__tail_gauss(g, u, -kt * tf, p0, pd, NBT_TAIL_GAUSS_N);
-        double s2 = nbt__tail_gauss(g, u, -kt * tf, p0, pd, 2 * NBT_TAIL_GAUSS_N);
+        /* s(theta_d) - s(theta_0) = (d_sp + d_vp - d_sv)/h, the path's excess
+         * d_vp (d_sv - t_f + d_sp + d_vp - t_f)/(d_sp + d_sv) without cancellation */
+        double q = geo->dvp - tf, sh = sin(0.5 * geo->gamma);
+        double ex = geo->dvp * (2.0 * geo->dsv * sh * sh + (q >= 0 ? dsp + q : h * h / (dsp - q))) / (dsp + geo->dsv);
+        double s0 = tan(0.5 * geo->gamma), ds = ex / h; /* s(theta_0) = tan(gamma/2) */
+        double s1 = nbt__tail_gauss(g, u, kt * geo->dsv, s0, ds, NBT_TAIL_GAUSS_N);
+        double s2 = nbt__tail_gauss(g, u, kt * geo->dsv, s0, ds, 2 * NBT_TAIL_GAUSS_N);
         *La = pref * s1;
         *abserr = pref * (2.0 * fabs(s2 - s1) + 1e-12 * fabs(s2)); /* + rounding */
         return NBT_OK;
@@ -332,17 +340,20 @@ nbt_status nbt__airlight_tail(const nbt_table *t, double g, const void *geom, do
     return NBT_OK;
 }
 
-double nbt__tail_gauss(double g, double u, double y0, double p0, double p1, int n)
+double nbt__tail_gauss(double g, double u, double e0, double s0, double ds, int n)
 {
     nbt_gl_rule *R = nbt_gl_rule_alloc((size_t)n);
     if (!R)
         return NAN;
-    double k = (1.0 - g) / (1.0 + g), c = 0.5 * (p0 + p1), hw = 0.5 * (p1 - p0), sum = 0.0;
+    /* a = tan(phi_0/2), b = tan(phi_d/2); dphi by the atan difference */
+    double k = (1.0 - g) / (1.0 + g), a = s0 / k, b = a + ds / k;
+    double c0 = 1.0 / sqrt(1.0 + a * a), n0 = a * c0, dphi = 2.0 * atan((ds / k) / (1.0 + a * b)), sum = 0.0;
     for (int i = 0; i < n; i++) {
-        double ph = c + hw * R->x[i];
-        double y = ph >= NBT_PI ? INFINITY : u * k * tan(0.5 * ph);
-        sum += R->w[i] * (u > 0 ? exp(y0 - y) : exp(y0)) * hg_f(g, ph);
+        double hd = 0.25 * dphi * (1.0 + R->x[i]), sd = sin(hd), ci = c0 * cos(hd) - n0 * sd;
+        /* u (s - s0) = u k (tan(phi/2) - a) = u k sin(delta/2)/(cos(phi/2) cos(phi_0/2)) */
+        double y = e0 + u * k * sd / (ci * c0), cphi = 2.0 * ci * ci - 1.0;
+        sum += R->w[i] * exp(-y) * sqrt(fmax(1.0 + g * g + 2.0 * g * cphi, 0.0));
     }
     nbt_gl_rule_free(R);
-    return hw * sum;
+    return 0.5 * dphi * sum / (1.0 - g * g);
 }

@@ -105,18 +105,21 @@ float nbt_tail_c(float u, float v, float s, float g)
     return exp(r) / (1.0 + 0.5 * s + 0.5 * u * s * s);
 }
 
-// int_{p0}^{p1} e^{y0 - u k tan(phi/2)} sqrt(1 + g^2 + 2 g cos phi)/(1 - g^2) dphi, 16 points
-float nbt_tail_gauss(float g, float u, float y0, float p0, float p1)
+// int over [phi_0, phi_d] of e^{-e0 - u (s - s0)} sqrt(1 + g^2 + 2 g cos phi)/(1 - g^2) dphi,
+// 16 points, s = k tan(phi/2), s0 = s(theta_0), ds = s(theta_d) - s0; written without
+// cancellation: dphi by the atan difference, u (s - s0) = u k sin(delta/2)/(cos(phi/2) cos(phi_0/2))
+float nbt_tail_gauss(float g, float u, float e0, float s0, float ds)
 {
-    float k = (1.0 - g) / (1.0 + g), c = 0.5 * (p0 + p1), hw = 0.5 * (p1 - p0), sum = 0.0;
+    float k = (1.0 - g) / (1.0 + g), a = s0 / k, b = a + ds / k;
+    float c0 = inversesqrt(1.0 + a * a), n0 = a * c0, dphi = 2.0 * atan((ds / k) / (1.0 + a * b)), sum = 0.0;
     for (int i = 0; i < 8; i++) {
         for (int sg = -1; sg <= 1; sg += 2) {
-            float ph = c + float(sg) * hw * nbt_gl16x[i];
-            float e = exp(y0 - u * k * tan(0.5 * ph));
-            sum += nbt_gl16w[i] * e * sqrt(max(1.0 + g * g + 2.0 * g * cos(ph), 0.0));
+            float hd = 0.25 * dphi * (1.0 + float(sg) * nbt_gl16x[i]), sd = sin(hd), ci = c0 * cos(hd) - n0 * sd;
+            float y = e0 + u * k * sd / (ci * c0);
+            sum += nbt_gl16w[i] * exp(-y) * sqrt(max(1.0 + g * g + 2.0 * g * (2.0 * ci * ci - 1.0), 0.0));
         }
     }
-    return hw * sum / (1.0 - g * g);
+    return 0.5 * dphi * sum / (1.0 - g * g);
 }
 
 float nbt_airlight_g(float kappa_s, float kappa_t, float I0, float dsv, float gamma, float dvp, float gph)
@@ -125,7 +128,7 @@ float nbt_airlight_g(float kappa_s, float kappa_t, float I0, float dsv, float ga
     float g = clamp(gph, nbt_H_ax2.x, nbt_H_ax2.y);
     float h = dsv * sin(gm), tf = dsv * cos(gm), u = kappa_t * h;
     float th0 = gm - 0.5 * NBT_PI, thd = atan(dvp - tf, h);
-    float s0 = nbt_tail_s(th0), dsp = length(vec2(dvp - tf, h));
+    float s0 = tan(0.5 * gm), dsp = length(vec2(dvp - tf, h)); // s(theta_0) = tan(gamma/2): no cancellation
     float A = exp(-kappa_t * dsv), B = exp(-kappa_t * (dsp + dvp));
     float c0 = nbt_tail_c(u, th0, s0, g), bd = 0.0;
     float pref = kappa_s * I0 / (4.0 * NBT_PI * h);
@@ -133,8 +136,10 @@ float nbt_airlight_g(float kappa_s, float kappa_t, float I0, float dsv, float ga
         float sd = nbt_tail_s(thd);
         bd = B * nbt_tail_c(u, thd, sd, g);
         if (bd > NBT_TAIL_SHORT * A * c0) {
-            float k = (1.0 + g) / (1.0 - g);
-            return pref * nbt_tail_gauss(g, u, -kappa_t * tf, 2.0 * atan(s0 * k), 2.0 * atan(sd * k));
+            // d_sp + d_vp - d_sv = d_vp (d_sv - t_f + d_sp + d_vp - t_f)/(d_sp + d_sv), without cancellation
+            float q = dvp - tf, sh = sin(0.5 * gm);
+            float ex = dvp * (2.0 * dsv * sh * sh + (q >= 0.0 ? dsp + q : h * h / (dsp - q))) / (dsp + dsv);
+            return pref * nbt_tail_gauss(g, u, kappa_t * dsv, s0, ex / h);
         }
     }
     return pref * (A * c0 - bd);
