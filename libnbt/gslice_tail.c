@@ -20,10 +20,6 @@
 /* exponents above this (relative to the start) are dropped: e^-60 < 1e-26 */
 #define TAIL_YCAP 60.0
 
-static double hg_f(double g, double phi)
-{
-    return sqrt(fmax(1.0 + g * g + 2.0 * g * cos(phi), 0.0)) / (1.0 - g * g);
-}
 
 double nbt__tail_phi(double s, double g)
 {
@@ -53,11 +49,12 @@ static double tail_seg(const nbt_gl_rule *R, double g, double u, double y0, doub
             b = fmin(fmin(b, 2.0 * atan((sa + step / u) / k)), a + 0.5 * (NBT_PI - a));
         double c = 0.5 * (a + b), h = 0.5 * (b - a), sum = 0.0;
         for (size_t i = 0; i < R->n; i++) {
-            double ph = c + h * R->x[i];
-            double e = u > 0 ? exp(y0 - u * k * tan(0.5 * ph)) : exp(y0);
-            sum += R->w[i] * e * hg_f(g, ph);
+            /* one tan per node: cos phi = (1 - tan^2(phi/2))/(1 + tan^2(phi/2)) */
+            double tq = tan(0.5 * (c + h * R->x[i])), cph = tq > 1e150 ? -1.0 : (1.0 - tq * tq) / (1.0 + tq * tq);
+            double e = u > 0 ? exp(y0 - u * k * tq) : exp(y0);
+            sum += R->w[i] * e * sqrt(fmax(1.0 + g * g + 2.0 * g * cph, 0.0));
         }
-        acc += h * sum;
+        acc += h * sum / (1.0 - g * g);
         a = b;
     }
     return acc;
@@ -163,6 +160,57 @@ double nbt__tail_err_at(const nbt_table *t, double u, double v, double g)
     return e;
 }
 
+typedef struct {
+    const nbt_table *t;
+    const double *ex, *us, *vs2, *gs;
+    size_t nu, nv, nv2, ng, ns;
+    double *ce;
+} meas_ctx;
+
+/* the error of g cell m's (u, v) cells, from the exact rows at g_m, the
+ * midpoint and g_{m+1} */
+static nbt_status meas_task(size_t m, unsigned thread, void *vp)
+{
+    (void)thread;
+    const meas_ctx *c = vp;
+    const nbt_table *t = c->t;
+    const nbt_axis *ag = &t->axis[2];
+    const double *ex = c->ex, *us = c->us, *vs2 = c->vs2, *gs = c->gs;
+    size_t nu = c->nu, nv = c->nv, nv2 = c->nv2, ng = c->ng, ns = c->ns;
+    double *ce = c->ce, dg = 1e-9 / (double)(ng - 1);
+    double gl = nbt_axis_from_unit(ag, ((double)m + 0.5) / (double)(ng - 1) - dg);
+    double gh = nbt_axis_from_unit(ag, ((double)m + 0.5) / (double)(ng - 1) + dg);
+    const double *rows[3] = {ex + m * ns, ex + (ng + m) * ns, ex + (m + 1) * ns};
+    for (size_t j2 = 0; j2 < nv2; j2++)
+        for (size_t i = 0; i < nu; i++) {
+            double e = 0, eu = 0;
+            for (int q = 0; q < 3; q++) {
+                double x = rows[q][j2 * nu + i], a[2], b[2];
+                if (q == 1) {
+                    nbt_table_lookup3(t, us[i], vs2[j2], gl, a);
+                    nbt_table_lookup3(t, us[i], vs2[j2], gh, b);
+                    e = fmax(e, fmax(fabs(expm1(a[0] - log(x))), fabs(expm1(b[0] - log(x)))));
+                } else if (j2 % 2) {
+                    nbt_table_lookup3(t, us[i], vs2[j2], q ? gs[m + 1] : gs[m], a);
+                    e = fmax(e, fabs(expm1(a[0] - log(x))));
+                }
+                if (i > 0 && i + 1 < nu)
+                    eu = fmax(eu, fabs(log(rows[q][j2 * nu + i - 1]) - 2.0 * log(x) +
+                                       log(rows[q][j2 * nu + i + 1])) / 8.0);
+            }
+            /* the point's cells: u cells i-1, i; v cells around j2 */
+            size_t jlo = j2 / 2 > 0 && j2 % 2 == 0 ? j2 / 2 - 1 : j2 / 2, jhi = j2 / 2;
+            if (jhi > nv - 2)
+                jhi = nv - 2;
+            for (size_t j = jlo; j <= jhi; j++)
+                for (size_t ii = i > 0 ? i - 1 : 0; ii <= i && ii + 1 < nu; ii++) {
+                    double *pc = &ce[(m * (nv - 1) + j) * (nu - 1) + ii];
+                    *pc = fmax(*pc, e + eu);
+                }
+        }
+    return NBT_OK;
+}
+
 nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
 {
     if (!(t->axis[1].lo == -NBT_PI_2 && t->axis[1].hi == NBT_PI_2) || t->axis[0].lo != 0.0)
@@ -184,7 +232,7 @@ nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
     double *us = malloc(nu * sizeof *us), *vs2 = malloc(nv2 * sizeof *vs2), *gs = malloc(2 * ng * sizeof *gs);
     /* exact R on the grid refined in v (node rows are the even ones) at
      * the g nodes, then (measuring) at the g midpoints */
-    double *ex = malloc((meas ? 2 * ng - 1 : ng) * ns * sizeof *ex), qerr = 0, q2 = 0;
+    double *ex = malloc((meas ? 2 * ng - 1 : ng) * ns * sizeof *ex), qerr = 0;
     nbt_status st = d2 && c2 && us && vs2 && gs && ex ? NBT_OK : NBT_ENOMEM;
     if (st == NBT_OK) {
         t->nch = 2;
@@ -222,40 +270,8 @@ nbt_status nbt__tail_fill(nbt_table *t, const nbt_build_opts *o)
          * midpoint with both quadratic stencils), plus the bilinear u error
          * at its u midpoints estimated from second differences of log R in
          * u (|d2|/8) on the same rows, plus the quadrature error */
-        double dg = 1e-9 / (double)(ng - 1);
-        for (size_t m = 0; m + 1 < ng; m++) {
-            double gl = nbt_axis_from_unit(ag, ((double)m + 0.5) / (double)(ng - 1) - dg);
-            double gh = nbt_axis_from_unit(ag, ((double)m + 0.5) / (double)(ng - 1) + dg);
-            const double *rows[3] = {ex + m * ns, ex + (ng + m) * ns, ex + (m + 1) * ns};
-            for (size_t j2 = 0; j2 < nv2; j2++)
-                for (size_t i = 0; i < nu; i++) {
-                    double e = 0, eu = 0;
-                    for (int q = 0; q < 3; q++) {
-                        double x = rows[q][j2 * nu + i], a[2], b[2];
-                        if (q == 1) {
-                            nbt_table_lookup3(t, us[i], vs2[j2], gl, a);
-                            nbt_table_lookup3(t, us[i], vs2[j2], gh, b);
-                            e = fmax(e, fmax(fabs(expm1(a[0] - log(x))), fabs(expm1(b[0] - log(x)))));
-                        } else if (j2 % 2) {
-                            nbt_table_lookup3(t, us[i], vs2[j2], q ? gs[m + 1] : gs[m], a);
-                            e = fmax(e, fabs(expm1(a[0] - log(x))));
-                        }
-                        if (i > 0 && i + 1 < nu)
-                            eu = fmax(eu, fabs(log(rows[q][j2 * nu + i - 1]) - 2.0 * log(x) +
-                                               log(rows[q][j2 * nu + i + 1])) / 8.0);
-                    }
-                    /* the point's cells: u cells i-1, i; v cells around j2 */
-                    size_t jlo = j2 / 2 > 0 && j2 % 2 == 0 ? j2 / 2 - 1 : j2 / 2, jhi = j2 / 2;
-                    if (jhi > nv - 2)
-                        jhi = nv - 2;
-                    for (size_t j = jlo; j <= jhi; j++)
-                        for (size_t ii = i > 0 ? i - 1 : 0; ii <= i && ii + 1 < nu; ii++) {
-                            double *c = &ce[(m * (nv - 1) + j) * (nu - 1) + ii];
-                            *c = fmax(*c, e + eu);
-                        }
-                }
-        }
-        (void)q2;
+        meas_ctx mc = {t, ex, us, vs2, gs, nu, nv, nv2, ng, ns, ce};
+        st = nbt__parallel_for(ng - 1, nbt__nthreads(o->nthreads, ng - 1), meas_task, &mc);
         /* node values: the largest of the cells around the node */
         for (size_t m = 0; m < ng; m++)
             for (size_t j = 0; j < nv; j++)
