@@ -137,6 +137,9 @@ static void test_airlight(const nbt_table *t)
         t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-12 * fabs(R),
                "airlight_table_g g=%.3f gamma=%.3f dvp=%g: |%.8g - %.8g| <= bound %.2e", g, geo.gamma, geo.dvp, L, R,
                E);
+        /* the tail route's promise: a lookup only where its bound is within 1e-3 */
+        t_true(E <= 1e-3 * fabs(L), "airlight_table_g g=%.3f gamma=%.3f: bound %.2e <= 1e-3 of the value", g,
+               geo.gamma, E / fabs(L));
     }
     t_true(fell <= n / 4, "airlight_table_g (tail form): the lookup served %d of %d rays", n - fell, n);
     /* on the source axis the ray integral with HG(g) */
