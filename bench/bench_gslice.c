@@ -125,8 +125,8 @@ static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G
 
 static void row(const char *what, double G, const char *size, double mb, double secs, double rec, ray_stats s)
 {
-    printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %3.0f%% "
-           "vs-unobstructed %.1e | route: worst %.1e fallback %3.0f%%\n", what, G, size, mb, secs, rec,
+    printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %5.1f%% "
+           "vs-unobstructed %.1e | route: worst %.1e fallback %5.1f%%\n", what, G, size, mb, secs, rec,
            s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
 }
 
