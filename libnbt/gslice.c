@@ -338,6 +338,8 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
                          p->axis[0].n, p->axis[1].n, ng, rel, r->tol);
         ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
     }
+    if (r->half && (*out)->form == NBT_FORM_TAIL)
+        return nbt__tail_round_half(*out);
     if (r->half)
         nbt_table_round_half(*out);
     return NBT_OK;

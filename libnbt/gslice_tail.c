@@ -373,3 +373,29 @@ double nbt__tail_gauss(double g, double u, double e0, double s0, double ds, int 
     nbt_gl_rule_free(R);
     return 0.5 * dphi * sum / (1.0 - g * g);
 }
+
+nbt_status nbt__tail_round_half(nbt_table *t)
+{
+    size_t n = nbt_table_size(t) / t->nch;
+    float *c0 = malloc(n * sizeof *c0);
+    if (!c0)
+        NBT_FAIL(NBT_ENOMEM, "g-sliced H table (tail form): out of memory");
+    for (size_t i = 0; i < n; i++)
+        c0[i] = t->data[i * t->nch];
+    nbt_table_round_half(t);
+    double d = 0;
+    for (size_t i = 0; i < n; i++)
+        d = fmax(d, fabs((double)t->data[i * t->nch] - (double)c0[i]));
+    free(c0);
+    double er = expm1(d);
+    /* the map before rounding is not kept: add the rounding, then a margin of
+     * a half-precision step (2^-10 relative) so that the rounded map is not
+     * below it */
+    for (size_t i = 0; i < n; i++)
+        t->data[i * t->nch + 1] = (float)(((double)t->data[i * t->nch + 1] * (1.0 + 0x1p-10) + er) * (1.0 + 0x1p-10));
+    nbt_table_round_half(t);
+    for (size_t m = 0; m + 1 < t->axis[2].n; m++)
+        t->cell_err[m * t->nch] += er;
+    t->max_err[0] += er;
+    return NBT_OK;
+}

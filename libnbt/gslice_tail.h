@@ -23,6 +23,10 @@ double nbt__tail_gauss(double g, double u, double e0, double s0, double ds, int 
 /* the relative error bound of a lookup at (u, v, g): the error map (channel
  * 1) at the 8 nodes of its cell; cell_err without a map */
 double nbt__tail_err_at(const nbt_table *t, double u, double v, double g);
+/* Half precision for a tail-form table: log values rounded, their largest
+ * rounding change (relative: expm1 of it) added to the error map, cell_err
+ * and max_err, the map rounded up. */
+nbt_status nbt__tail_round_half(nbt_table *t);
 nbt_status nbt__airlight_tail(const nbt_table *t, double g, const void *geo, double *La, double *abserr,
                               int *used_gauss);
 
