@@ -1,5 +1,5 @@
 /* libnbt/gslice_tail.c: the tail form of g-sliced H tables (NBT_FORM_TAIL,
- * doc/tables.md): fill with its relative error per g cell, and the airlight
+ * doc/tables.md): fill with its relative error map (per node) and per g cell, and the airlight
  * from it (lookup, physical exponentials, a Gauss rule on short segments).
  *
  * HG in the angle phi = 2 atan(s/k), k = (1 - g)/(1 + g), s = tan(pi/4 + t/2)
@@ -107,7 +107,7 @@ static nbt_status tail_task(size_t task, unsigned thread, void *vp)
     tail_row(c->R, c->gs[m], c->us[i], c->vs, c->nv, 1.0, 0.1, row);
     double e = 0;
     if (i < 2 || i % 32 == 0 || i + 1 == c->nu) {
-        /* a rerun with pieces a quarter as long and twice the nodes */
+        /* a rerun with pieces half as long (in phi and in the exponent) and twice the nodes */
         tail_row(c->Rfine, c->gs[m], c->us[i], c->vs, c->nv, 0.5, 0.05, fine);
         for (size_t j = 0; j < c->nv; j++)
             e = fmax(e, 2.0 * fabs(fine[j] - row[j]) / fabs(fine[j]));
