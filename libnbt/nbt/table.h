@@ -74,11 +74,13 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
 typedef enum {
     NBT_FORM_PLAIN,
-    /* g-sliced H only: the scaled tail integral
+    /* g-sliced H only (nbt/gslice.h, doc/tables.md): channel 0 holds
+     * log(C W), C the scaled tail integral
      *   C(u, v; g) = int_v^{pi/2} exp(-u (s(t) - s(v))) 4 pi p_g(-sin t) dt,
-     * s(t) = tan(pi/4 + t/2) (nbt/gslice.h): smooth, O(1), no forward peak
-     * to subtract, and the airlight needs only physical exponentials;
-     * cell_err and max_err bound the error relative to the value */
+     * W = 1 + s(v)/2 + u s(v)^2/2, s(t) = tan(pi/4 + t/2): smooth, no
+     * forward peak to subtract, and the airlight needs only physical
+     * exponentials; channel 1 a per-node relative error map; cell_err and
+     * max_err are relative too */
     NBT_FORM_TAIL,
 } nbt_table_form;
 
