@@ -87,7 +87,11 @@ static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G
         nbt_phase *p = nbt_phase_hg(g);
         nbt_airlight_direct(p, &geo, 1e-10, &R, &RE);
         nbt_phase_free(p);
-        double Lp = pure_lookup(t, nt, g, &geo), Rinf = R, e2;
+        double Lp, Rinf = R, e2, EL;
+        if (sliced)
+            nbt_airlight_table_g_lookup(t[0], g, &geo, &Lp, &EL); /* the shader's arithmetic */
+        else
+            Lp = pure_lookup(t, nt, g, &geo);
         if (!isinf(geo.dvp)) {
             nbt_airlight_geom gi = geo;
             gi.dvp = INFINITY;
@@ -103,8 +107,8 @@ static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G
                 b[k] = pow(g, (double)k);
             nbt_airlight_table_e(t, nt, b, K, NULL, &geo, &L, &E);
         }
-        if (E < 1e-9 * fabs(L))
-            fell++; /* the ray quadrature's estimate: the fallback ran */
+        if (sliced ? L != Lp : E < 1e-9 * fabs(L))
+            fell++; /* the route did not return the lookup (sliced) / the ray quadrature's estimate */
         rel[i] = fabs(Lp - R) / fabs(R);
         ok3 += rel[i] <= 1e-3;
         r.worst_pure = fmax(r.worst_pure, rel[i]);
@@ -121,8 +125,8 @@ static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G
 
 static void row(const char *what, double G, const char *size, double mb, double secs, double rec, ray_stats s)
 {
-    printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %3.0f%% "
-           "vs-unobstructed %.1e | route: worst %.1e fallback %3.0f%%\n", what, G, size, mb, secs, rec,
+    printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %5.1f%% "
+           "vs-unobstructed %.1e | route: worst %.1e fallback %5.1f%%\n", what, G, size, mb, secs, rec,
            s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
 }
 
@@ -179,7 +183,11 @@ int main(int argc, char **argv)
     printf("# H tables for HG g in [-G, G], u in [0, %g], tol %g (max_err / max |value|), 2 threads;\n"
            "# airlight over %d random rays (d_vp finite and infinite, gamma in (0.02, pi-0.02)) and g,\n"
            "# relative to nbt_airlight_direct. 'lookup': the shader's arithmetic; 'route': the library\n"
-           "# call with its fallback to the ray integral where the bound exceeds 10%% of the value.\n"
+           "# call with its fallback to the ray integral where the bound exceeds 10%% of the value\n"
+           "# (tail form: 1e-3). 'plain': the former g-sliced H (plain values, trilinear, cos g axis,\n"
+           "# the former planner's sizes for tol 1e-2, fill time only); 'tail': the tail form as planned\n"
+           "# (its rec is relative to the value: the error map's largest entry, at u -> 0, v -> pi/2).\n"
+           "# Arguments: TOL NRAYS LEGMAX (< 0: no Legendre rows) [nosurface].\n"
            "# 'vs-unobstructed': the lookup's error relative to the airlight of the same ray with\n"
            "# d_vp = inf (equal to 'worst' when the worst rays are unobstructed ones: sideways and\n"
            "# backward rays far from the source, whose airlight is a difference of two nearly\n"
@@ -190,7 +198,7 @@ int main(int argc, char **argv)
         double G = Gs[gi];
         /* Legendre packs, as nbt-gen airlight --g -G:G --basis legendre */
         nbt_plan_legendre leg;
-        nbt_status st = nbt_plan_legendre_terms(G, XMAX, tol, 512, &leg);
+        nbt_status st = legmax < 0 ? NBT_EINVAL : nbt_plan_legendre_terms(G, XMAX, tol, 512, &leg);
         if (st == NBT_OK) {
             nbt_plan_request q = {NBT_TABLE_H, 0, leg.nterms, NULL, XMAX, leg.table_tol, {0, 0}, 0};
             nbt_plan *plan = NULL;
@@ -214,9 +222,27 @@ int main(int argc, char **argv)
                 }
             }
             nbt_plan_free(plan);
-        } else
+        } else if (legmax >= 0)
             printf("legendre  %4.2f  needs more than %d orders at tol %g\n", G, 512, tol);
-        /* g slices */
+        /* before (in this process): plain H slices, trilinear on a cos g axis, at the sizes the
+         * former error-driven planner chose for tol 1e-2 (doc/tables.md), fill time only */
+        {
+            static const size_t old_n[4][2] = {{33, 25}, {65, 49}, {97, 65}, {129, 65}};
+            nbt_axis a0 = {0, XMAX, NBT_AXIS_LOG1P_CBRT, 10, old_n[gi][0]};
+            nbt_axis a1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, old_n[gi][0]}, a2 = {-G, G, NBT_AXIS_COS, 0, old_n[gi][1]};
+            nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &a2, 1);
+            nbt_build_opts o = {1e-10, 1, 2};
+            double t0 = now();
+            if (t && nbt_gslice_fill_form(t, NBT_FORM_PLAIN, &o) == NBT_OK) {
+                double secs = now() - t0;
+                char size[64];
+                snprintf(size, sizeof size, "%zux%zux%zu", t->axis[0].n, t->axis[1].n, t->axis[2].n);
+                ray_stats s = rays((const nbt_table *const *)&t, 1, 1, G, nrays);
+                row("plain", G, size, 4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], s);
+            }
+            nbt_table_free(t);
+        }
+        /* after: g slices as planned (H: the tail form, atanh g, quadratic) */
         nbt_gslice_request r = {NBT_TABLE_H, 0, XMAX, {-G, G}, tol, {0, 0, 0}, 0};
         nbt_table *t = NULL;
         char err[256];
@@ -229,10 +255,12 @@ int main(int argc, char **argv)
         char size[64];
         snprintf(size, sizeof size, "%zux%zux%zu", t->axis[0].n, t->axis[1].n, t->axis[2].n);
         ray_stats s = rays((const nbt_table *const *)&t, 1, 1, G, nrays);
-        row("slices", G, size, 4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], s);
+        row(t->form == NBT_FORM_TAIL ? "tail" : "slices", G, size, 4e-6 * (double)nbt_table_size(t), secs,
+            t->form == NBT_FORM_TAIL ? t->max_err[0] : t->max_err[0] / t->max_abs[0], s);
         nbt_table_free(t);
         fflush(stdout);
     }
-    surface_part(tol, nrays / 2);
+    if (!(argc > 4 && !strcmp(argv[4], "nosurface")))
+        surface_part(tol, nrays / 2);
     return 0;
 }

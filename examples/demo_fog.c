@@ -294,7 +294,9 @@ int main(int argc, char **argv)
      * nbt_g = 0.9 (between slices) and 0.95 (the last one); the g = 0.9 panel is compared with the
      * fixed-phase one (column 2) pixel by pixel */
     nbt_axis gax = {0.8, 0.95, NBT_AXIS_COS, 0, 4};
-    nbt_table *t[3] = {assemble_gsliced(NBT_TABLE_H, 0, 129, &gax), assemble_gsliced(NBT_TABLE_J, 1, 65, &gax),
+    /* H in the tail form: quadratic in g on an atanh axis (5 slices) */
+    nbt_axis hgax = {0.8, 0.95, NBT_AXIS_ATANH, 0, 5};
+    nbt_table *t[3] = {assemble_gsliced(NBT_TABLE_H, 0, 129, &hgax), assemble_gsliced(NBT_TABLE_J, 1, 65, &gax),
                        assemble_gsliced(NBT_TABLE_J, 20, 65, &gax)};
     GLuint tex[3];
     glUseProgram(prog_g);

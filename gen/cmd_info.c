@@ -62,6 +62,12 @@ int cmd_info(int argc, char **argv)
                nbt_table_axis_name(t->kind, 2), nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
                t->axis[2].n);
     printf("storage     %s\n", t->half ? "half" : "float");
+    if (t->form != NBT_FORM_PLAIN || t->axis[2].n >= 2)
+        printf("form        %s%s\n", nbt_table_form_name(t->form),
+               t->form == NBT_FORM_TAIL ? ": R = log(C W), C the scaled tail integral, W = 1 + s/2 + u s^2/2 "
+                                          "(doc/tables.md); errors relative" : "");
+    if (t->axis[2].n >= 2)
+        printf("g interp    %s\n", t->interp2 == 2 ? "quadratic (three nearest slices)" : "linear");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
     int fitted = t->kind == NBT_TABLE_KERNEL && strstr(t->phase, " fitted ") != NULL;
     if (fitted)
@@ -77,6 +83,8 @@ int cmd_info(int argc, char **argv)
             snprintf(what, sizeof what, "P%d", strstr(t->phase, " P4") ? 4 : (int)ch);
         else if (t->kind == NBT_TABLE_KERNEL)
             snprintf(what, sizeof what, ch == 0 ? "alpha/sig_t" : "beta*sig_t");
+        else if (t->form == NBT_FORM_TAIL)
+            snprintf(what, sizeof what, ch == 0 ? "log(C W)(g)" : "error map");
         else if (t->k[ch] < 0 && t->axis[2].n >= 2)
             snprintf(what, sizeof what, "phase(g)");
         else if (t->k[ch] < 0)

@@ -9,6 +9,7 @@
 #include <nbt/gslice.h>
 #include <nbt/plan.h>
 #include "internal.h"
+#include "gslice_tail.h"
 
 static double now_s(void)
 {
@@ -19,8 +20,8 @@ static double now_s(void)
 
 int nbt_table_is_gslice(const nbt_table *t)
 {
-    return t && (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J) && t->axis[2].n >= 2 && t->nch == 1 &&
-           t->k[0] == -1 && !strcmp(t->phase, "hg");
+    return t && (t->kind == NBT_TABLE_H || t->kind == NBT_TABLE_J) && t->axis[2].n >= 2 &&
+           (t->nch == 1 || (t->nch == 2 && t->form == NBT_FORM_TAIL)) && t->k[0] == -1 && !strcmp(t->phase, "hg");
 }
 
 /* One fixed-phase slice at g over the table's axes 0 and 1. */
@@ -66,6 +67,13 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
 
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 {
+    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : NBT_FORM_PLAIN, o);
+}
+
+nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o)
+{
+    if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H))
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: the tail form is for H tables only");
     if (t->kind != NBT_TABLE_H && t->kind != NBT_TABLE_J)
         NBT_FAIL(NBT_EINVAL, "g-sliced table: the kind must be H or J");
     if (t->axis[2].n < 2)
@@ -79,6 +87,9 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
     snprintf(t->phase, sizeof t->phase, "hg");
     if (t->kind == NBT_TABLE_H)
         t->n = 0;
+    if (form == NBT_FORM_TAIL)
+        return nbt__tail_fill(t, o);
+    t->form = NBT_FORM_PLAIN;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
     double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
     double *gs = calloc(ng, sizeof *gs);
@@ -141,11 +152,14 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 
 static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1024};
 #define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])
+static const size_t PSIZES[] = {17, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049, 3073, 4097};
+#define NPSIZES (sizeof PSIZES / sizeof PSIZES[0])
 
 
+/* H (tail form): uniform in atanh g, quadratic; J: cos */
 static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
 {
-    return (nbt_axis){r->g[0], r->g[1], NBT_AXIS_COS, 0, n};
+    return (nbt_axis){r->g[0], r->g[1], r->kind == NBT_TABLE_H ? NBT_AXIS_ATANH : NBT_AXIS_COS, 0, n};
 }
 
 static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t errlen)
@@ -216,6 +230,46 @@ static nbt_status plan_axes(const nbt_gslice_request *r, unsigned nthreads, nbt_
     return st;
 }
 
+/* H in the tail form: sizes by a rule measured with bench/bench_gslice
+ * (doc/tables.md), no proxies: u (log1p_cbrt, c = 10) and v (cos) 129 nodes
+ * at tol 1e-3 relative, the bilinear error falling as N^-2; g uniform in
+ * atanh with 33 slices for atanh(g) spanning [-atanh 0.95, atanh 0.95] at
+ * 1e-3, quadratic, so the slice count scales with the atanh span and
+ * tol^(-1/3). The predicted time is the measured CPU time per node value
+ * (2.2e-6 s, error measurement included) over the threads. */
+static nbt_status plan_tail(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
+{
+    size_t nuv = r->size[0] > 0 ? r->size[0] : 129, nvv = r->size[1] > 0 ? r->size[1] : 129, ng = r->size[2];
+    if (r->tol > 0) {
+        double q = 1e-3 / r->tol, span = (atanh(r->g[1]) - atanh(r->g[0])) / (2.0 * atanh(0.95));
+        nuv = nvv = 4097;
+        for (size_t i = 0; i < NPSIZES; i++)
+            if ((double)PSIZES[i] >= 129.0 * sqrt(q) - 1e-9) {
+                nuv = nvv = PSIZES[i];
+                break;
+            }
+        ng = GSIZES[NGSIZES - 1];
+        double want = fmax(5.0, 1.0 + 32.0 * span * cbrt(q));
+        for (size_t i = 0; i < NGSIZES; i++)
+            if ((double)GSIZES[i] >= want - 1e-9) {
+                ng = GSIZES[i];
+                break;
+            }
+        if (nuv > 4096)
+            nuv = nvv = 4096;
+    }
+    double xmax = r->xmax;
+    out->axis[0] = (nbt_axis){0.0, xmax, NBT_AXIS_LOG1P_CBRT, 10.0, nuv};
+    out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_COS, 0.0, nvv};
+    out->axis[2] = g_axis(r, ng);
+    out->pred_err = r->tol;
+    unsigned nt = nthreads ? nthreads : 2;
+    out->pred_seconds = 2.2e-6 * (double)nuv * (double)nvv * (double)ng / (double)(nt > 2 ? 2 : nt);
+    out->bytes = (double)nuv * (double)nvv * (double)ng * 2.0 * (r->half ? 2.0 : 4.0);
+    out->plan_seconds = now_s() - t0;
+    return NBT_OK;
+}
+
 nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
                            size_t errlen)
 {
@@ -225,6 +279,8 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
+    if (r->kind == NBT_TABLE_H)
+        return plan_tail(r, nthreads, out, t0);
     if ((st = plan_axes(r, nthreads, &out->axis[0], &out->axis[1], err, errlen)) != NBT_OK)
         return st;
     /* the g error at 9 slices on a 33^2 grid, decaying as (8/(ng-1))^1.5
@@ -272,8 +328,8 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
         if (st != NBT_OK)
             return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
         double rel = (*out)->max_err[0] / (*out)->max_abs[0];
-        if (r->tol == 0 || rel <= r->tol)
-            break;
+        if (r->tol == 0 || rel <= r->tol || (*out)->form == NBT_FORM_TAIL)
+            break; /* tail: max_err is set by the corner u -> 0, v -> pi/2; the error map bounds each lookup */
         size_t n2 = nbt__ladder_next(GSIZES, NGSIZES, ng);
         nbt_table_free(*out);
         *out = NULL;
@@ -282,6 +338,8 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
                          p->axis[0].n, p->axis[1].n, ng, rel, r->tol);
         ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
     }
+    if (r->half && (*out)->form == NBT_FORM_TAIL)
+        return nbt__tail_round_half(*out);
     if (r->half)
         nbt_table_round_half(*out);
     return NBT_OK;
@@ -400,6 +458,30 @@ static nbt_status check_g(const nbt_table *t, double g, nbt_table_kind kind)
     return NBT_OK;
 }
 
+nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
+                                       double *abserr)
+{
+    nbt_status st = nbt_airlight_check(geo);
+    if (st != NBT_OK)
+        return st;
+    if ((st = check_g(t, g, NBT_TABLE_H)) != NBT_OK)
+        return st;
+    double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma);
+    if (!(h > 0.0))
+        NBT_FAIL(NBT_EDOM, "airlight: the lookup is undefined on the source axis (gamma = 0 or pi)");
+    if (t->form == NBT_FORM_TAIL) {
+        int gauss;
+        nbt__airlight_tail(t, g, geo, La, abserr, &gauss);
+    } else {
+        double u = geo->kappa_t * h, th0 = geo->gamma - NBT_PI_2, a[NBT_TABLE_MAX_CH], b[NBT_TABLE_MAX_CH];
+        double thd = isinf(geo->dvp) ? NBT_PI_2 : atan2(geo->dvp - tt, h);
+        nbt_table_lookup3(t, u, thd, g, a);
+        nbt_table_lookup3(t, u, th0, g, b);
+        nbt__airlight_from_diff(geo, h, tt, a[0] - b[0], 2.0 * t->max_err[0], La, abserr);
+    }
+    return geo->kappa_t * h > t->axis[0].hi ? NBT_ETOL : NBT_OK;
+}
+
 nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                 double *abserr)
 {
@@ -408,21 +490,18 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
         return st;
     if ((st = check_g(t, g, NBT_TABLE_H)) != NBT_OK)
         return st;
-    double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma);
+    double h = geo->dsv * sin(geo->gamma);
     double Lt = NAN, Et = INFINITY;
     int outside = 0;
     if (h > 0.0) {
-        double u = geo->kappa_t * h, th0 = geo->gamma - NBT_PI_2;
-        double thd = isinf(geo->dvp) ? NBT_PI_2 : atan2(geo->dvp - tt, h), a, b;
-        outside = u > t->axis[0].hi;
-        nbt_table_lookup3(t, u, thd, g, &a);
-        nbt_table_lookup3(t, u, th0, g, &b);
-        double s = a - b, w = 2.0 * t->max_err[0];
-        nbt__airlight_from_diff(geo, h, tt, s, w, &Lt, &Et);
-        if (isnan(Et) || Et <= NBT__TABLE_RAY_FRAC * fabs(Lt)) {
+        st = nbt_airlight_table_g_lookup(t, g, geo, &Lt, &Et);
+        outside = st == NBT_ETOL;
+        /* tail form: the ray integral where the bound misses 1e-3; plain: 10% */
+        double frac = t->form == NBT_FORM_TAIL ? NBT_TAIL_RAY_TOL : NBT__TABLE_RAY_FRAC;
+        if (isnan(Et) || Et <= frac * fabs(Lt)) {
             *La = Lt;
             *abserr = Et;
-            return outside ? NBT_ETOL : NBT_OK;
+            return st;
         }
     }
     nbt_phase *p = nbt_phase_hg(g);

@@ -121,14 +121,15 @@ unsigned nbt_gl_upload_table(const nbt_table *t)
     size_t nx = t->axis[0].n, ny = t->axis[1].n, nz = t->axis[2].n, nv = nx * ny * nz;
     GLenum target = nbt_gl_table_target(t);
     /* 2-D tables stay RGBA (the Legendre shaders dot all four channels);
-     * a one-channel 3-D table needs only R (its shaders read .r) */
-    int red = target == GL_TEXTURE_3D && t->nch == 1;
+     * a one-channel 3-D table needs only R (its shaders read .r), and so
+     * does a tail-form one (channel 1 is libnbt's error map) */
+    int red = target == GL_TEXTURE_3D && (t->nch == 1 || t->form == NBT_FORM_TAIL);
     size_t nc = red ? 1 : 4;
     float *px = calloc(nv * nc, sizeof(float));
     if (!px)
         return 0;
     for (size_t i = 0; i < nv; i++)
-        for (size_t c = 0; c < t->nch; c++)
+        for (size_t c = 0; c < t->nch && c < nc; c++)
             px[i * nc + c] = t->data[i * t->nch + c];
     GLuint tex = 0;
     glGenTextures(1, &tex);

@@ -23,7 +23,7 @@ static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, 
     nbt_axis a0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, nx};
     nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI / 2, M_PI / 2, NBT_AXIS_COS, 0, ny}
                                       : (nbt_axis){0, M_PI, NBT_AXIS_LINEAR, 0, ny};
-    nbt_axis a2 = {glo, ghi, NBT_AXIS_COS, 0, ng};
+    nbt_axis a2 = {glo, ghi, kind == NBT_TABLE_H ? NBT_AXIS_ATANH : NBT_AXIS_COS, 0, ng};
     nbt_table *t = nbt_table_alloc3(kind, &a0, &a1, &a2, 1);
     t->n = n;
     nbt_build_opts o = {1e-10, 1, 2};
@@ -69,6 +69,57 @@ static void check_table(const nbt_table *t, int npts)
           nbt_table_kind_name(t->kind), m);
 }
 
+/* The tail form: C(u, v; g) is the unobstructed airlight of a ray whose
+ * foot point lies at distance h = 1 from the source with theta_0 = v, in a
+ * medium with kappa_t = u (kappa_s = I0 = 1): L_a = e^{-u d_sv} C/(4 pi)
+ * (doc/tables.md), so nbt_airlight_direct (Nishita's integral along the
+ * ray, adaptive) is an independent reference. The error map's bound
+ * (abserr of the pure lookup) covers |lookup - direct| at random (u, v, g)
+ * and a node holds log(C W) within float rounding. */
+static double tail_exact(double u, double v, double g, double *L, double *err)
+{
+    nbt_airlight_geom geo = {u, u, 1.0, 1.0 / cos(v), v + M_PI_2, INFINITY};
+    nbt_phase *p = nbt_phase_hg(g);
+    nbt_airlight_direct(p, &geo, 1e-11, L, err);
+    nbt_phase_free(p);
+    return *L * 4.0 * M_PI / u * exp(u * geo.dsv);
+}
+
+static void check_tail(const nbt_table *t, int npts)
+{
+    double worst = 0, worst_rel = 0;
+    int inside = 0;
+    for (int i = 0; i < npts; i++) {
+        double u = 1e-3 + (t->axis[0].hi - 1e-3) * pow(uni(), 3.0), v = -1.55 + 3.1 * uni();
+        double g = t->axis[2].lo + (t->axis[2].hi - t->axis[2].lo) * uni(), R, RE, L, E;
+        tail_exact(u, v, g, &R, &RE);
+        nbt_airlight_geom geo = {u, u, 1.0, 1.0 / cos(v), v + M_PI_2, INFINITY};
+        nbt_status st = nbt_airlight_table_g_lookup(t, g, &geo, &L, &E);
+        if (st != NBT_OK || !(fabs(L - R) <= E + RE)) {
+            t_true(0, "tail lookup u=%.4g v=%.4f g=%.4f: |%.10g - %.10g| = %.2e <= bound %.2e (status %d)", u, v, g,
+                   L, R, fabs(L - R), E, st);
+            return;
+        }
+        worst = fmax(worst, fabs(L - R) / E);
+        worst_rel = fmax(worst_rel, fabs(L - R) / R);
+        inside += E <= 1e-2 * R;
+    }
+    t_true(1, "H tail form: |lookup - direct| <= the error map's bound at %d random (u, v, g) (worst %.2f of it, "
+           "%.2e relative)", npts, worst, worst_rel);
+    /* a bound, not a gross overestimate: somewhere the true error reaches 1/30 of it */
+    t_true(worst >= 1.0 / 30, "H tail form: the bound is reached within 30x (worst true/bound %.3f)", worst);
+    t_true(inside >= npts / 2, "H tail form: the bound is under 1e-2 relative at %d of %d points", inside, npts);
+    /* a node: log(C W) */
+    size_t m = t->axis[2].n - 2, j = t->axis[1].n / 3, ii = t->axis[0].n / 2;
+    double g = nbt_axis_node(&t->axis[2], m), u = nbt_axis_node(&t->axis[0], ii), v = nbt_axis_node(&t->axis[1], j);
+    double R, RE, s = tan(M_PI / 4 + v / 2);
+    double C = tail_exact(u, v, g, &R, &RE);
+    /* float: rounding of log C W (~1e-7); half: the error map there, which takes the rounding in */
+    size_t at = ((m * t->axis[1].n + j) * t->axis[0].n + ii) * t->nch;
+    t_rel(exp(t->data[at]), C * (1 + s / 2 + u * s * s / 2), t->half ? t->data[at + 1] : 1e-6,
+          "H tail slice %zu node = log(C W) of the direct integral", m);
+}
+
 static void test_airlight(const nbt_table *t)
 {
     /* lookup within its bound (plus the reference's error) of the direct
@@ -88,8 +139,11 @@ static void test_airlight(const nbt_table *t)
         t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-12 * fabs(R),
                "airlight_table_g g=%.3f gamma=%.3f dvp=%g: |%.8g - %.8g| <= bound %.2e", g, geo.gamma, geo.dvp, L, R,
                E);
+        /* the tail route's promise: a lookup only where its bound is within 1e-3 */
+        t_true(E <= 1e-3 * fabs(L), "airlight_table_g g=%.3f gamma=%.3f: bound %.2e <= 1e-3 of the value", g,
+               geo.gamma, E / fabs(L));
     }
-    t_true(fell < n, "airlight_table_g: the lookup served %d of %d rays", n - fell, n);
+    t_true(fell <= n / 4, "airlight_table_g (tail form): the lookup served %d of %d rays", n - fell, n);
     /* on the source axis the ray integral with HG(g) */
     nbt_airlight_geom ax = {0.3, 0.5, 2.0, 3.0, M_PI, 5.0};
     double L, E, R, RE;
@@ -154,6 +208,14 @@ static void test_errors(nbt_table *H, nbt_table *J)
     t3->kind = NBT_TABLE_PSI;
     t_true(nbt_gslice_fill(t3, &o) == NBT_EINVAL, "fill of a PSI table: EINVAL");
     nbt_table_free(t3);
+    nbt_axis b0 = {0, 1, NBT_AXIS_LINEAR, 0, 3}, b1 = {-M_PI / 2, M_PI / 2, NBT_AXIS_COS, 0, 3};
+    nbt_table *t4 = nbt_table_alloc3(NBT_TABLE_H, &b0, &b1, &(nbt_axis){-0.5, 0.5, NBT_AXIS_ATANH, 0, 2}, 1);
+    t_true(nbt_gslice_fill(t4, &o) == NBT_EINVAL, "tail form with 2 g slices: EINVAL (quadratic in g needs 3)");
+    nbt_table_free(t4);
+    t4 = nbt_table_alloc3(NBT_TABLE_J, &b0, &a1, &(nbt_axis){-0.5, 0.5, NBT_AXIS_ATANH, 0, 3}, 1);
+    t4->n = 1;
+    t_true(nbt_gslice_fill_form(t4, NBT_FORM_TAIL, &o) == NBT_EINVAL, "tail form for a J table: EINVAL");
+    nbt_table_free(t4);
     nbt_airlight_geom geo = {0.3, 0.5, 2.0, 3.0, 1.0, 5.0};
     double L, E;
     t_true(nbt_airlight_table_g(J, 0.1, &geo, &L, &E) == NBT_EINVAL, "airlight from a J table: EINVAL");
@@ -183,9 +245,9 @@ static void test_build_io(void)
     t_true(st == NBT_OK, "error-driven build tol 2e-2: status %d %s", st, err);
     if (st != NBT_OK)
         return;
-    t_true(t->max_err[0] / t->max_abs[0] <= r.tol, "build: recorded %.2e relative <= tol",
-           t->max_err[0] / t->max_abs[0]);
-    check_table(t, 60);
+    t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 2,
+           "build: H in the tail form on an atanh g axis, quadratic in g");
+    check_tail(t, 60);
     char path[] = "/tmp/test_gslice_XXXXXX.exr";
     int fd = mkstemps(path, 4);
     close(fd);
@@ -196,19 +258,36 @@ static void test_build_io(void)
         st = nbt_table_read_exr(path, &back, rerr, sizeof rerr);
     unlink(path);
     t_true(st == NBT_OK && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
-               back->max_err[0] == t->max_err[0],
+               back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 2 &&
+               back->nch == 2 && back->data[5] == t->data[5],
            "EXR round trip keeps the g-sliced table (%zu slices)", t->axis[2].n);
     nbt_table_free(back);
+    nbt_table_free(t);
+    /* half floats: log values rounded to 11 bits (up to 2.4e-4 of |log C W| <= ~7), which the
+     * error map takes in */
+    r.half = 1;
+    st = nbt_gslice_build(&r, 2, &t, NULL, err, sizeof err);
+    t_true(st == NBT_OK && t->half, "error-driven build, half floats: status %d %s", st, err);
+    if (st == NBT_OK)
+        check_tail(t, 60);
     nbt_table_free(t);
 }
 
 int main(void)
 {
-    nbt_table *H = small_table(NBT_TABLE_H, 0, 49, 49, 9, -0.4, 0.5);
+    nbt_table *H = small_table(NBT_TABLE_H, 0, 97, 97, 9, -0.4, 0.5);
     nbt_table *J = small_table(NBT_TABLE_J, 1, 33, 33, 9, -0.5, 0.7);
     t_true(nbt_table_is_gslice(H) && nbt_table_is_gslice(J), "fill marks the tables g-sliced");
-    check_table(H, 300);
+    check_tail(H, 200);
     check_table(J, 80);
+    /* the plain form (older files) still builds and bounds its error */
+    nbt_table *P = nbt_table_alloc3(NBT_TABLE_H, &H->axis[0], &H->axis[1],
+                                    &(nbt_axis){-0.4, 0.5, NBT_AXIS_COS, 0, 9}, 1);
+    nbt_build_opts po = {1e-10, 1, 2};
+    t_true(nbt_gslice_fill_form(P, NBT_FORM_PLAIN, &po) == NBT_OK && P->form == NBT_FORM_PLAIN && P->nch == 1,
+           "plain-form H fill");
+    check_table(P, 100);
+    nbt_table_free(P);
     test_airlight(H);
     test_surface(J);
     test_errors(H, J);

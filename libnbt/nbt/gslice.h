@@ -41,6 +41,15 @@ extern "C" {
  * NBT_EINVAL for a 2-D table or another kind, NBT_EDOM for a g axis
  * outside the range. */
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
+/* The same in a given value form: nbt_gslice_fill is this with
+ * NBT_FORM_TAIL for H and NBT_FORM_PLAIN for J. TAIL (H only; axis[1] must
+ * be [-pi/2, pi/2], axis[0] start at 0) stores R = C(u, v; g) W(u, v),
+ * C the scaled tail integral of nbt/table.h, W = 1 + s/2 + u s^2/2,
+ * s = tan(pi/4 + v/2) (R(u, pi/2) = 4 pi p_g(-1)), sets interp2 = 2
+ * (3 slices or more) and records the error relative to the value: cell_err
+ * per g cell, max_err their largest (doc/tables.md). PLAIN as described
+ * above. NBT_EINVAL for TAIL on a J table. */
+nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o);
 
 /* An error-driven g-sliced table. */
 typedef struct {
@@ -110,14 +119,27 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
 /* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
 int nbt_table_is_gslice(const nbt_table *t);
 
-/* Airlight from a g-sliced H table at run-time g (nbt/airlight.h's L_a with
- * the trilinear lookup, as a shader does) and its bound: 2 max_err times the
- * prefactor. The fallback policy is nbt_airlight_table_e's: where the bound
- * exceeds 10% of the value (or on the source axis) the ray integral with
- * HG(g) is returned with its error estimate. NBT_EDOM for g outside the
+/* Airlight from a g-sliced H table at run-time g: the lookup of
+ * nbt_airlight_table_g_lookup and its bound. Tail form: where the bound
+ * exceeds 1e-3 of the value (or on the source axis) the ray integral with
+ * HG(g) is returned with its error estimate. Plain form (older files): the
+ * trilinear difference, bound 2 max_err times the prefactor, with
+ * nbt_airlight_table_e's fallback policy (bound beyond 10% of the value). NBT_EDOM for g outside the
  * table's g range (no extrapolation), NBT_ETOL for u beyond its u range. */
 nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                 double *abserr);
+/* The lookup alone, exactly the shader's arithmetic (shaders/nbt_airlight.glsl,
+ * NBT_G_SLICED), no fallback: for a tail-form table
+ *   L_a = kappa_s I0/(4 pi h) [e^{-kappa_t d_sv} C(u, theta_0) - e^{-kappa_t (d_sp + d_vp)} C(u, theta_d)]
+ * with C = exp(lookup)/W, or, where the second term exceeds 0.25 of the
+ * first, the 16-point Gauss-Legendre rule over [theta_0, theta_d] in HG's
+ * angle phi (doc/tables.md); abserr: the error map's bound (Gauss: twice
+ * the difference from 32 points); a plain table: the difference of two
+ * lookups, bound 2 max_err times the prefactor. NBT_EDOM on the source
+ * axis (h = 0) and for g outside the range, NBT_ETOL for u beyond it (the
+ * value is the clamped lookup's). */
+nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
+                                       double *abserr);
 
 /* Surface radiance from g-sliced J tables at run-time g: diffuse (n = 1)
  * and specular (n = geo->n) tables (either may be NULL when kd resp. ks is

@@ -80,9 +80,17 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
 typedef enum {
     NBT_FORM_PLAIN,
+    /* g-sliced H only (nbt/gslice.h, doc/tables.md): channel 0 holds
+     * log(C W), C the scaled tail integral
+     *   C(u, v; g) = int_v^{pi/2} exp(-u (s(t) - s(v))) 4 pi p_g(-sin t) dt,
+     * W = 1 + s(v)/2 + u s(v)^2/2, s(t) = tan(pi/4 + t/2): smooth, no
+     * forward peak to subtract, and the airlight needs only physical
+     * exponentials; channel 1 a per-node relative error map; cell_err and
+     * max_err are relative too */
+    NBT_FORM_TAIL,
 } nbt_table_form;
 
-/* "plain", ...; parse returns NBT_EFORMAT for other names. */
+/* "plain", "tail"; parse returns NBT_EFORMAT for other names. */
 const char *nbt_table_form_name(nbt_table_form f);
 nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f);
 
