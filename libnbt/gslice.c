@@ -9,6 +9,7 @@
 #include <nbt/gslice.h>
 #include <nbt/plan.h>
 #include "internal.h"
+#include "gslice_j.h"
 
 static double now_s(void)
 {
@@ -51,6 +52,8 @@ static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts
 static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
                                nbt_table **out)
 {
+    if (t->kind == NBT_TABLE_J)
+        return nbt__gslice_j_slices(t, g, m, o, out);
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++)
         out[i] = NULL;
@@ -80,12 +83,13 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
     if (t->kind == NBT_TABLE_H)
         t->n = 0;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
-    double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
-    double *gs = calloc(ng, sizeof *gs);
+    double qerr = 0, amax = 0;
+    double *gs = calloc(ng, sizeof *gs), *serr = calloc(ng, sizeof *serr);
     nbt_table **sl = calloc(ng, sizeof *sl);
-    if (!gs || !sl) {
+    if (!gs || !sl || !serr) {
         free(gs);
         free(sl);
+        free(serr);
         NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory");
     }
     for (size_t m = 0; m < ng; m++)
@@ -93,8 +97,7 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
     nbt_status st = build_slices(t, gs, ng, o, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
         memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
-        if (o->measure_error)
-            slice_err = fmax(slice_err, sl[m]->max_err[0]);
+        serr[m] = o->measure_error ? sl[m]->max_err[0] : NAN;
         qerr = fmax(qerr, sl[m]->quad_err);
         amax = fmax(amax, sl[m]->max_abs[0]);
     }
@@ -103,7 +106,7 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
         sl[m] = NULL;
     }
     /* the interpolation in g: exact slices at every g midpoint against the
-     * lookup at every (u, v) node */
+     * lookup at every (u, v) node (quadratic: both stencils that meet there) */
     nbt_build_opts om = *o;
     om.measure_error = 0;
     if (st == NBT_OK && o->measure_error) {
@@ -111,27 +114,47 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
             gs[m] = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
         st = build_slices(t, gs, ng - 1, &om, sl);
     }
+    int quad = t->interp2 == 2 && ng >= 3;
+    double maxe = 0;
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
-        for (size_t j = 0; j < ny; j++) {
-            double y = nbt_axis_node(&t->axis[1], j);
-            for (size_t i = 0; i < nx; i++) {
-                double v;
-                nbt_table_lookup3(t, nbt_axis_node(&t->axis[0], i), y, gs[m], &v);
-                gerr = fmax(gerr, fabs(v - (double)sl[m]->data[j * nx + i]));
+        double gm = 0, se = 0;
+        for (size_t c = m; c <= m + 1; c++) {
+            /* stencil centre and weights at the midpoint p = m + 1/2 */
+            size_t mc = quad ? (c < 1 ? 1 : c > ng - 2 ? ng - 2 : c) : m;
+            double tt = (double)m + 0.5 - (double)mc;
+            double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)};
+            if (!quad)
+                w[0] = 0.0, w[1] = w[2] = 0.5; /* slices m, m + 1 */
+            size_t m0 = quad ? mc - 1 : m - 1; /* w[q] weighs slice m0 + q (w[0] = 0 when linear) */
+            for (int q = 0; q < 3; q++)
+                if (w[q] != 0.0)
+                    se = fmax(se, serr[m0 + (size_t)q]);
+            for (size_t k = 0; k < ns; k++) {
+                double v = 0;
+                for (int q = 0; q < 3; q++)
+                    if (w[q] != 0.0)
+                        v += w[q] * (double)t->data[(m0 + (size_t)q) * ns + k];
+                gm = fmax(gm, fabs(v - (double)sl[m]->data[k]));
             }
         }
         qerr = fmax(qerr, sl[m]->quad_err);
+        /* in-slice errors weighted by sum |w| <= 1.25 (quadratic), 1 (linear) */
+        t->cell_err[m] = gm + (quad ? 1.25 : 1.0) * se;
+        maxe = fmax(maxe, t->cell_err[m]);
     }
+    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++)
+        t->cell_err[m] += qerr;
     for (size_t m = 0; m < ng; m++)
         nbt_table_free(sl[m]);
     free(sl);
     free(gs);
+    free(serr);
     if (st != NBT_OK)
         return st;
     t->quad_tol = o->quad_tol;
     t->quad_err = qerr;
     t->max_abs[0] = amax;
-    t->max_err[0] = o->measure_error ? slice_err + gerr + qerr : NAN;
+    t->max_err[0] = o->measure_error ? maxe + qerr : NAN;
     return NBT_OK;
 }
 

@@ -1,9 +1,55 @@
-/* libnbt/gslice_j.c: the J side of g-sliced tables (nbt/gslice.h):
- * surface radiance from g-sliced J^1 and J^n tables. */
+/* libnbt/gslice_j.c: the J side of g-sliced tables (nbt/gslice.h): the
+ * slices of J_p^n(T, theta; g) in the table's value form, the value and
+ * bound of a lookup, surface radiance from g-sliced J^1 and J^n tables. */
 #include <config.h>
 #include <math.h>
 #include <nbt/gslice.h>
 #include "internal.h"
+#include "gslice_j.h"
+
+double nbt__gslice_j_at(const nbt_table *t, double T, double theta, double g, double *err)
+{
+    double v, e = nbt_table_err_at(t, 0, g);
+    nbt_table_lookup3(t, T, theta, g, &v);
+    if (t->form != NBT_FORM_LOG_ET) {
+        *err = e;
+        return v;
+    }
+    /* v and the true T + ln J differ by at most e: J within J_lookup e^{+-e} */
+    v = exp(v - T);
+    *err = v * expm1(e);
+    return v;
+}
+
+nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
+                                nbt_table **out)
+{
+    nbt_status st = NBT_OK;
+    for (size_t i = 0; i < m; i++)
+        out[i] = NULL;
+    for (size_t i = 0; i < m && st == NBT_OK; i++) {
+        nbt_table *s = nbt_table_alloc(NBT_TABLE_J, &t->axis[0], &t->axis[1], 1);
+        nbt_phase *p = nbt_phase_hg(g[i]);
+        if (!s || !p)
+            st = nbt__fail(NBT_ENOMEM, "g-sliced J table: out of memory");
+        else {
+            s->k[0] = -1;
+            s->n = t->n;
+            s->form = t->form;
+            st = nbt_j_table_build(s, p, o);
+        }
+        nbt_phase_free(p);
+        if (st == NBT_OK)
+            out[i] = s;
+        else
+            nbt_table_free(s);
+    }
+    for (size_t i = 0; i < m && st != NBT_OK; i++) {
+        nbt_table_free(out[i]);
+        out[i] = NULL;
+    }
+    return st;
+}
 
 static nbt_status check_gj(const nbt_table *t, double g)
 {
@@ -39,13 +85,11 @@ nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specul
     double T = geo->kappa_t * geo->dsp, sd = 0, ss = 0, ed = 0, es = 0;
     int out = 0;
     if (geo->kd > 0) {
-        nbt_table_lookup3(diffuse, T, geo->theta_s, g, &sd);
-        ed = diffuse->max_err[0];
+        sd = nbt__gslice_j_at(diffuse, T, geo->theta_s, g, &ed);
         out |= T > diffuse->axis[0].hi;
     }
     if (geo->ks > 0) {
-        nbt_table_lookup3(specular, T, geo->theta_r, g, &ss);
-        es = specular->max_err[0];
+        ss = nbt__gslice_j_at(specular, T, geo->theta_r, g, &es);
         out |= T > specular->axis[0].hi;
     }
     double f = geo->kappa_s * geo->I0 / (4.0 * NBT_PI * geo->dsp);

@@ -419,6 +419,7 @@ typedef struct {
     int checked;                /* the check ran (on the node rows, once per build) */
     nbt__segfix *sf;            /* fixed rules for G (Legendre channels), or NULL */
     double check_err;           /* its result, added to later passes */
+    int logform;                /* values as ln(e^T J) (NBT_FORM_LOG_ET), errors relative */
 } jfill_ctx;
 
 /* g(y) on panel p, dg/dy, and the inverse */
@@ -636,6 +637,18 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
+        /* the log form: F -> T + ln F, and G's absolute error over the row's
+         * smallest J becomes a bound in ln (relative) */
+        for (size_t i = 0; i < nx && st == NBT_OK && c->logform; i++) {
+            double *Fi = F + i * ny * c->nch, jmin = INFINITY;
+            for (size_t k = 0; k < ny * c->nch; k++) {
+                jmin = fmin(jmin, Fi[k]);
+                Fi[k] = xs[i] + log(Fi[k]);
+            }
+            if (!(jmin > 0))
+                st = nbt__fail(NBT_EDOM, "J table: form log_et needs J > 0 at every node");
+            c->rowerr[i] /= jmin;
+        }
     }
     double e = 0;
     for (size_t i = 0; i < nx && c->rowerr; i++)
@@ -708,6 +721,10 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         st = nbt__fail(NBT_EDOM, "J table: axes must lie in T >= 0, theta in [0, pi]");
     else if (!(o->quad_tol > 0 && o->quad_tol < 1))
         st = nbt__fail(NBT_EDOM, "J table: quad_tol must lie in (0, 1)");
+    for (size_t i = 0; i < ntab && st == NBT_OK; i++)
+        if (ts[i]->form != t->form || (t->form != NBT_FORM_PLAIN && (t->form != NBT_FORM_LOG_ET || !fixed)))
+            st = nbt__fail(NBT_EINVAL, "J table: forms plain, or log_et for a fixed phase, the same for the set");
+    c.logform = t->form == NBT_FORM_LOG_ET;
     if (st != NBT_OK) {
         free(kmap);
         return st;

@@ -97,6 +97,8 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
 const char *nbt_table_form_name(nbt_table_form f)
 {
     switch (f) {
+    case NBT_FORM_LOG_ET:
+        return "log_et";
     case NBT_FORM_PLAIN:
     default:
         return "plain";
@@ -107,6 +109,8 @@ nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f)
 {
     if (!strcmp(name, "plain"))
         *f = NBT_FORM_PLAIN;
+    else if (!strcmp(name, "log_et"))
+        *f = NBT_FORM_LOG_ET;
     else
         return NBT_EFORMAT;
     return NBT_OK;

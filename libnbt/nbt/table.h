@@ -74,9 +74,10 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
 
 typedef enum {
     NBT_FORM_PLAIN,
+    NBT_FORM_LOG_ET,   /* J tables: ln(e^T J) = T + ln J (J > 0); the bilinear error is relative */
 } nbt_table_form;
 
-/* "plain", ...; parse returns NBT_EFORMAT for other names. */
+/* "plain", "log_et", ...; parse returns NBT_EFORMAT for other names. */
 const char *nbt_table_form_name(nbt_table_form f);
 nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f);
 
