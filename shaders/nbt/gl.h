@@ -72,7 +72,8 @@ void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0
 
 /* Set PREFIX_ax0, PREFIX_ax1, PREFIX_map0, PREFIX_map1 of the program in use
  * (e.g. prefix "nbt_H" or "nbt_J") from the table's axes; for a 3-D table
- * (axis[2].n > 1) also PREFIX_ax2, PREFIX_map2. */
+ * (axis[2].n > 1) also PREFIX_ax2, PREFIX_map2, PREFIX_form (1: log_et,
+ * else 0) and PREFIX_interp2 (the table's g interpolation). */
 void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table *t);
 
 /* GL_TEXTURE_2D for a 2-D table, GL_TEXTURE_3D for a 3-D (g-sliced) one: the
