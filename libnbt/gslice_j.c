@@ -3,6 +3,7 @@
  * bound of a lookup, surface radiance from g-sliced J^1 and J^n tables. */
 #include <config.h>
 #include <math.h>
+#include <stdio.h>
 #include <nbt/gslice.h>
 #include "internal.h"
 #include "gslice_j.h"
@@ -25,25 +26,20 @@ nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, c
                                 nbt_table **out)
 {
     nbt_status st = NBT_OK;
-    for (size_t i = 0; i < m; i++)
-        out[i] = NULL;
-    for (size_t i = 0; i < m && st == NBT_OK; i++) {
-        nbt_table *s = nbt_table_alloc(NBT_TABLE_J, &t->axis[0], &t->axis[1], 1);
-        nbt_phase *p = nbt_phase_hg(g[i]);
-        if (!s || !p)
+    for (size_t i = 0; i < m; i++) {
+        out[i] = nbt_table_alloc(NBT_TABLE_J, &t->axis[0], &t->axis[1], 1);
+        if (!out[i]) {
             st = nbt__fail(NBT_ENOMEM, "g-sliced J table: out of memory");
-        else {
-            s->k[0] = -1;
-            s->n = t->n;
-            s->form = t->form;
-            st = nbt_j_table_build(s, p, o);
+            continue;
         }
-        nbt_phase_free(p);
-        if (st == NBT_OK)
-            out[i] = s;
-        else
-            nbt_table_free(s);
+        out[i]->k[0] = -1;
+        out[i]->n = t->n;
+        out[i]->form = t->form;
+        snprintf(out[i]->phase, sizeof out[i]->phase, "hg:%.17g", g[i]);
     }
+    /* all slices in one pass (one quadrature per node for every g) */
+    if (st == NBT_OK)
+        st = nbt__j_table_build_hg(out, m, g, o);
     for (size_t i = 0; i < m && st != NBT_OK; i++) {
         nbt_table_free(out[i]);
         out[i] = NULL;

@@ -17,4 +17,10 @@ nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, c
  * with bound J (e^err - 1); PLAIN: the lookup and err itself. */
 double nbt__gslice_j_at(const nbt_table *t, double T, double theta, double g, double *err);
 
+/* J tables (surface.c) for HG at g[0..m-1], one one-channel table each
+ * (same axes, n and form), in one pass: each quadrature node's exponential
+ * and the kernel matrix shared by all of them, panels graded for the most
+ * peaked g. */
+nbt_status nbt__j_table_build_hg(nbt_table *const *ts, size_t m, const double *g, const nbt_build_opts *o);
+
 #endif

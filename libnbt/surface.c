@@ -8,6 +8,7 @@
 #include <nbt/surface.h>
 #include "internal.h"
 #include "tablefill.h"
+#include "gslice_j.h"
 
 #define SEG_MAX_INTERVALS 2000
 
@@ -198,14 +199,14 @@ static nbt_status j_eval(const nbt__weights *w, int n, double T, double theta, d
 
 nbt_status nbt_jk(size_t kmax, int n, double T, double theta, double tol, double *J, double *abserr)
 {
-    nbt__weights w = {kmax, NULL, NULL};
+    nbt__weights w = {kmax, NULL, NULL, NULL, 0};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
 nbt_status nbt_j_phase(const nbt_phase *p, int n, double T, double theta, double tol,
                        double *J, double *abserr)
 {
-    nbt__weights w = {0, p, NULL};
+    nbt__weights w = {0, p, NULL, NULL, 0};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
@@ -327,7 +328,7 @@ nbt_status nbt_surface_series(const double *b, size_t nterms, const nbt_surface_
     if (nterms == 0)
         NBT_FAIL(NBT_EINVAL, "surface: need at least one Legendre term");
     /* one channel: J of the truncated series sum_k (2k+1) b_k P_k */
-    nbt__weights w = {nterms - 1, NULL, b};
+    nbt__weights w = {nterms - 1, NULL, b, NULL, 0};
     double T = g->kappa_t * g->dsp, s = 0, e = 0;
     for (int lobe = 0; lobe < 2 && st == NBT_OK; lobe++) {
         double coef = lobe == 0 ? g->kd : g->ks, J, Je;
@@ -481,25 +482,27 @@ static nbt_status jpanels_init(jpanels *P, size_t ngeo, size_t nhi, int split, c
 static nbt_status j_grow(size_t i, unsigned thread, void *vp)
 {
     jfill_ctx *c = vp;
-    double e = 0, *err = c->buf[thread];
+    double *err = c->buf[thread], *re = c->rowerr + i * c->fdim;
+    for (unsigned k = 0; k < c->fdim; k++)
+        re[k] = 0.0;
     for (size_t q = 0; q < c->P->Q; q++) {
         double *G = c->G + (i * c->P->Q + q) * c->fdim;
         if (c->sf) {
             /* Legendre channels: fixed rules, one a-priori bound for all orders */
             double T = c->xs[i], g = c->P->gq[q], b = 0, ex = exp(-T);
             nbt__segfix_eval(c->sf, &c->w, T * sin(g), g - NBT_PI_2, NBT_PI_2, 1, G, err, &b);
-            for (unsigned k = 0; k < c->fdim; k++)
+            for (unsigned k = 0; k < c->fdim; k++) {
                 G[k] *= ex;
-            e = fmax(e, b * ex);
+                re[k] = fmax(re[k], b * ex);
+            }
             continue;
         }
         nbt_status st = g_eval(c->ws[thread], &c->w, c->xs[i], c->P->gq[q], c->tol, G, err);
         if (st != NBT_OK)
             return st;
         for (unsigned k = 0; k < c->fdim; k++)
-            e = fmax(e, err[k]);
+            re[k] = fmax(re[k], err[k]);
     }
-    c->rowerr[i] = e;
     return NBT_OK;
 }
 
@@ -629,30 +632,34 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->F = F;
     c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
     c->M = malloc(ny * P->Q * sizeof(double));
-    c->rowerr = calloc(nx, sizeof(double));
+    c->rowerr = calloc(nx * c->fdim, sizeof(double));
     nbt_status st = NBT_ENOMEM;
+    double e = 0;
     if (c->G && c->M && c->rowerr) {
         st = nbt__parallel_for(nx, c->nt, j_grow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
-        /* the log form: F -> T + ln F, and G's absolute error over the row's
-         * smallest J becomes a bound in ln (relative) */
-        for (size_t i = 0; i < nx && st == NBT_OK && c->logform; i++) {
-            double *Fi = F + i * ny * c->nch, jmin = INFINITY;
-            for (size_t k = 0; k < ny * c->nch; k++) {
-                jmin = fmin(jmin, Fi[k]);
-                Fi[k] = xs[i] + log(Fi[k]);
+        /* G's error per row and component; in the log form F -> T + ln F,
+         * and that error over the smallest J of its channel in the row
+         * becomes a bound in ln (relative) */
+        for (size_t i = 0; i < nx && st == NBT_OK; i++)
+            for (size_t ch = 0; ch < c->nch; ch++) {
+                double *Fi = F + i * ny * c->nch + ch, jmin = INFINITY;
+                double re = c->rowerr[i * c->fdim + (c->w.phase ? 0u : (unsigned)c->kmap[ch])];
+                if (c->logform) {
+                    for (size_t j = 0; j < ny; j++) {
+                        jmin = fmin(jmin, Fi[j * c->nch]);
+                        Fi[j * c->nch] = xs[i] + log(Fi[j * c->nch]);
+                    }
+                    if (!(jmin > 0))
+                        st = nbt__fail(NBT_EDOM, "J table: form log_et needs J > 0 at every node");
+                    re /= jmin;
+                }
+                e = fmax(e, re);
             }
-            if (!(jmin > 0))
-                st = nbt__fail(NBT_EDOM, "J table: form log_et needs J > 0 at every node");
-            c->rowerr[i] /= jmin;
-        }
     }
-    double e = 0;
-    for (size_t i = 0; i < nx && c->rowerr; i++)
-        e = fmax(e, c->rowerr[i]);
     *gerr = 2.0 * NBT_PI * e;
     free(c->G);
     free(c->M);
@@ -702,14 +709,30 @@ static nbt_status j_fill(void *vp, const double *xs, size_t nx, const double *ys
     return st;
 }
 
-nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const nbt_build_opts *o)
+/* a fixed phase, HG at hg[0..ntab-1] (one one-channel table each, filled
+ * in one pass), or (both NULL) Legendre channels */
+static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const double *hg,
+                          const nbt_build_opts *o)
 {
     int *kmap;
     jfill_ctx c = {.tol = o->quad_tol};
     c.w.phase = fixed;
-    nbt_status st = nbt__table_set_prepare(ts, ntab, fixed, &kmap, &c.nch, &c.w.kmax);
+    nbt_phase *any = hg ? nbt_phase_hg(hg[0]) : NULL; /* set_prepare: channels are fixed-phase ones */
+    nbt_status st = hg && !any ? NBT_ENOMEM : nbt__table_set_prepare(ts, ntab, hg ? any : fixed, &kmap, &c.nch,
+                                                                        &c.w.kmax);
+    nbt_phase_free(any);
     if (st != NBT_OK)
         return st;
+    for (size_t i = 0; hg && i < ntab; i++) {
+        if (ts[i]->nch != 1)
+            st = nbt__fail(NBT_EINVAL, "J table: HG slices are one-channel tables");
+        kmap[i] = (int)i; /* slice i is component i */
+    }
+    if (hg) {
+        c.w.hg = hg;
+        c.w.nhg = ntab;
+        c.w.kmax = 0;
+    }
     c.kmap = kmap;
     nbt_table *t = ts[0];
     c.n = t->n;
@@ -722,7 +745,7 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     else if (!(o->quad_tol > 0 && o->quad_tol < 1))
         st = nbt__fail(NBT_EDOM, "J table: quad_tol must lie in (0, 1)");
     for (size_t i = 0; i < ntab && st == NBT_OK; i++)
-        if (ts[i]->form != t->form || (t->form != NBT_FORM_PLAIN && (t->form != NBT_FORM_LOG_ET || !fixed)))
+        if (ts[i]->form != t->form || (t->form != NBT_FORM_PLAIN && (t->form != NBT_FORM_LOG_ET || !(fixed || hg))))
             st = nbt__fail(NBT_EINVAL, "J table: forms plain, or log_et for a fixed phase, the same for the set");
     c.logform = t->form == NBT_FORM_LOG_ET;
     if (st != NBT_OK) {
@@ -737,15 +760,18 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     /* a peaked fixed phase p(cos g) puts a feature of width ~1 - |mean
      * cosine| where the segment's lower end t = g - pi/2 crosses its peak:
      * at g = 0 (forward), g = pi (backward): panels graded to it */
-    double hmin = 0.2 / sqrt(1.0 + t->axis[0].hi), hpk = 1.0, mc = fixed ? nbt_phase_mean_cosine(fixed) : 0;
-    if (fixed)
-        hpk = 0.5 * (1.0 - fabs(mc));
-    if (mc > 0)
-        hmin = fmin(hmin, hpk);
+    double hmin = 0.2 / sqrt(1.0 + t->axis[0].hi), mc = fixed ? nbt_phase_mean_cosine(fixed) : 0;
+    double mfw = mc > 0 ? mc : 0, mbw = mc < 0 ? -mc : 0; /* the most forward and backward peaks */
+    for (size_t i = 0; hg && i < ntab; i++) {
+        mfw = fmax(mfw, hg[i]);
+        mbw = fmax(mbw, -hg[i]);
+    }
+    if (mfw > 0)
+        hmin = fmin(hmin, 0.5 * (1.0 - mfw));
     while (ngeo < 20 && NBT_PI / 8 * ldexp(1.0, -(int)ngeo) > hmin)
         ngeo++;
     size_t nhi = 0;
-    while (mc < 0 && nhi < 20 && NBT_PI / 8 * ldexp(1.0, -(int)nhi) > hpk)
+    while (mbw > 0 && nhi < 20 && NBT_PI / 8 * ldexp(1.0, -(int)nhi) > 0.5 * (1.0 - mbw))
         nhi++;
     size_t m = J_PANEL_NODES;
     nbt_gl_rule *rp = nbt_gl_rule_alloc(m);
@@ -773,7 +799,7 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
         c.ws = ws;
         c.buf = buf;
         c.tol = 0.1 * o->quad_tol;
-        if (!fixed && !(c.sf = nbt__segfix_alloc(c.tol)))
+        if (!fixed && !hg && !(c.sf = nbt__segfix_alloc(c.tol)))
             st = NBT_ENOMEM;
         if (st == NBT_OK)
             st = nbt__table_fill(ts, ntab, o->measure_error ? NBT__MEASURE_SPARSE : 0, j_fill, &c);
@@ -791,6 +817,16 @@ nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_ph
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "J table: out of memory");
     return st;
+}
+
+nbt_status nbt_j_table_build_set(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed, const nbt_build_opts *o)
+{
+    return j_build(ts, ntab, fixed, NULL, o);
+}
+
+nbt_status nbt__j_table_build_hg(nbt_table *const *ts, size_t m, const double *g, const nbt_build_opts *o)
+{
+    return j_build(ts, m, NULL, g, o);
 }
 
 nbt_status nbt_j_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)
