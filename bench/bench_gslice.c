@@ -325,7 +325,7 @@ int main(int argc, char **argv)
            "# |J|; after: in ln J, i.e. relative). 'bound <=1e-3': the route's bound certifies 1e-3.\n",
            TMAX_J, nrays / 2);
     /* T x theta x g: before and after at two sizes, then after only (before costs ~5x) */
-    static const size_t JN[][4] = {{33, 33, 33, 1}, {65, 65, 33, 1}, {33, 129, 17, 0}, {49, 193, 17, 0}, {65, 257, 17, 0}};
+    static const size_t JN[][4] = {{33, 33, 33, 1}, {65, 65, 33, 1}, {49, 193, 17, 0}, {65, 193, 33, 0}, {65, 257, 33, 0}};
     for (size_t k = 0; k < sizeof JN / sizeof JN[0]; k++)
         surface_part(nrays / 2, JN[k][0], JN[k][1], JN[k][2], (int)JN[k][3]);
     return 0;
