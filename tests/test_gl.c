@@ -467,6 +467,45 @@ static void test_gsliced(void)
     t_true(ndir >= 8 && worst_dir <= 1,
            "g-sliced surface (log_et J): shader = nbt_surface_direct within the recorded bound at %d pixels "
            "(worst %.2f of it; bound up to %.1e relative on these 25^2 x 9 tables)", ndir, worst_dir, bound_max);
+    /* issue 10's goal, 1e-3 relative from the shader alone: J^1, J^20 log_et tables sized for the
+     * alpha column's T = 1.2 (T in [0, 2.5]: 33 x 129 x 33, g in [-0.95, 0.95]) bound in place of the
+     * small ones; at the same pixels the shader is within 1e-3 of nbt_surface_direct (+ its error
+     * estimate). This asserts the goal as measured (7.2e-4 here), not a bound: libnbt's recorded
+     * bound for these tables is the largest over each g cell's whole (T, theta) slice (8.4e-3). */
+    nbt_axis f0 = {0, 2.5, NBT_AXIS_LOG1P_CBRT, 10, 33}, f1 = {0, M_PI, NBT_AXIS_LINEAR, 0, 129};
+    nbt_axis fg = {-0.95, 0.95, NBT_AXIS_ATANH, 0, 33}; /* the shader's J tables share their axes */
+    nbt_table *J1f = assemble_gsliced(NBT_TABLE_J, 1, &f0, &f1, &fg), *Jnf = assemble_gsliced(NBT_TABLE_J, (int)NPH, &f0, &f1, &fg);
+    t_true(J1f && Jnf, "g-sliced J 33x129x33 built");
+    if (J1f && Jnf) {
+        GLuint t1 = nbt_gl_bind_table(p, "nbt_J1_0", J1f, 9), t2 = nbt_gl_bind_table(p, "nbt_Jn_0", Jnf, 10);
+        nbt_gl_set_table_axes(p, "nbt_J", J1f);
+        glUniform1f(glGetUniformLocation(p, "nbt_g"), 0.0f);
+        gl_draw_fullscreen();
+        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+        double worst = 0, wb = 0;
+        int np = 0;
+        for (int j = 3; j < H; j += 12)
+            for (int i = 5; i < W; i += 16) {
+                double fx = (double)i / (W - 1), gr = (float)(-0.99 + 1.98 * (double)j / (H - 1)), L, E, R, RE;
+                if (fabs(gr) > 0.95)
+                    continue;
+                nbt_surface_geom sg6 = {KS, KT, I0, 6.0, fx * M_PI, (1 - fx) * 1.5, KD, KSP, (int)NPH};
+                nbt_phase *ph = nbt_phase_hg(gr);
+                nbt_surface_direct(ph, &sg6, 1e-9, &R, &RE);
+                nbt_phase_free(ph);
+                nbt_surface_table_g(J1f, Jnf, gr, &sg6, 0, &L, &E);
+                worst = fmax(worst, (fabs(px[(j * W + i) * 4 + 3] - R) - RE) / fabs(R));
+                wb = fmax(wb, E / fabs(L));
+                np++;
+            }
+        t_true(np >= 8 && worst <= 1e-3,
+               "g-sliced surface (log_et J 33x129x33): shader within 1e-3 of nbt_surface_direct at %d pixels "
+               "(worst %.1e; libnbt's recorded bound there up to %.1e)", np, worst, wb);
+        glDeleteTextures(1, &t1);
+        glDeleteTextures(1, &t2);
+    }
+    nbt_table_free(J1f);
+    nbt_table_free(Jnf);
     free(px);
     glDeleteTextures(3, tex);
     glDeleteProgram(p);
