@@ -124,8 +124,8 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
             double tt = (double)m + 0.5 - (double)mc;
             double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)};
             if (!quad)
-                w[0] = 0.0, w[1] = w[2] = 0.5; /* slices m, m + 1 */
-            size_t m0 = quad ? mc - 1 : m - 1; /* w[q] weighs slice m0 + q (w[0] = 0 when linear) */
+                w[0] = w[1] = 0.5, w[2] = 0.0; /* slices m, m + 1 */
+            size_t m0 = quad ? mc - 1 : m; /* w[q] weighs slice m0 + q */
             for (int q = 0; q < 3; q++)
                 if (w[q] != 0.0)
                     se = fmax(se, serr[m0 + (size_t)q]);
