@@ -4,9 +4,9 @@
  * airlight over random rays and g against the direct integral: the pure
  * lookup (what a shader computes) and the library route with its fallback
  * (nbt_airlight_table_g / nbt_airlight_table_e).
- * Then surface radiance from g-sliced J^1 tables (Legendre J packs: see
- * bench_tables).
- * Usage: bench_gslice [tol] [rays] [max_legendre_seconds]   (make bench) */
+ * Then surface radiance from g-sliced J^1 and J^20 tables, before and after
+ * the one-pass log_et fill (Legendre J packs: see bench_tables).
+ * Usage: bench_gslice [tol] [rays] [max_legendre_seconds] [j: surface only]   (make bench) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -130,46 +130,131 @@ static void row(const char *what, double G, const char *size, double mb, double 
            s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
 }
 
-/* Surface radiance (Lambert, kd = 1) from a g-sliced J^1 table over random
- * geometries (T = kappa_t d_sp <= XMAX, theta_s in [0, pi]: below the
- * horizon only scattered light arrives) against nbt_surface_direct: the
- * lookup (no fallback) and the route with fallback to the direct integral
- * where the bound exceeds 10% of the value. */
-static void surface_part(double tol, int n)
+/* Surface radiance from g-sliced J^1 and J^20 tables for g in [-0.95, 0.95],
+ * T = kappa_t d_sp in [0, 20] (d_sp up to 20 mean free paths), theta_s and
+ * theta_r in [0, pi] (below the horizon only scattered light arrives): the
+ * "before" tables (commit f7542cd's method: one fixed-phase build per slice,
+ * plain J, g on the cos mapping, trilinear; recorded error = largest
+ * in-slice + largest g error + quadrature) rebuilt here from public calls,
+ * and the "after" ones (nbt_gslice_fill: one pass for all slices, ln(e^T J),
+ * atanh g axis, quadratic in g, error per g cell) on the same T/theta axes
+ * and sizes, in this process. Against nbt_surface_direct (kd 0.7 Lambert +
+ * ks 0.3 Phong 20, the direct term included): the pure lookup (the shader's
+ * arithmetic) and the route (nbt_surface_table_g with fallback_tol, which
+ * integrates where its bound exceeds 10% of the value). */
+#define TMAX_J 20.0
+
+static nbt_table *j_before(int n, const nbt_axis *a0, const nbt_axis *a1, size_t ng, double *secs)
 {
-    static const double Gs[] = {0.5, 0.8, 0.9};
-    printf("# surface: g-sliced J^1, T in [0, %g], tol %g; %d random geometries and g; relative to\n"
-           "# nbt_surface_direct (the direct term included, as in L_p)\n", XMAX, tol, n);
-    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0]; gi++) {
-        double G = Gs[gi], secs;
-        nbt_gslice_request r = {NBT_TABLE_J, 1, XMAX, {-G, G}, tol, {0, 0, 0}, 0};
-        nbt_table *t = NULL;
-        char err[256];
-        if (nbt_gslice_build(&r, 2, &t, &secs, err, sizeof err) != NBT_OK) {
-            printf("J1 slices %4.2f  %s\n", G, err);
-            continue;
+    double t0 = now();
+    nbt_axis a2 = {-0.95, 0.95, NBT_AXIS_COS, 0, ng};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_J, a0, a1, &a2, 1);
+    size_t ns = a0->n * a1->n;
+    double serr = 0, gerr = 0, qerr = 0, amax = 0;
+    t->n = n;
+    t->k[0] = -1;
+    snprintf(t->phase, sizeof t->phase, "hg");
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t m = 0; m + (size_t)pass < ng; m++) {
+            double g = pass ? nbt_axis_from_unit(&a2, ((double)m + 0.5) / (double)(ng - 1)) : nbt_axis_node(&a2, m);
+            nbt_table *s = nbt_table_alloc(NBT_TABLE_J, a0, a1, 1);
+            nbt_phase *p = nbt_phase_hg(g);
+            nbt_build_opts o = {1e-10, !pass, 2};
+            s->n = n;
+            s->k[0] = -1;
+            nbt_j_table_build(s, p, &o);
+            qerr = fmax(qerr, s->quad_err);
+            if (!pass) {
+                memcpy(t->data + m * ns, s->data, ns * sizeof(float));
+                serr = fmax(serr, s->max_err[0]);
+                amax = fmax(amax, s->max_abs[0]);
+            } else
+                for (size_t k = 0; k < ns; k++) {
+                    double v;
+                    nbt_table_lookup3(t, nbt_axis_node(a0, k % a0->n), nbt_axis_node(a1, k / a0->n), g, &v);
+                    gerr = fmax(gerr, fabs(v - s->data[k]));
+                }
+            nbt_phase_free(p);
+            nbt_table_free(s);
         }
-        double wl = 0, wr = 0;
-        int ok = 0, fell = 0;
+    t->max_err[0] = serr + gerr + qerr;
+    t->max_abs[0] = amax;
+    t->quad_err = qerr;
+    *secs = now() - t0;
+    return t;
+}
+
+static nbt_table *j_after(int n, const nbt_axis *a0, const nbt_axis *a1, size_t ng, double *secs)
+{
+    double t0 = now();
+    nbt_axis a2 = {-0.95, 0.95, NBT_AXIS_ATANH, 0, ng};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_J, a0, a1, &a2, 1);
+    nbt_build_opts o = {1e-10, 1, 2};
+    t->n = n;
+    t->form = NBT_FORM_LOG_ET;
+    t->interp2 = 2;
+    nbt_gslice_fill(t, &o);
+    *secs = now() - t0;
+    return t;
+}
+
+/* the shader's arithmetic: the lookups in the tables' form, no fallback */
+static double surface_lookup(const nbt_table *J1, const nbt_table *Jn, double g, const nbt_surface_geom *geo)
+{
+    double T = geo->kappa_t * geo->dsp, v[2];
+    const nbt_table *t[2] = {J1, Jn};
+    double th[2] = {geo->theta_s, geo->theta_r};
+    for (int i = 0; i < 2; i++) {
+        nbt_table_lookup3(t[i], T, th[i], g, &v[i]);
+        if (t[i]->form == NBT_FORM_LOG_ET)
+            v[i] = exp(v[i] - T);
+    }
+    double direct = geo->I0 * exp(-T) / (geo->dsp * geo->dsp) *
+                    (geo->kd * fmax(cos(geo->theta_s), 0.0) + geo->ks * pow(fmax(cos(geo->theta_r), 0.0), geo->n));
+    return direct + geo->kappa_s * geo->I0 / (4.0 * M_PI * geo->dsp) * (geo->kd * v[0] + geo->ks * v[1]);
+}
+
+static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
+{
+    nbt_axis a0 = {0, TMAX_J, NBT_AXIS_LOG1P_CBRT, TMAX_J, NT}, a1 = {0, M_PI, NBT_AXIS_LINEAR, 0, N};
+    nbt_axis an = a1;
+    an.map = NBT_AXIS_COS; /* the planner's theta mappings: linear for Lambert, cos for Phong */
+    for (int after = !with_before; after < 2; after++) {
+        double s1, sn;
+        nbt_table *J1 = after ? j_after(1, &a0, &a1, ng, &s1) : j_before(1, &a0, &a1, ng, &s1);
+        nbt_table *Jn = after ? j_after(20, &a0, &an, ng, &sn) : j_before(20, &a0, &an, ng, &sn);
+        double wl = 0, wr = 0, *rel = malloc((size_t)n * sizeof(double));
+        int ok = 0, fell = 0, cert = 0;
+        unsigned long long seed = rs;
+        rs = 0x51ed2701ull; /* the same geometries for every table */
         for (int i = 0; i < n; i++) {
-            nbt_surface_geom geo = {0.3, 0.5, 1.0, 0.5 + 19.0 * uni(), M_PI * uni(), 0.5, 1.0, 0.0, 1};
-            double g = -G + 2.0 * G * uni(), R, RE, L, E, Lf, Ef;
+            nbt_surface_geom geo = {0.3, 0.5, 1.0, 0.05 + (2.0 * TMAX_J - 0.05) * uni(), M_PI * uni(), M_PI * uni(),
+                                    0.7, 0.3, 20};
+            double g = -0.95 + 1.9 * uni(), R, RE, L, E, Lf, Ef;
             nbt_phase *p = nbt_phase_hg(g);
             nbt_surface_direct(p, &geo, 1e-9, &R, &RE);
             nbt_phase_free(p);
-            nbt_surface_table_g(t, NULL, g, &geo, 0, &L, &E);
-            nbt_surface_table_g(t, NULL, g, &geo, 1e-9, &Lf, &Ef);
+            double Lp = surface_lookup(J1, Jn, g, &geo);
+            nbt_surface_table_g(J1, Jn, g, &geo, 0, &L, &E);
+            nbt_surface_table_g(J1, Jn, g, &geo, 1e-9, &Lf, &Ef);
             fell += Lf != L;
-            double e = fabs(L - R) / fabs(R);
-            ok += e <= 1e-3;
-            wl = fmax(wl, e);
+            cert += E <= 1e-3 * fabs(L);
+            rel[i] = fabs(Lp - R) / fabs(R);
+            ok += rel[i] <= 1e-3;
+            wl = fmax(wl, rel[i]);
             wr = fmax(wr, fabs(Lf - R) / fabs(R));
         }
-        printf("J1 slices %4.2f %zux%zux%zu %6.2f MB %6.2f s rec %.1e | lookup: worst %.1e <=1e-3 %3.0f%% | "
-               "route: worst %.1e fallback %3.0f%%\n", G, t->axis[0].n, t->axis[1].n, t->axis[2].n,
-               4e-6 * (double)nbt_table_size(t), secs, t->max_err[0] / t->max_abs[0], wl, 100.0 * ok / n, wr,
-               100.0 * fell / n);
-        nbt_table_free(t);
+        rs = seed;
+        qsort(rel, (size_t)n, sizeof(double), cmpd);
+        printf("%-6s J1+J20 %3zux%3zux%2zu x2 %5.2f MB build %5.2f s (J1 %.2f, J20 %.2f) rec J1 %.1e J20 %.1e | "
+               "lookup: worst %.1e median %.1e <=1e-3 %3.0f%% | bound <=1e-3 %3.0f%% | route: worst %.1e fallback %3.0f%%\n",
+               after ? "after" : "before", NT, N, ng, 8e-6 * (double)nbt_table_size(J1), s1 + sn, s1, sn,
+               after ? J1->max_err[0] : J1->max_err[0] / J1->max_abs[0],
+               after ? Jn->max_err[0] : Jn->max_err[0] / Jn->max_abs[0], wl, rel[n / 2], 100.0 * ok / n,
+               100.0 * cert / n, wr, 100.0 * fell / n);
+        free(rel);
+        nbt_table_free(J1);
+        nbt_table_free(Jn);
         fflush(stdout);
     }
 }
@@ -179,6 +264,7 @@ int main(int argc, char **argv)
     double tol = argc > 1 ? atof(argv[1]) : 1e-2;
     int nrays = argc > 2 ? atoi(argv[2]) : 200;
     double legmax = argc > 3 ? atof(argv[3]) : 30.0;
+    int only_j = argc > 4 && !strcmp(argv[4], "j"); /* the surface part alone */
     static const double Gs[] = {0.5, 0.8, 0.9, 0.95};
     printf("# H tables for HG g in [-G, G], u in [0, %g], tol %g (max_err / max |value|), 2 threads;\n"
            "# airlight over %d random rays (d_vp finite and infinite, gamma in (0.02, pi-0.02)) and g,\n"
@@ -194,7 +280,7 @@ int main(int argc, char **argv)
            "# equal lookups). 'rec': the recorded error, relative to max |value|\n"
            "# (Legendre: the tables' times the amplification plus the truncation).\n",
            XMAX, tol, nrays);
-    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0]; gi++) {
+    for (size_t gi = 0; gi < sizeof Gs / sizeof Gs[0] && !only_j; gi++) {
         double G = Gs[gi];
         /* Legendre packs, as nbt-gen airlight --g -G:G --basis legendre */
         nbt_plan_legendre leg;
@@ -260,7 +346,16 @@ int main(int argc, char **argv)
         nbt_table_free(t);
         fflush(stdout);
     }
-    if (!(argc > 4 && !strcmp(argv[4], "nosurface")))
-        surface_part(tol, nrays / 2);
+    if (!(argc > 4 && !strcmp(argv[4], "nosurface"))) {
+        printf("# surface: g-sliced J^1 (theta linear) and J^20 (theta cos), g in [-0.95, 0.95], T in [0, %g]\n"
+               "# (log1p_cbrt), 2 threads; %d random geometries (d_sp <= 40, kappa_t 0.5, theta_s, theta_r in [0, pi]) and g;\n"
+               "# relative to nbt_surface_direct (direct term included). 'rec': recorded error (before: relative to max\n"
+               "# |J|; after: in ln J, i.e. relative). 'bound <=1e-3': the route's bound certifies 1e-3.\n",
+               TMAX_J, nrays / 2);
+        /* T x theta x g: before and after at two sizes, then after only (before costs ~5x) */
+        static const size_t JN[][4] = {{33, 33, 33, 1}, {65, 65, 33, 1}, {49, 193, 17, 0}, {65, 193, 33, 0}, {65, 257, 33, 0}};
+        for (size_t k = 0; k < sizeof JN / sizeof JN[0]; k++)
+            surface_part(nrays / 2, JN[k][0], JN[k][1], JN[k][2], (int)JN[k][3]);
+    }
     return 0;
 }

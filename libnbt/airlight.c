@@ -32,7 +32,12 @@ double nbt__s_of_t(double t)
  * cancellation by the caller. */
 static void weights_at(const nbt__weights *w, double c, double sn, double *f)
 {
-    if (w->phase)
+    if (w->nhg) /* as nbt__phase_eval_cs's HG, times 4 pi */
+        for (size_t i = 0; i < w->nhg; i++) {
+            double g = w->hg[i], d = 1.0 + g * g - 2.0 * g * c;
+            f[i] = (1.0 - g * g) / (d * sqrt(d));
+        }
+    else if (w->phase)
         f[0] = 4.0 * NBT_PI * nbt__phase_eval_cs(w->phase, c, sn);
     else if (w->b)
         f[0] = nbt__legendre_series(w->b, w->kmax, c);
@@ -192,13 +197,13 @@ static nbt_status h_eval(const nbt__weights *w, double u, double v, double tol, 
 
 nbt_status nbt_hk(size_t kmax, double u, double v, double tol, double *H, double *abserr)
 {
-    nbt__weights w = {kmax, NULL, NULL};
+    nbt__weights w = {kmax, NULL, NULL, NULL, 0};
     return h_eval(&w, u, v, tol, H, abserr);
 }
 
 nbt_status nbt_h_phase(const nbt_phase *p, double u, double v, double tol, double *H, double *abserr)
 {
-    nbt__weights w = {0, p, NULL};
+    nbt__weights w = {0, p, NULL, NULL, 0};
     return h_eval(&w, u, v, tol, H, abserr);
 }
 
@@ -324,7 +329,7 @@ nbt_status nbt_airlight_series(const double *b, size_t nterms, const nbt_airligh
      * pi/2 to be resolved in angle: the same series in distance is exact. */
     if (sin(g->gamma) < 1e-4)
         return nbt__airlight_ray(NULL, b, nterms, g, tol, La, abserr);
-    nbt__weights w = {nterms - 1, NULL, b};
+    nbt__weights w = {nterms - 1, NULL, b, NULL, 0};
     nbt_quad_ws *ws = nbt_quad_ws_alloc(1, SEG_MAX_INTERVALS);
     if (!ws)
         NBT_FAIL(NBT_ENOMEM, "airlight: out of memory");

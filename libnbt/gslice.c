@@ -10,6 +10,7 @@
 #include <nbt/plan.h>
 #include "internal.h"
 #include "gslice_tail.h"
+#include "gslice_j.h"
 
 static double now_s(void)
 {
@@ -52,6 +53,8 @@ static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts
 static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
                                nbt_table **out)
 {
+    if (t->kind == NBT_TABLE_J)
+        return nbt__gslice_j_slices(t, g, m, o, out);
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++)
         out[i] = NULL;
@@ -67,13 +70,15 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
 
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 {
-    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : NBT_FORM_PLAIN, o);
+    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL
+                                   : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN, o);
 }
 
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o)
 {
-    if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H))
-        NBT_FAIL(NBT_EINVAL, "g-sliced table: the tail form is for H tables only");
+    if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H) &&
+        !(form == NBT_FORM_LOG_ET && t->kind == NBT_TABLE_J))
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: the forms are plain, tail (H only) and log_et (J only)");
     if (t->kind != NBT_TABLE_H && t->kind != NBT_TABLE_J)
         NBT_FAIL(NBT_EINVAL, "g-sliced table: the kind must be H or J");
     if (t->axis[2].n < 2)
@@ -89,14 +94,15 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
         t->n = 0;
     if (form == NBT_FORM_TAIL)
         return nbt__tail_fill(t, o);
-    t->form = NBT_FORM_PLAIN;
+    t->form = form;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
-    double slice_err = 0, gerr = 0, qerr = 0, amax = 0;
-    double *gs = calloc(ng, sizeof *gs);
+    double qerr = 0, amax = 0;
+    double *gs = calloc(ng, sizeof *gs), *serr = calloc(ng, sizeof *serr);
     nbt_table **sl = calloc(ng, sizeof *sl);
-    if (!gs || !sl) {
+    if (!gs || !sl || !serr) {
         free(gs);
         free(sl);
+        free(serr);
         NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory");
     }
     for (size_t m = 0; m < ng; m++)
@@ -104,8 +110,7 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     nbt_status st = build_slices(t, gs, ng, o, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
         memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
-        if (o->measure_error)
-            slice_err = fmax(slice_err, sl[m]->max_err[0]);
+        serr[m] = o->measure_error ? sl[m]->max_err[0] : NAN;
         qerr = fmax(qerr, sl[m]->quad_err);
         amax = fmax(amax, sl[m]->max_abs[0]);
     }
@@ -114,7 +119,7 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
         sl[m] = NULL;
     }
     /* the interpolation in g: exact slices at every g midpoint against the
-     * lookup at every (u, v) node */
+     * lookup at every (u, v) node (quadratic: both stencils that meet there) */
     nbt_build_opts om = *o;
     om.measure_error = 0;
     if (st == NBT_OK && o->measure_error) {
@@ -122,27 +127,47 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
             gs[m] = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
         st = build_slices(t, gs, ng - 1, &om, sl);
     }
+    int quad = t->interp2 == 2 && ng >= 3;
+    double maxe = 0;
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
-        for (size_t j = 0; j < ny; j++) {
-            double y = nbt_axis_node(&t->axis[1], j);
-            for (size_t i = 0; i < nx; i++) {
-                double v;
-                nbt_table_lookup3(t, nbt_axis_node(&t->axis[0], i), y, gs[m], &v);
-                gerr = fmax(gerr, fabs(v - (double)sl[m]->data[j * nx + i]));
+        double gm = 0, se = 0;
+        for (size_t c = m; c <= m + 1; c++) {
+            /* stencil centre and weights at the midpoint p = m + 1/2 */
+            size_t mc = quad ? (c < 1 ? 1 : c > ng - 2 ? ng - 2 : c) : m;
+            double tt = (double)m + 0.5 - (double)mc;
+            double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)};
+            if (!quad)
+                w[0] = w[1] = 0.5, w[2] = 0.0; /* slices m, m + 1 */
+            size_t m0 = quad ? mc - 1 : m; /* w[q] weighs slice m0 + q */
+            for (int q = 0; q < 3; q++)
+                if (w[q] != 0.0)
+                    se = fmax(se, serr[m0 + (size_t)q]);
+            for (size_t k = 0; k < ns; k++) {
+                double v = 0;
+                for (int q = 0; q < 3; q++)
+                    if (w[q] != 0.0)
+                        v += w[q] * (double)t->data[(m0 + (size_t)q) * ns + k];
+                gm = fmax(gm, fabs(v - (double)sl[m]->data[k]));
             }
         }
         qerr = fmax(qerr, sl[m]->quad_err);
+        /* in-slice errors weighted by sum |w| <= 1.25 (quadratic), 1 (linear) */
+        t->cell_err[m] = gm + (quad ? 1.25 : 1.0) * se;
+        maxe = fmax(maxe, t->cell_err[m]);
     }
+    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++)
+        t->cell_err[m] += qerr;
     for (size_t m = 0; m < ng; m++)
         nbt_table_free(sl[m]);
     free(sl);
     free(gs);
+    free(serr);
     if (st != NBT_OK)
         return st;
     t->quad_tol = o->quad_tol;
     t->quad_err = qerr;
     t->max_abs[0] = amax;
-    t->max_err[0] = o->measure_error ? slice_err + gerr + qerr : NAN;
+    t->max_err[0] = o->measure_error ? maxe + qerr : NAN;
     return NBT_OK;
 }
 
@@ -510,59 +535,6 @@ nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight
     st = nbt__airlight_ray_or_lookup(p, NULL, 0, geo, h, Lt, Et, outside, La, abserr);
     nbt_phase_free(p);
     return st;
-}
-
-static double surface_direct_term(const nbt_surface_geom *g)
-{
-    double cs = fmax(cos(g->theta_s), 0.0), cr = fmax(cos(g->theta_r), 0.0);
-    return g->I0 * exp(-g->kappa_t * g->dsp) / (g->dsp * g->dsp) * (g->kd * cs + g->ks * pow(cr, g->n));
-}
-
-nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specular, double g,
-                               const nbt_surface_geom *geo, double fallback_tol, double *Lp, double *abserr)
-{
-    nbt_status st = nbt_surface_check(geo);
-    if (st != NBT_OK)
-        return st;
-    if ((geo->kd > 0 && !diffuse) || (geo->ks > 0 && !specular))
-        NBT_FAIL(NBT_EINVAL, "surface: a lobe with a non-zero coefficient has no table");
-    if (diffuse && (st = check_g(diffuse, g, NBT_TABLE_J)) != NBT_OK)
-        return st;
-    if (specular && (st = check_g(specular, g, NBT_TABLE_J)) != NBT_OK)
-        return st;
-    if (diffuse && diffuse->n != 1)
-        NBT_FAIL(NBT_EINVAL, "surface: the diffuse table must have n = 1");
-    if (specular && specular->n != geo->n)
-        NBT_FAIL(NBT_EINVAL, "surface: the specular table must have the geometry's n");
-    double T = geo->kappa_t * geo->dsp, sd = 0, ss = 0, ed = 0, es = 0;
-    int out = 0;
-    if (geo->kd > 0) {
-        nbt_table_lookup3(diffuse, T, geo->theta_s, g, &sd);
-        ed = diffuse->max_err[0];
-        out |= T > diffuse->axis[0].hi;
-    }
-    if (geo->ks > 0) {
-        nbt_table_lookup3(specular, T, geo->theta_r, g, &ss);
-        es = specular->max_err[0];
-        out |= T > specular->axis[0].hi;
-    }
-    double f = geo->kappa_s * geo->I0 / (4.0 * NBT_PI * geo->dsp);
-    *Lp = surface_direct_term(geo) + f * (geo->kd * sd + geo->ks * ss);
-    *abserr = f * (geo->kd * ed + geo->ks * es);
-    if (fallback_tol > 0 && !(*abserr <= NBT__TABLE_RAY_FRAC * fabs(*Lp))) {
-        nbt_phase *p = nbt_phase_hg(g);
-        if (!p)
-            NBT_FAIL(NBT_ENOMEM, "surface: out of memory");
-        double L, E;
-        st = nbt_surface_direct(p, geo, fallback_tol, &L, &E);
-        nbt_phase_free(p);
-        if (st == NBT_OK || (st == NBT_ETOL && E < *abserr)) {
-            *Lp = L;
-            *abserr = E;
-            return st;
-        }
-    }
-    return out ? NBT_ETOL : NBT_OK;
 }
 
 nbt_status nbt_scene_basis(const nbt_scene *s, unsigned nthreads, nbt_basis_choice *out, char *err, size_t errlen)

@@ -21,16 +21,20 @@ nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, 
 
 /* Weights of the airlight integrand: Legendre orders 0..kmax, or one
  * channel: 4 pi p(mu) when phase != NULL, or the truncated series
- * sum_k (2k+1) b_k P_k(mu) when b != NULL (orders 0..kmax). */
+ * sum_k (2k+1) b_k P_k(mu) when b != NULL (orders 0..kmax); or, when
+ * nhg > 0, 4 pi HG(hg[i], mu) for nhg asymmetries at once (g-sliced
+ * tables: one quadrature for all slices). */
 typedef struct {
     size_t kmax;
     const nbt_phase *phase;
     const double *b;
+    const double *hg;
+    size_t nhg;
 } nbt__weights;
 
 static inline unsigned nbt__fdim(const nbt__weights *w)
 {
-    return (w->phase || w->b) ? 1u : (unsigned)(w->kmax + 1);
+    return w->nhg ? (unsigned)w->nhg : (w->phase || w->b) ? 1u : (unsigned)(w->kmax + 1);
 }
 
 /* p at mu = cos(theta) with sn = sin(theta) >= 0 given accurately (the

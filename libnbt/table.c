@@ -107,6 +107,8 @@ const char *nbt_table_form_name(nbt_table_form f)
     switch (f) {
     case NBT_FORM_TAIL:
         return "tail";
+    case NBT_FORM_LOG_ET:
+        return "log_et";
     case NBT_FORM_PLAIN:
     default:
         return "plain";
@@ -119,6 +121,8 @@ nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f)
         *f = NBT_FORM_PLAIN;
     else if (!strcmp(name, "tail"))
         *f = NBT_FORM_TAIL;
+    else if (!strcmp(name, "log_et"))
+        *f = NBT_FORM_LOG_ET;
     else
         return NBT_EFORMAT;
     return NBT_OK;

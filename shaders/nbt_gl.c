@@ -109,6 +109,12 @@ void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table
         snprintf(name, sizeof name, "%s_map%d", prefix, i);
         glUniform1i(glGetUniformLocation(program, name), m[i]);
     }
+    if (na == 3) { /* g-sliced: value form and g interpolation (absent uniforms: location -1, ignored) */
+        snprintf(name, sizeof name, "%s_form", prefix);
+        glUniform1i(glGetUniformLocation(program, name), t->form == NBT_FORM_LOG_ET ? 1 : 0);
+        snprintf(name, sizeof name, "%s_interp2", prefix);
+        glUniform1i(glGetUniformLocation(program, name), t->interp2);
+    }
 }
 
 unsigned nbt_gl_table_target(const nbt_table *t)

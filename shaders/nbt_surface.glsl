@@ -8,7 +8,9 @@
 // J^1 and J^n tables (at most one each) are g-sliced J_p^n(T, theta; g) of the
 // HG phase (sampler3D, channel R, axis 2 = g): nbt_surface_g(..., g) reads
 // them at any g, nbt_surface at the uniform nbt_g (g clamps to the tables' g
-// range). T beyond the table reads its edge.
+// range). T beyond the table reads its edge. nbt_J_form and nbt_J_interp2
+// (set by nbt_gl_set_table_axes) name the tables' value form and g
+// interpolation, as libnbt's nbt_surface_table_g reads them.
 #ifdef NBT_G_SLICED
 #define NBT_JSAMPLER NBT_SAMPLER3D
 #else
@@ -30,6 +32,8 @@ NBT_U int nbt_J_map0, nbt_J_map1;
 #ifdef NBT_G_SLICED
 NBT_U vec4 nbt_J_ax2; // g axis
 NBT_U int nbt_J_map2;
+NBT_U int nbt_J_form;    // 0: plain J; 1: log_et, the texel holds T + ln J
+NBT_U int nbt_J_interp2; // 2: quadratic in g (nbt_lookup3q), else trilinear
 #endif
 NBT_BLOCK_END
 #if NBT_JN_PACKS > 0
@@ -46,7 +50,16 @@ NBT_SAMPLER(nbt_Jn_3, 14)
 #endif
 
 #ifdef NBT_G_SLICED
-#define NBT_JLOOK3(tex, T, th, g) nbt_lookup3(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r
+// libnbt's nbt_surface_table_g: the lookup (quadratic or linear in g), then
+// J = e^{v - T} for the log_et form
+float nbt_jlook3(sampler3D tex, float T, float th, float g)
+{
+    float v = nbt_J_interp2 == 2
+        ? nbt_lookup3q(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r
+        : nbt_lookup3(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r;
+    return nbt_J_form == 1 ? exp(v - T) : v;
+}
+#define NBT_JLOOK3(tex, T, th, g) nbt_jlook3(tex, T, th, g)
 #define NBT_J1_SUM(T, th, g) NBT_JLOOK3(nbt_J1_0, T, th, g)
 #define NBT_JN_SUM(T, th, g) NBT_JLOOK3(nbt_Jn_0, T, th, g)
 #else

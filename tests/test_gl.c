@@ -148,6 +148,11 @@ static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, const nbt_axis *a
     nbt_build_opts o = {1e-10, 0, 0};
     if (t) {
         t->n = n;
+        if (kind == NBT_TABLE_J) { /* J as libnbt builds it: ln(e^T J), quadratic in g */
+            t->form = NBT_FORM_LOG_ET;
+            t->interp2 = 2;
+            o.measure_error = 1; /* for the check against nbt_surface_direct */
+        }
         if (nbt_gslice_fill(t, &o) != NBT_OK) {
             nbt_table_free(t);
             t = NULL;
@@ -172,11 +177,26 @@ static double gs_airlight(const nbt_table *Ht, double gph, const nbt_airlight_ge
     return L;
 }
 
-static double gs_surface(const nbt_table *J1, const nbt_table *Jn, double gph, const nbt_surface_geom *g)
+/* J from a g-sliced table in its form (log_et: e^{v - T}); *scale: how float
+ * coordinate noise in v turns into J (plain: max |v|; log_et: J max |v|) */
+static double gs_j(const nbt_table *J, double T, double th, double gph, double *scale)
 {
-    double T = g->kappa_t * g->dsp, j1, jn;
-    nbt_table_lookup3(J1, T, g->theta_s, gph, &j1);
-    nbt_table_lookup3(Jn, T, g->theta_r, gph, &jn);
+    double v;
+    nbt_table_lookup3(J, T, th, gph, &v);
+    if (J->form != NBT_FORM_LOG_ET) {
+        *scale = J->max_abs[0];
+        return v;
+    }
+    v = exp(v - T);
+    *scale = v * J->max_abs[0];
+    return v;
+}
+
+static double gs_surface(const nbt_table *J1, const nbt_table *Jn, double gph, const nbt_surface_geom *g, double *sj)
+{
+    double T = g->kappa_t * g->dsp, s1, sn;
+    double j1 = gs_j(J1, T, g->theta_s, gph, &s1), jn = gs_j(Jn, T, g->theta_r, gph, &sn);
+    *sj = g->kd * s1 + g->ks * sn;
     double direct = g->I0 * exp(-T) / (g->dsp * g->dsp) *
                     (g->kd * fmax(cos(g->theta_s), 0.0) + g->ks * pow(fmax(cos(g->theta_r), 0.0), g->n));
     return direct + g->kappa_s * g->I0 / (4.0 * M_PI * g->dsp) * (g->kd * j1 + g->ks * jn);
@@ -356,8 +376,9 @@ static void test_gsliced(void)
     nbt_axis h0 = {0, 10, NBT_AXIS_LOG1P_CBRT, 10, 33}, h1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 33};
     nbt_axis j0 = {0, 10, NBT_AXIS_LOG1P, 1000, 25}, j1 = {0, M_PI, NBT_AXIS_COS, 0, 25};
     nbt_table *Hg = assemble_gsliced(NBT_TABLE_H, 0, &h0, &h1, &g2);
-    nbt_table *J1g = assemble_gsliced(NBT_TABLE_J, 1, &j0, &j1, &g2);
-    nbt_table *Jng = assemble_gsliced(NBT_TABLE_J, (int)NPH, &j0, &j1, &g2);
+    nbt_axis gj2 = {-0.95, 0.95, NBT_AXIS_ATANH, 0, 9};
+    nbt_table *J1g = assemble_gsliced(NBT_TABLE_J, 1, &j0, &j1, &gj2);
+    nbt_table *Jng = assemble_gsliced(NBT_TABLE_J, (int)NPH, &j0, &j1, &gj2);
     t_true(Hg && J1g && Jng, "g-sliced tables assembled");
     if (!Hg || !J1g || !Jng)
         return;
@@ -398,7 +419,9 @@ static void test_gsliced(void)
      * times the table's scale */
     /* the tail form: log values, so the noise is relative (slopes of log R up to ~10 per unit) */
     double noise_h = 4 * FLT_EPSILON * (double)(h0.n + h1.n + g2.n - 3) * 10.0;
-    double noise_j = 4 * FLT_EPSILON * (double)(j0.n + j1.n + g2.n - 3);
+    double noise_j = 4 * FLT_EPSILON * (double)(j0.n + j1.n + gj2.n - 3);
+    double worst_dir = 0, bound_max = 0;
+    int ndir = 0;
     for (int gi = 0; gi < 6; gi++) {
         glUniform1f(glGetUniformLocation(p, "nbt_g"), (float)gu[gi]);
         gl_draw_fullscreen();
@@ -417,16 +440,30 @@ static void test_gsliced(void)
                 /* as test 1: 1e-4 relative + the noise of two lookups times the prefactor (airlight),
                  * of the weighted lookups (surface) */
                 double La = gs_airlight(Hg, gf, &ag), La6 = gs_airlight(Hg, gr, &ag6);
-                double Lp = gs_surface(J1g, Jng, gf, &sg), Lp6 = gs_surface(J1g, Jng, gr, &sg6);
+                double sj, sj6, Lp = gs_surface(J1g, Jng, gf, &sg, &sj), Lp6 = gs_surface(J1g, Jng, gr, &sg6, &sj6);
                 double pre = KS * I0 * exp(-KT * d * cos(gam)) / (4 * M_PI * d * sin(gam));
                 double pre6 = KS * I0 * exp(-KT * 6.0 * cos(gam)) / (4 * M_PI * 6.0 * sin(gam));
-                double sj = KD * J1g->max_abs[0] + KSP * Jng->max_abs[0];
+                double tol6 = 1e-4 * fabs(Lp6) + noise_j * KS * I0 / (4 * M_PI * 6.0) * sj6;
                 (void)pre;
                 (void)pre6;
                 worst[0] = fmax(worst[0], fabs(q[0] - La) / ((1e-4 + 2 * noise_h) * fabs(La)));
                 worst[1] = fmax(worst[1], fabs(q[1] - Lp) / (1e-4 * fabs(Lp) + noise_j * KS * I0 / (4 * M_PI * d) * sj));
                 worst[2] = fmax(worst[2], fabs(q[2] - La6) / ((1e-4 + 2 * noise_h) * fabs(La6)));
-                worst[3] = fmax(worst[3], fabs(q[3] - Lp6) / (1e-4 * fabs(Lp6) + noise_j * KS * I0 / (4 * M_PI * 6.0) * sj));
+                worst[3] = fmax(worst[3], fabs(q[3] - Lp6) / tol6);
+                /* the shader's surface radiance against the direct integral, within the
+                 * bound libnbt records for the same lookup (nbt_surface_table_g, no fallback)
+                 * + the shader-vs-CPU tolerance + the reference's error: a few pixels of the
+                 * first frame with |g| <= 0.95 (the direct integral takes ~0.1 s) */
+                if (gi == 0 && fabs(gr) <= 0.95 && i % 16 == 5 && j % 12 == 3) {
+                    double L, E, R, RE;
+                    nbt_phase *ph = nbt_phase_hg(gr);
+                    nbt_surface_direct(ph, &sg6, 1e-8, &R, &RE);
+                    nbt_phase_free(ph);
+                    nbt_surface_table_g(J1g, Jng, gr, &sg6, 0, &L, &E);
+                    worst_dir = fmax(worst_dir, fabs(q[3] - R) / (E + RE + tol6));
+                    bound_max = fmax(bound_max, E / fabs(R));
+                    ndir++;
+                }
             }
         t_true(fin, "g-sliced, nbt_g = %.6g: every pixel finite", gf);
         t_true(worst[0] <= 1 && worst[1] <= 1,
@@ -437,6 +474,48 @@ static void test_gsliced(void)
                    "g-sliced, g per row -0.99..0.99 (nbt_airlight_g, nbt_surface_g): = CPU lookup within the same "
                    "bound (worst %.2f, %.2f of it)", worst[2], worst[3]);
     }
+    t_true(ndir >= 8 && worst_dir <= 1,
+           "g-sliced surface (log_et J): shader = nbt_surface_direct within the recorded bound at %d pixels "
+           "(worst %.2f of it; bound up to %.1e relative on these 25^2 x 9 tables)", ndir, worst_dir, bound_max);
+    /* issue 10's goal, 1e-3 relative from the shader alone: J^1, J^20 log_et tables sized for the
+     * alpha column's T = 1.2 (T in [0, 2.5]: 33 x 129 x 33, g in [-0.95, 0.95]) bound in place of the
+     * small ones; at the same pixels the shader is within 1e-3 of nbt_surface_direct (+ its error
+     * estimate). This asserts the goal as measured (7.2e-4 here), not a bound: libnbt's recorded
+     * bound for these tables is the largest over each g cell's whole (T, theta) slice (8.4e-3). */
+    nbt_axis f0 = {0, 2.5, NBT_AXIS_LOG1P_CBRT, 10, 33}, f1 = {0, M_PI, NBT_AXIS_LINEAR, 0, 129};
+    nbt_axis fg = {-0.95, 0.95, NBT_AXIS_ATANH, 0, 33}; /* the shader's J tables share their axes */
+    nbt_table *J1f = assemble_gsliced(NBT_TABLE_J, 1, &f0, &f1, &fg), *Jnf = assemble_gsliced(NBT_TABLE_J, (int)NPH, &f0, &f1, &fg);
+    t_true(J1f && Jnf, "g-sliced J 33x129x33 built");
+    if (J1f && Jnf) {
+        GLuint t1 = nbt_gl_bind_table(p, "nbt_J1_0", J1f, 9), t2 = nbt_gl_bind_table(p, "nbt_Jn_0", Jnf, 10);
+        nbt_gl_set_table_axes(p, "nbt_J", J1f);
+        glUniform1f(glGetUniformLocation(p, "nbt_g"), 0.0f);
+        gl_draw_fullscreen();
+        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+        double worst = 0, wb = 0;
+        int np = 0;
+        for (int j = 3; j < H; j += 12)
+            for (int i = 5; i < W; i += 16) {
+                double fx = (double)i / (W - 1), gr = (float)(-0.99 + 1.98 * (double)j / (H - 1)), L, E, R, RE;
+                if (fabs(gr) > 0.95)
+                    continue;
+                nbt_surface_geom sg6 = {KS, KT, I0, 6.0, fx * M_PI, (1 - fx) * 1.5, KD, KSP, (int)NPH};
+                nbt_phase *ph = nbt_phase_hg(gr);
+                nbt_surface_direct(ph, &sg6, 1e-9, &R, &RE);
+                nbt_phase_free(ph);
+                nbt_surface_table_g(J1f, Jnf, gr, &sg6, 0, &L, &E);
+                worst = fmax(worst, (fabs(px[(j * W + i) * 4 + 3] - R) - RE) / fabs(R));
+                wb = fmax(wb, E / fabs(L));
+                np++;
+            }
+        t_true(np >= 8 && worst <= 1e-3,
+               "g-sliced surface (log_et J 33x129x33): shader within 1e-3 of nbt_surface_direct at %d pixels "
+               "(worst %.1e; libnbt's recorded bound there up to %.1e)", np, worst, wb);
+        glDeleteTextures(1, &t1);
+        glDeleteTextures(1, &t2);
+    }
+    nbt_table_free(J1f);
+    nbt_table_free(Jnf);
     free(px);
     glDeleteTextures(3, tex);
     glDeleteProgram(p);

@@ -4,19 +4,22 @@
  * A g-sliced table is a 3-D nbt_table (nbt/table.h): axes 0 and 1 as for a
  * fixed-phase H or J table, axis[2] the asymmetry g (map "cos", nodes
  * clustered towards both ends of [g_lo, g_hi]); one channel, k[0] = -1,
- * phase "hg". Slice m holds the plain fixed-phase values of nbt/airlight.h
- * (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m), g_m node m of axis[2]: no
- * transformation of values, so a sampler3D at node-aligned coordinates on
- * all three axes returns what nbt_table_lookup3 does.
+ * phase "hg". Slice m holds the fixed-phase values of nbt/airlight.h
+ * (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m), g_m node m of axis[2], in
+ * the table's value form (t->form: PLAIN, or for J LOG_ET, T + ln J), so a
+ * sampler3D at node-aligned coordinates on all three axes returns what
+ * nbt_table_lookup3 does (interp2 = 2: nbt_lookup3q's three fetches).
  *
- * Recorded error (max_err[0], absolute): the largest in-slice bilinear
- * error (each slice's own midpoint measurement, as for a fixed-phase table)
- * plus the largest error of the interpolation in g, measured as
- * |lookup3 - exact| on exact slices at every g midpoint, at every (u, v)
- * node, plus the largest quadrature error estimate. The sum bounds the
- * trilinear error at any point by the triangle inequality, up to the
- * variation of the g error between (u, v) nodes (tests/test_gslice.c checks
- * it against independently integrated values at random (u, v, g)). */
+ * Recorded error (in the value form; LOG_ET: in ln J, i.e. relative), per
+ * g cell (cell_err, nbt_table_err_at) and its largest (max_err[0]): the
+ * error of the interpolation in g, measured as |lookup - exact| on the exact
+ * slice at the cell's g midpoint at every (u, v) node (quadratic: both
+ * stencils that meet there), plus the in-slice bilinear errors of the
+ * slices used there (each slice's own midpoint measurement) times sum |w|,
+ * plus the largest quadrature error estimate. This bounds the error at any
+ * point by the triangle inequality, up to the variation of the g error
+ * between (u, v) nodes (tests/test_gslice.c checks it against
+ * independently integrated values at random (u, v, g)). */
 #ifndef NBT_GSLICE_H
 #define NBT_GSLICE_H
 
@@ -36,8 +39,10 @@ extern "C" {
 /* Fill a 3-D table whose kind (H or J), axes (axis[2]: g within
  * [-NBT_GSLICE_GMAX, NBT_GSLICE_GMAX], n >= 2) and, for J, n are set;
  * sets nch = 1, k[0] = -1, phase "hg", quad_tol, quad_err, max_abs and (with
- * o->measure_error) max_err as described above (NaN without). Every slice is
- * an ordinary fixed-phase build (nbt_h_table_build / nbt_j_table_build).
+ * o->measure_error) max_err and cell_err as described above (NaN without).
+ * H: every slice is an ordinary fixed-phase build (nbt_h_table_build); J:
+ * all slices in one pass (one quadrature per node for every g), in the
+ * table's form (PLAIN or LOG_ET).
  * NBT_EINVAL for a 2-D table or another kind, NBT_EDOM for a g axis
  * outside the range. */
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
@@ -143,7 +148,9 @@ nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_a
 
 /* Surface radiance from g-sliced J tables at run-time g: diffuse (n = 1)
  * and specular (n = geo->n) tables (either may be NULL when kd resp. ks is
- * 0). abserr: the tables' max_err times kappa_s I0 kd (ks)/(4 pi d_sp);
+ * 0), each in its value form (LOG_ET: J = e^{v - T}). abserr: each table's
+ * recorded error at g (nbt_table_err_at; LOG_ET: J (e^err - 1)) times
+ * kappa_s I0 kd (ks)/(4 pi d_sp);
  * where it exceeds 10% of the scattered part the lookup is kept but
  * NBT_ETOL is not raised (the direct term is exact); pass fallback_tol > 0
  * to integrate nbt_surface_direct with HG(g) there instead (slow: seconds).

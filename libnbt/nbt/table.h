@@ -88,9 +88,10 @@ typedef enum {
      * exponentials; channel 1 a per-node relative error map; cell_err and
      * max_err are relative too */
     NBT_FORM_TAIL,
+    NBT_FORM_LOG_ET,   /* J tables: ln(e^T J) = T + ln J (J > 0); the bilinear error is relative */
 } nbt_table_form;
 
-/* "plain", "tail"; parse returns NBT_EFORMAT for other names. */
+/* "plain", "tail", "log_et"; parse returns NBT_EFORMAT for other names. */
 const char *nbt_table_form_name(nbt_table_form f);
 nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f);
 

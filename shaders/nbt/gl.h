@@ -8,7 +8,8 @@
  *   nbt_J1_0..3, nbt_Jn_0..3          J^1 and J^n packs; nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
  * g-sliced (config g_sliced): nbt_H0, nbt_J1_0, nbt_Jn_0 are sampler3D (channel R, axis 2 = HG g),
  *   nbt_H_ax2, nbt_H_map2, nbt_J_ax2, nbt_J_map2 their g axes, float nbt_g the run-time g
- *   (clamped to the g axis' range by the lookup); nbt_hw is unused.
+ *   (clamped to the g axis' range by the lookup); nbt_J_form (int, 1: log_et, the texels hold
+ *   T + ln J) and nbt_J_interp2 (int, 2: quadratic in g) for the J tables; nbt_hw is unused.
  * Functions: nbt_airlight(kappa_s, kappa_t, I0, dsv, gamma, dvp),
  *   nbt_surface(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n),
  *   g-sliced: nbt_airlight_g(..., dvp, g), nbt_surface_g(..., n, g) at any g (the plain ones read nbt_g),
@@ -44,7 +45,8 @@ typedef struct {
  * uniforms in std140 blocks and samplers at descriptor set 0, bindings:
  *   0 nbt_weights_block { nbt_hw[, nbt_g] }, 1 nbt_H_block { nbt_H_ax0, nbt_H_ax1, nbt_H_map0, nbt_H_map1
  *   [, nbt_H_ax2, nbt_H_map2] }, 2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
- *   [, nbt_J_ax2, nbt_J_map2] } (the bracketed members with g_sliced; the samplers at 3, 7, 11 are
+ *   [, nbt_J_ax2, nbt_J_map2, nbt_J_form, nbt_J_interp2] } (the bracketed members with g_sliced;
+ *   the samplers at 3, 7, 11 are
  *   then sampler3D),
  *   3..6 nbt_H0..nbt_H3, 7..10 nbt_J1_0..nbt_J1_3, 11..14 nbt_Jn_0..nbt_Jn_3,
  *   15 nbt_beam_fit_block { nbt_beam_fit_c[20] (vec4), nbt_beam_fit_lo, nbt_beam_fit_hi }.
@@ -72,7 +74,8 @@ void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0
 
 /* Set PREFIX_ax0, PREFIX_ax1, PREFIX_map0, PREFIX_map1 of the program in use
  * (e.g. prefix "nbt_H" or "nbt_J") from the table's axes; for a 3-D table
- * (axis[2].n > 1) also PREFIX_ax2, PREFIX_map2. */
+ * (axis[2].n > 1) also PREFIX_ax2, PREFIX_map2, PREFIX_form (1: log_et,
+ * else 0) and PREFIX_interp2 (the table's g interpolation). */
 void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table *t);
 
 /* GL_TEXTURE_2D for a 2-D table, GL_TEXTURE_3D for a 3-D (g-sliced) one: the
