@@ -3,8 +3,10 @@
  *
  * A g-sliced table is a 3-D nbt_table (nbt/table.h): axes 0 and 1 as for a
  * fixed-phase H or J table, axis[2] the asymmetry g (map "cos", nodes
- * clustered towards both ends of [g_lo, g_hi]); one channel, k[0] = -1,
- * phase "hg". Slice m holds the plain fixed-phase values of nbt/airlight.h
+ * clustered towards both ends of [g_lo, g_hi]; H: "atanh"); one channel,
+ * k[0] = -1, phase "hg". H tables are built in the tail form (NBT_FORM_TAIL,
+ * nbt_gslice_fill_form below: log of a scaled tail integral and an error
+ * map); what follows describes the plain form, which J keeps. Slice m holds the plain fixed-phase values of nbt/airlight.h
  * (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m), g_m node m of axis[2]: no
  * transformation of values, so a sampler3D at node-aligned coordinates on
  * all three axes returns what nbt_table_lookup3 does.
@@ -62,7 +64,12 @@ typedef struct {
     int half;                 /* store half floats */
 } nbt_gslice_request;
 
-/* A plan: axes 0 and 1 are the planner's sizes and mappings
+/* A plan. H (tail form): u log1p_cbrt(c = 10) and v cos with 129 nodes at
+ * tol 1e-3 (times sqrt(1e-3/tol) up a ladder), g uniform in atanh with
+ * 1 + 32 (atanh span / 2 atanh 0.95) (1e-3/tol)^(1/3) slices up the g
+ * ladder (measured, doc/tables.md); the predicted time a 33x33x3 proxy's
+ * scaled by the node count; execution does not regrow (the error map
+ * bounds each lookup). J: axes 0 and 1 are the planner's sizes and mappings
  * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2
  * (or its mappings at the requested size), the larger of the two; g: a
  * 33^2 proxy with 9 slices measures the g interpolation error at the g
@@ -116,7 +123,8 @@ typedef struct {
 nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
                             nbt_basis_choice *out, char *err, size_t errlen);
 
-/* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
+/* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel or the
+ * tail form's two, HG). */
 int nbt_table_is_gslice(const nbt_table *t);
 
 /* Airlight from a g-sliced H table at run-time g: the lookup of
