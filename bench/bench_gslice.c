@@ -60,6 +60,7 @@ typedef struct {
     double worst_pure, worst_route, p99_pure, fallback_frac;
     double worst_inf;    /* |lookup - direct| / the unobstructed ray's airlight */
     double frac_1e3;     /* rays whose lookup is within 1e-3 relative */
+    char worst_ray[96];  /* the pure lookup's worst ray */
 } ray_stats;
 
 static int cmpd(const void *a, const void *b)
@@ -71,7 +72,7 @@ static int cmpd(const void *a, const void *b)
 /* over nrays random rays and g in [-G, G] */
 static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G, int nrays)
 {
-    ray_stats r = {0, 0, 0, 0, 0, 0};
+    ray_stats r = {0, 0, 0, 0, 0, 0, ""};
     int ok3 = 0;
     double *rel = malloc((size_t)nrays * sizeof(double));
     int fell = 0;
@@ -111,6 +112,9 @@ static ray_stats rays(const nbt_table *const *t, size_t nt, int sliced, double G
             fell++; /* the route did not return the lookup (sliced) / the ray quadrature's estimate */
         rel[i] = fabs(Lp - R) / fabs(R);
         ok3 += rel[i] <= 1e-3;
+        if (rel[i] > r.worst_pure)
+            snprintf(r.worst_ray, sizeof r.worst_ray, "g %.3f gamma %.3f u %.3f d_vp %g", g, geo.gamma,
+                     geo.kappa_t * geo.dsv * sin(geo.gamma), geo.dvp);
         r.worst_pure = fmax(r.worst_pure, rel[i]);
         r.worst_route = fmax(r.worst_route, fabs(L - R) / fabs(R));
     }
@@ -128,6 +132,7 @@ static void row(const char *what, double G, const char *size, double mb, double 
     printf("%-8s %4.2f %-15s %7.2f MB %6.2f s rec %.1e | lookup: worst %.1e p99 %.1e <=1e-3 %5.1f%% "
            "vs-unobstructed %.1e | route: worst %.1e fallback %5.1f%%\n", what, G, size, mb, secs, rec,
            s.worst_pure, s.p99_pure, 100.0 * s.frac_1e3, s.worst_inf, s.worst_route, 100.0 * s.fallback_frac);
+    printf("#   worst lookup: %s\n", s.worst_ray);
 }
 
 /* Surface radiance from g-sliced J^1 and J^20 tables for g in [-0.95, 0.95],

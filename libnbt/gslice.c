@@ -260,8 +260,7 @@ static nbt_status plan_axes(const nbt_gslice_request *r, unsigned nthreads, nbt_
  * at tol 1e-3 relative, the bilinear error falling as N^-2; g uniform in
  * atanh with 33 slices for atanh(g) spanning [-atanh 0.95, atanh 0.95] at
  * 1e-3, quadratic, so the slice count scales with the atanh span and
- * tol^(-1/3). The predicted time is the measured CPU time per node value
- * (2.2e-6 s, error measurement included) over the threads. */
+ * tol^(-1/3). The predicted time scales a small proxy's by the node count. */
 static nbt_status plan_tail(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
 {
     size_t nuv = r->size[0] > 0 ? r->size[0] : 129, nvv = r->size[1] > 0 ? r->size[1] : 129, ng = r->size[2];
@@ -288,8 +287,19 @@ static nbt_status plan_tail(const nbt_gslice_request *r, unsigned nthreads, nbt_
     out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_COS, 0.0, nvv};
     out->axis[2] = g_axis(r, ng);
     out->pred_err = r->tol;
-    unsigned nt = nthreads ? nthreads : 2;
-    out->pred_seconds = 2.2e-6 * (double)nuv * (double)nvv * (double)ng / (double)(nt > 2 ? 2 : nt);
+    /* the time: a 33x33x3 proxy through the same code (error measurement
+     * included), scaled by the node count, so that it compares with the
+     * Legendre planner's measured proxies on this machine and build */
+    nbt_axis p0 = out->axis[0], p1 = out->axis[1];
+    p0.n = p1.n = 33;
+    nbt_table *proxy;
+    double tp = now_s();
+    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, &proxy);
+    tp = now_s() - tp;
+    nbt_table_free(proxy);
+    if (st != NBT_OK)
+        return nbt__failf(NULL, 0, st, "g-sliced table: the proxy build failed");
+    out->pred_seconds = tp * (double)nuv * (double)nvv * (double)ng / (33.0 * 33.0 * 3.0);
     out->bytes = (double)nuv * (double)nvv * (double)ng * 2.0 * (r->half ? 2.0 : 4.0);
     out->plan_seconds = now_s() - t0;
     return NBT_OK;

@@ -401,6 +401,30 @@ int main(void)
     t_true(nbt_gslice_fill_form(P, NBT_FORM_PLAIN, &po) == NBT_OK && P->form == NBT_FORM_PLAIN && P->nch == 1,
            "plain-form H fill");
     check_table(P, 100);
+    /* a plain-form file (as written before the tail form) reads back plain and still evaluates:
+     * the difference of two lookups with its bound, or the ray integral */
+    char ppath[] = "/tmp/test_gslice_plain_XXXXXX.exr";
+    int pfd = mkstemps(ppath, 4);
+    close(pfd);
+    nbt_table *Pb = NULL;
+    char perr[256];
+    nbt_status pst = nbt_table_write_exr(P, ppath, NBT_EXR_ZIP);
+    if (pst == NBT_OK)
+        pst = nbt_table_read_exr(ppath, &Pb, perr, sizeof perr);
+    unlink(ppath);
+    t_true(pst == NBT_OK && Pb->form == NBT_FORM_PLAIN && Pb->nch == 1 && nbt_table_is_gslice(Pb),
+           "plain-form file reads back plain");
+    for (int i = 0; pst == NBT_OK && i < 6; i++) {
+        nbt_airlight_geom geo = {0.3, 0.5, 2.0, 1.0 + 3.0 * uni(), 0.1 + 2.9 * uni(), i % 2 ? INFINITY : 3.0};
+        double g = -0.4 + 0.9 * uni(), L, E, R, RE;
+        nbt_phase *ph = nbt_phase_hg(g);
+        nbt_airlight_direct(ph, &geo, 1e-10, &R, &RE);
+        nbt_phase_free(ph);
+        nbt_status est = nbt_airlight_table_g(Pb, g, &geo, &L, &E);
+        t_true(est == NBT_OK && fabs(L - R) <= E + RE + 1e-12 * fabs(R),
+               "plain file: airlight_table_g g=%.3f gamma=%.3f: |%.8g - %.8g| <= bound %.2e", g, geo.gamma, L, R, E);
+    }
+    nbt_table_free(Pb);
     nbt_table_free(P);
     test_airlight(H);
     test_surface(J);

@@ -3,12 +3,15 @@
  *
  * A g-sliced table is a 3-D nbt_table (nbt/table.h): axes 0 and 1 as for a
  * fixed-phase H or J table, axis[2] the asymmetry g (map "cos", nodes
- * clustered towards both ends of [g_lo, g_hi]); one channel, k[0] = -1,
- * phase "hg". Slice m holds the fixed-phase values of nbt/airlight.h
- * (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m), g_m node m of axis[2], in
- * the table's value form (t->form: PLAIN, or for J LOG_ET, T + ln J), so a
- * sampler3D at node-aligned coordinates on all three axes returns what
- * nbt_table_lookup3 does (interp2 = 2: nbt_lookup3q's three fetches).
+ * clustered towards both ends of [g_lo, g_hi]; H: "atanh"); one channel
+ * (two for H's tail form), k[0] = -1, phase "hg". H tables are built in the
+ * tail form (NBT_FORM_TAIL, nbt_gslice_fill_form below: log of a scaled
+ * tail integral and an error map). Otherwise slice m holds the fixed-phase
+ * values of nbt/airlight.h (H_p) and nbt/surface.h (J_p^n) for p = HG(g_m),
+ * g_m node m of axis[2], in the table's value form (t->form: PLAIN, or for
+ * J LOG_ET, T + ln J), so a sampler3D at node-aligned coordinates on all
+ * three axes returns what nbt_table_lookup3 does (interp2 = 2:
+ * nbt_lookup3q's three fetches).
  *
  * Recorded error (in the value form; LOG_ET: in ln J, i.e. relative), per
  * g cell (cell_err, nbt_table_err_at) and its largest (max_err[0]): the
@@ -47,13 +50,14 @@ extern "C" {
  * outside the range. */
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
 /* The same in a given value form: nbt_gslice_fill is this with
- * NBT_FORM_TAIL for H and NBT_FORM_PLAIN for J. TAIL (H only; axis[1] must
+ * NBT_FORM_TAIL for H and, for J, the form the table holds (PLAIN unless
+ * set to LOG_ET). TAIL (H only; axis[1] must
  * be [-pi/2, pi/2], axis[0] start at 0) stores R = C(u, v; g) W(u, v),
  * C the scaled tail integral of nbt/table.h, W = 1 + s/2 + u s^2/2,
  * s = tan(pi/4 + v/2) (R(u, pi/2) = 4 pi p_g(-1)), sets interp2 = 2
  * (3 slices or more) and records the error relative to the value: cell_err
  * per g cell, max_err their largest (doc/tables.md). PLAIN as described
- * above. NBT_EINVAL for TAIL on a J table. */
+ * above. NBT_EINVAL for TAIL on a J table or LOG_ET on an H table. */
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o);
 
 /* An error-driven g-sliced table. */
@@ -67,7 +71,12 @@ typedef struct {
     int half;                 /* store half floats */
 } nbt_gslice_request;
 
-/* A plan: axes 0 and 1 are the planner's sizes and mappings
+/* A plan. H (tail form): u log1p_cbrt(c = 10) and v cos with 129 nodes at
+ * tol 1e-3 (times sqrt(1e-3/tol) up a ladder), g uniform in atanh with
+ * 1 + 32 (atanh span / 2 atanh 0.95) (1e-3/tol)^(1/3) slices up the g
+ * ladder (measured, doc/tables.md); the predicted time a 33x33x3 proxy's
+ * scaled by the node count; execution does not regrow (the error map
+ * bounds each lookup). J: axes 0 and 1 are the planner's sizes and mappings
  * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2
  * (or its mappings at the requested size), the larger of the two; g: a
  * 33^2 proxy with 9 slices measures the g interpolation error at the g
@@ -121,7 +130,8 @@ typedef struct {
 nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
                             nbt_basis_choice *out, char *err, size_t errlen);
 
-/* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel, HG). */
+/* Nonzero when t is a g-sliced table (3-D, kind H or J, one channel or the
+ * tail form's two, HG). */
 int nbt_table_is_gslice(const nbt_table *t);
 
 /* Airlight from a g-sliced H table at run-time g: the lookup of
