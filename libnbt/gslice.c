@@ -493,13 +493,17 @@ static nbt_status check_g(const nbt_table *t, double g, nbt_table_kind kind)
     return NBT_OK;
 }
 
+static nbt_status check_airlight_g(const nbt_table *t, double g, const nbt_airlight_geom *geo)
+{
+    nbt_status st = nbt_airlight_check(geo);
+    return st != NBT_OK ? st : check_g(t, g, NBT_TABLE_H);
+}
+
 nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                        double *abserr)
 {
-    nbt_status st = nbt_airlight_check(geo);
+    nbt_status st = check_airlight_g(t, g, geo);
     if (st != NBT_OK)
-        return st;
-    if ((st = check_g(t, g, NBT_TABLE_H)) != NBT_OK)
         return st;
     double h = geo->dsv * sin(geo->gamma), tt = geo->dsv * cos(geo->gamma);
     if (!(h > 0.0))
@@ -520,10 +524,8 @@ nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_a
 nbt_status nbt_airlight_table_g(const nbt_table *t, double g, const nbt_airlight_geom *geo, double *La,
                                 double *abserr)
 {
-    nbt_status st = nbt_airlight_check(geo);
+    nbt_status st = check_airlight_g(t, g, geo);
     if (st != NBT_OK)
-        return st;
-    if ((st = check_g(t, g, NBT_TABLE_H)) != NBT_OK)
         return st;
     double h = geo->dsv * sin(geo->gamma);
     double Lt = NAN, Et = INFINITY;
