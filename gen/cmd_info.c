@@ -58,7 +58,7 @@ int cmd_info(int argc, char **argv)
     if (has_c)
         printf("%-11s %g %g\n", is_asinh ? "map c" : "log1p c", t->axis[0].c, t->axis[1].c);
     if (t->axis[2].n >= 2)
-        printf("axis2       %s %s [%.17g, %.17g] %zu slices (3-D: trilinear lookup, a sampler3D)\n",
+        printf("axis2       %s %s [%.17g, %.17g] %zu slices (3-D: a sampler3D)\n",
                nbt_table_axis_name(t->kind, 2), nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
                t->axis[2].n);
     printf("storage     %s\n", t->half ? "half" : "float");

@@ -137,7 +137,7 @@ static void print_table_line(const nbt_tableset *ts, const nbt_table *t, const c
     }
     printf("%-22s %4zux%-4zu%s%.0zu %s %s%s  max interp err %.2e (rel %.2e)  quad err %.1e\n", path, t->axis[0].n,
            t->axis[1].n, t->axis[2].n >= 2 ? "x" : "", t->axis[2].n >= 2 ? t->axis[2].n : 0, d0, d1, d2, e,
-           t->form == NBT_FORM_TAIL ? e : ts->scale > 0 ? e / ts->scale : e, t->quad_err);
+           t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? e : ts->scale > 0 ? e / ts->scale : e, t->quad_err);
     if (t->form == NBT_FORM_TAIL)
         print_tail_map(t);
 }

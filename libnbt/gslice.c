@@ -181,10 +181,10 @@ static const size_t PSIZES[] = {17, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769
 #define NPSIZES (sizeof PSIZES / sizeof PSIZES[0])
 
 
-/* H (tail form): uniform in atanh g, quadratic; J: cos */
+/* uniform in atanh g (H's tail form and J's log_et form are quadratic in g) */
 static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
 {
-    return (nbt_axis){r->g[0], r->g[1], r->kind == NBT_TABLE_H ? NBT_AXIS_ATANH : NBT_AXIS_COS, 0, n};
+    return (nbt_axis){r->g[0], r->g[1], NBT_AXIS_ATANH, 0, n};
 }
 
 static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t errlen)
@@ -216,6 +216,10 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
     if (!*out)
         NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory or too large");
     (*out)->n = r->kind == NBT_TABLE_J ? r->n : 0;
+    if (r->kind == NBT_TABLE_J) { /* ln(e^T J), quadratic in g */
+        (*out)->form = NBT_FORM_LOG_ET;
+        (*out)->interp2 = ng >= 3 ? 2 : 1;
+    }
     nbt_build_opts o = {1e-10, measure, nthreads};
     nbt_status st = nbt_gslice_fill(*out, &o);
     if (st != NBT_OK) {
@@ -225,66 +229,43 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
     return st;
 }
 
-/* Axes 0 and 1 from the planner for HG(g[0]) and HG(g[1]) at tol/2 (or
- * its mappings at the requested size). */
-static nbt_status plan_axes(const nbt_gslice_request *r, unsigned nthreads, nbt_axis *a0, nbt_axis *a1, char *err,
-                            size_t errlen)
+/* Sizes by rules measured with bench/bench_gslice (doc/tables.md), no
+ * error-driven proxies: at tol 1e-3 relative,
+ *   H (tail form): u (log1p_cbrt, c = 10) and v (cos) 129 nodes;
+ *   J (log_et form, T <= 20): T 65 nodes (log1p_cbrt, c = 20), theta 257
+ *     (linear for Lambert, cos for Phong lobes);
+ * the bilinear error falling as N^-2; g uniform in atanh with 33 slices for
+ * atanh(g) spanning [-atanh 0.95, atanh 0.95] at 1e-3, quadratic, so the
+ * slice count scales with the atanh span and tol^(-1/3). The predicted
+ * time scales a small proxy's by the node count. */
+static size_t ladder_at_least(const size_t *lad, size_t n, double want)
 {
-    nbt_phase *p0 = nbt_phase_hg(r->g[0]), *p1 = nbt_phase_hg(r->g[1]);
-    if (!p0 || !p1) {
-        nbt_phase_free(p0);
-        nbt_phase_free(p1);
-        return failf(err, errlen, NBT_ENOMEM, "g-sliced table: out of memory");
-    }
-    nbt_plan_request rq[2] = {{r->kind, r->kind == NBT_TABLE_J ? r->n : 0, 0, p0, r->xmax, 0.5 * r->tol,
-                               {r->size[0], r->size[1]}, 0},
-                              {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, 0, p1, r->xmax, 0.5 * r->tol,
-                               {r->size[0], r->size[1]}, 0}};
-    nbt_plan *plan = NULL;
-    nbt_status st = nbt_plan_tables(rq, 2, nthreads, &plan, err, errlen);
-    if (st == NBT_OK) {
-        const nbt_plan_set *s0 = nbt_plan_get(plan, 0), *s1 = nbt_plan_get(plan, 1);
-        *a0 = s0->axis[0];
-        *a1 = s0->axis[1];
-        a0->n = a0->n > s1->axis[0].n ? a0->n : s1->axis[0].n;
-        a1->n = a1->n > s1->axis[1].n ? a1->n : s1->axis[1].n;
-    }
-    nbt_plan_free(plan);
-    nbt_phase_free(p0);
-    nbt_phase_free(p1);
-    return st;
+    for (size_t i = 0; i < n; i++)
+        if ((double)lad[i] >= want - 1e-9)
+            return lad[i];
+    return lad[n - 1];
 }
 
-/* H in the tail form: sizes by a rule measured with bench/bench_gslice
- * (doc/tables.md), no proxies: u (log1p_cbrt, c = 10) and v (cos) 129 nodes
- * at tol 1e-3 relative, the bilinear error falling as N^-2; g uniform in
- * atanh with 33 slices for atanh(g) spanning [-atanh 0.95, atanh 0.95] at
- * 1e-3, quadratic, so the slice count scales with the atanh span and
- * tol^(-1/3). The predicted time scales a small proxy's by the node count. */
-static nbt_status plan_tail(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
+static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
 {
-    size_t nuv = r->size[0] > 0 ? r->size[0] : 129, nvv = r->size[1] > 0 ? r->size[1] : 129, ng = r->size[2];
+    int H = r->kind == NBT_TABLE_H;
+    size_t n0 = r->size[0] > 0 ? r->size[0] : H ? 129 : 65, n1 = r->size[1] > 0 ? r->size[1] : H ? 129 : 257;
+    size_t ng = r->size[2];
     if (r->tol > 0) {
         double q = 1e-3 / r->tol, span = (atanh(r->g[1]) - atanh(r->g[0])) / (2.0 * atanh(0.95));
-        nuv = nvv = 4097;
-        for (size_t i = 0; i < NPSIZES; i++)
-            if ((double)PSIZES[i] >= 129.0 * sqrt(q) - 1e-9) {
-                nuv = nvv = PSIZES[i];
-                break;
-            }
-        ng = GSIZES[NGSIZES - 1];
-        double want = fmax(5.0, 1.0 + 32.0 * span * cbrt(q));
-        for (size_t i = 0; i < NGSIZES; i++)
-            if ((double)GSIZES[i] >= want - 1e-9) {
-                ng = GSIZES[i];
-                break;
-            }
-        if (nuv > 4096)
-            nuv = nvv = 4096;
+        n0 = ladder_at_least(PSIZES, NPSIZES, (H ? 129.0 : 65.0) * sqrt(q));
+        n1 = ladder_at_least(PSIZES, NPSIZES, (H ? 129.0 : 257.0) * sqrt(q));
+        ng = ladder_at_least(GSIZES, NGSIZES, fmax(5.0, 1.0 + 32.0 * span * cbrt(q)));
+        n0 = n0 > 4096 ? 4096 : n0;
+        n1 = n1 > 4096 ? 4096 : n1;
     }
-    double xmax = r->xmax;
-    out->axis[0] = (nbt_axis){0.0, xmax, NBT_AXIS_LOG1P_CBRT, 10.0, nuv};
-    out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_COS, 0.0, nvv};
+    if (H) {
+        out->axis[0] = (nbt_axis){0.0, r->xmax, NBT_AXIS_LOG1P_CBRT, 10.0, n0};
+        out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_COS, 0.0, n1};
+    } else {
+        out->axis[0] = (nbt_axis){0.0, r->xmax, NBT_AXIS_LOG1P_CBRT, 20.0, n0};
+        out->axis[1] = (nbt_axis){0.0, NBT_PI, r->n == 1 ? NBT_AXIS_LINEAR : NBT_AXIS_COS, 0.0, n1};
+    }
     out->axis[2] = g_axis(r, ng);
     out->pred_err = r->tol;
     /* the time: a 33x33x3 proxy through the same code (error measurement
@@ -299,8 +280,8 @@ static nbt_status plan_tail(const nbt_gslice_request *r, unsigned nthreads, nbt_
     nbt_table_free(proxy);
     if (st != NBT_OK)
         return nbt__failf(NULL, 0, st, "g-sliced table: the proxy build failed");
-    out->pred_seconds = tp * (double)nuv * (double)nvv * (double)ng / (33.0 * 33.0 * 3.0);
-    out->bytes = (double)nuv * (double)nvv * (double)ng * 2.0 * (r->half ? 2.0 : 4.0);
+    out->pred_seconds = tp * (double)n0 * (double)n1 * (double)ng / (33.0 * 33.0 * 3.0);
+    out->bytes = (double)n0 * (double)n1 * (double)ng * (H ? 2.0 : 1.0) * (r->half ? 2.0 : 4.0);
     out->plan_seconds = now_s() - t0;
     return NBT_OK;
 }
@@ -314,67 +295,34 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
-    if (r->kind == NBT_TABLE_H)
-        return plan_tail(r, nthreads, out, t0);
-    if ((st = plan_axes(r, nthreads, &out->axis[0], &out->axis[1], err, errlen)) != NBT_OK)
-        return st;
-    /* the g error at 9 slices on a 33^2 grid, decaying as (8/(ng-1))^1.5
-     * (measured for H at |g| -> 0.95: the forward peak's width in v scales
-     * with 1 - g, so the decay is slower than linear interpolation's second
-     * order); its time, scaled, predicts the build's */
-    nbt_axis p0 = out->axis[0], p1 = out->axis[1];
-    p0.n = p1.n = 33;
-    nbt_table *proxy;
-    double tp = now_s();
-    st = build_at(r, &p0, &p1, 9, nthreads, 1, &proxy);
-    tp = now_s() - tp;
-    if (st != NBT_OK)
-        return failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
-    double eg = (proxy->max_err[0] - proxy->quad_err) / proxy->max_abs[0];
-    nbt_table_free(proxy);
-    size_t ng = r->size[2];
-    if (r->tol > 0) {
-        ng = GSIZES[NGSIZES - 1];
-        for (size_t i = 0; i < NGSIZES; i++)
-            if (eg * pow(8.0 / (double)(GSIZES[i] - 1), 1.5) <= 0.5 * r->tol) {
-                ng = GSIZES[i];
-                break;
-            }
-    }
-    out->axis[2] = g_axis(r, ng);
-    out->pred_err = eg * pow(8.0 / (double)(ng - 1), 1.5);
-    /* slices cost as the planner's fixed-phase sets: N^2 (H), N^1.1 (J) */
-    double a = r->kind == NBT_TABLE_H ? 2.0 : 1.1;
-    out->pred_seconds = tp * pow((double)out->axis[0].n * (double)out->axis[1].n / (33.0 * 33.0), 0.5 * a) *
-                        (2.0 * (double)ng - 1.0) / 17.0;
-    out->bytes = (double)out->axis[0].n * (double)out->axis[1].n * (double)ng * (r->half ? 2.0 : 4.0);
-    out->plan_seconds = now_s() - t0;
-    return NBT_OK;
+    return plan_rule(r, nthreads, out, t0);
 }
 
 nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
                               size_t errlen)
 {
+    /* sized by the plan's rule: the recorded max_err does not decide (tail:
+     * set by the corner u -> 0, v -> pi/2, where the error map bounds each
+     * lookup; log_et: the slices' largest error, set by the horizon at
+     * large T; doc/tables.md) */
     const nbt_gslice_request *r = &p->req;
-    size_t ng = p->axis[2].n;
-    *out = NULL;
-    for (int attempt = 0;; attempt++) {
-        nbt_status st = build_at(r, &p->axis[0], &p->axis[1], ng, nthreads, 1, out);
-        if (st != NBT_OK)
-            return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
-        double rel = (*out)->max_err[0] / (*out)->max_abs[0];
-        if (r->tol == 0 || rel <= r->tol || (*out)->form == NBT_FORM_TAIL)
-            break; /* tail: max_err is set by the corner u -> 0, v -> pi/2; the error map bounds each lookup */
-        size_t n2 = nbt__ladder_next(GSIZES, NGSIZES, ng);
-        nbt_table_free(*out);
-        *out = NULL;
-        if (attempt >= 2 || n2 == 0)
-            return failf(err, errlen, NBT_ETOL, "g-sliced table: %zux%zux%zu reaches %.2e relative, not tol %g",
-                         p->axis[0].n, p->axis[1].n, ng, rel, r->tol);
-        ng = n2; /* axes 0 and 1 were planned for tol/2: grow g */
-    }
+    nbt_status st = build_at(r, &p->axis[0], &p->axis[1], p->axis[2].n, nthreads, 1, out);
+    if (st != NBT_OK)
+        return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
     if (r->half && (*out)->form == NBT_FORM_TAIL)
         return nbt__tail_round_half(*out);
+    if (r->half && (*out)->form == NBT_FORM_LOG_ET) {
+        /* ln(e^T J) rounded to half: at most 2^-11 of |value| at a node, an
+         * error in ln J, i.e. relative */
+        nbt_table *t = *out;
+        double vmax = 0;
+        for (size_t i = 0; i < nbt_table_size(t); i++)
+            vmax = fmax(vmax, fabs(t->data[i]));
+        double e = ldexp(vmax, -11);
+        for (size_t m = 0; m + 1 < t->axis[2].n; m++)
+            t->cell_err[m] += e;
+        t->max_err[0] += e;
+    }
     if (r->half)
         nbt_table_round_half(*out);
     return NBT_OK;

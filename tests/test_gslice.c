@@ -385,6 +385,28 @@ static void test_build_io(void)
     if (st == NBT_OK)
         check_tail(t, 60);
     nbt_table_free(t);
+
+    /* J: the planner's rule at tol 1e-2 (T <= 20, g over +-0.95) gives a log_et
+     * table, quadratic on an atanh g axis, whose pure lookup (no fallback) is
+     * within tol of nbt_surface_direct at random geometries (the direct term
+     * included, as a renderer sees it; the reference's own error added) */
+    nbt_gslice_request rj = {NBT_TABLE_J, 1, 20.0, {-0.95, 0.95}, 1e-2, {0, 0, 0}, 0};
+    st = nbt_gslice_build(&rj, 2, &t, NULL, err, sizeof err);
+    t_true(st == NBT_OK && t->form == NBT_FORM_LOG_ET && t->interp2 == 2 && t->axis[2].map == NBT_AXIS_ATANH,
+           "J build tol 1e-2: log_et, quadratic, atanh g (status %d %s)", st, err);
+    double worst = 0;
+    for (int k = 0; st == NBT_OK && k < 12; k++) {
+        nbt_surface_geom geo = {0.4, 0.5, 1.0, 0.5 + 39.0 * uni() * uni(), M_PI * uni(), 0.5, 1.0, 0, 1};
+        double g = -0.95 + 1.9 * uni(), L, E, R, RE;
+        nbt_phase *ph = nbt_phase_hg(g);
+        nbt_surface_direct(ph, &geo, 1e-8, &R, &RE);
+        nbt_phase_free(ph);
+        nbt_surface_table_g(t, NULL, g, &geo, 0, &L, &E);
+        worst = fmax(worst, (fabs(L - R) - RE) / fabs(R));
+    }
+    t_true(worst <= 1e-2, "J rule tol 1e-2: 12 random surface lookups within 1e-2 of the direct integral (worst %.2e)",
+           worst);
+    nbt_table_free(t);
 }
 
 int main(void)

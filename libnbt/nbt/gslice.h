@@ -71,19 +71,13 @@ typedef struct {
     int half;                 /* store half floats */
 } nbt_gslice_request;
 
-/* A plan. H (tail form): u log1p_cbrt(c = 10) and v cos with 129 nodes at
- * tol 1e-3 (times sqrt(1e-3/tol) up a ladder), g uniform in atanh with
- * 1 + 32 (atanh span / 2 atanh 0.95) (1e-3/tol)^(1/3) slices up the g
- * ladder (measured, doc/tables.md); the predicted time a 33x33x3 proxy's
- * scaled by the node count; execution does not regrow (the error map
- * bounds each lookup). J: axes 0 and 1 are the planner's sizes and mappings
- * (nbt_plan_tables) for the fixed phases HG(g[0]) and HG(g[1]) at tol/2
- * (or its mappings at the requested size), the larger of the two; g: a
- * 33^2 proxy with 9 slices measures the g interpolation error at the g
- * midpoints, and the g size follows from its decay as ng^-1.5 (measured) on
- * the ladder 9, 13, 17, 25, 33, 49, 65, 97, 129, ..., 1024 for tol/2.
- * Predicted time: the proxy's scaled as the planner scales fixed-phase
- * sets, times the slice count. */
+/* A plan, sized by rules measured with bench/bench_gslice (doc/tables.md).
+ * H (tail form): u log1p_cbrt(c = 10) and v cos with 129 nodes at tol 1e-3;
+ * J (log_et form): T log1p_cbrt(c = 20) with 65 nodes, theta linear
+ * (Lambert) or cos (Phong) with 257; both times sqrt(1e-3/tol) up a ladder.
+ * g uniform in atanh, quadratic, with 1 + 32 (atanh span / 2 atanh 0.95)
+ * (1e-3/tol)^(1/3) slices up the g ladder 9, 13, 17, 25, 33, 49, 65, ...
+ * The predicted time is a 33x33x3 proxy's scaled by the node count. */
 typedef struct {
     nbt_gslice_request req;
     nbt_axis axis[3];
@@ -95,9 +89,10 @@ typedef struct {
 
 nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
                            size_t errlen);
-/* Build the plan's table; with a tol it measures its error and, if it
- * misses tol, grows the g axis along the ladder up to 2 times, then
- * NBT_ETOL (err names size and error). */
+/* Build the plan's table and measure its error (the rule decides the size;
+ * the recorded errors bound it: H's error map per lookup, J's cell_err).
+ * With req.half, the values are rounded and the rounding added to J's
+ * recorded errors (H's error map). */
 nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
                               size_t errlen);
 /* Plan and execute; seconds (may be NULL): total time, proxies included. */
