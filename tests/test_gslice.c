@@ -34,6 +34,21 @@ static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, 
 }
 
 /* H_p or J_p^n of the table's kind for HG(g), independently integrated */
+/* t written to a temporary EXR and read back (NULL where either fails) */
+static nbt_table *exr_round_trip(const nbt_table *t)
+{
+    char path[] = "/tmp/test_gslice_XXXXXX.exr", rerr[256];
+    int fd = mkstemps(path, 4);
+    if (fd < 0)
+        return NULL;
+    close(fd);
+    nbt_table *back = NULL;
+    if (nbt_table_write_exr(t, path, NBT_EXR_ZIP) != NBT_OK || nbt_table_read_exr(path, &back, rerr, sizeof rerr) != NBT_OK)
+        back = NULL;
+    unlink(path);
+    return back;
+}
+
 static double exact(const nbt_table *t, double x, double y, double g)
 {
     double v, e;
@@ -292,15 +307,8 @@ static void test_log_form(void)
     t_true(nbt_table_err_at(t, 0, 0.0) < 0.5 * t->max_err[0], "log_et: cell error at g = 0 %.2e < half of max_err %.2e "
            "(surface bound under 10%% at %d of %d geometries)", nbt_table_err_at(t, 0, 0.0), t->max_err[0], kept, n);
     /* the EXR keeps the form */
-    char path[] = "/tmp/test_gslice_XXXXXX.exr", rerr[256];
-    int fd = mkstemps(path, 4);
-    close(fd);
-    nbt_table *back = NULL;
-    st = nbt_table_write_exr(t, path, NBT_EXR_ZIP);
-    if (st == NBT_OK)
-        st = nbt_table_read_exr(path, &back, rerr, sizeof rerr);
-    unlink(path);
-    t_true(st == NBT_OK && back->form == NBT_FORM_LOG_ET && back->interp2 == 2, "EXR keeps form log_et");
+    nbt_table *back = exr_round_trip(t);
+    t_true(back && back->form == NBT_FORM_LOG_ET && back->interp2 == 2, "EXR keeps form log_et");
     nbt_table_free(back);
     /* Legendre channels can be negative: the log form is refused */
     nbt_table *L2 = nbt_table_alloc(NBT_TABLE_J, &a0, &a1, 1);
@@ -362,16 +370,8 @@ static void test_build_io(void)
     t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 2,
            "build: H in the tail form on an atanh g axis, quadratic in g");
     check_tail(t, 60);
-    char path[] = "/tmp/test_gslice_XXXXXX.exr";
-    int fd = mkstemps(path, 4);
-    close(fd);
-    nbt_table *back = NULL;
-    char rerr[256];
-    st = nbt_table_write_exr(t, path, NBT_EXR_ZIP);
-    if (st == NBT_OK)
-        st = nbt_table_read_exr(path, &back, rerr, sizeof rerr);
-    unlink(path);
-    t_true(st == NBT_OK && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
+    nbt_table *back = exr_round_trip(t);
+    t_true(back && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
                back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 2 &&
                back->nch == 2 && back->data[5] == t->data[5],
            "EXR round trip keeps the g-sliced table (%zu slices)", t->axis[2].n);
@@ -425,16 +425,9 @@ int main(void)
     check_table(P, 100);
     /* a plain-form file (as written before the tail form) reads back plain and still evaluates:
      * the difference of two lookups with its bound, or the ray integral */
-    char ppath[] = "/tmp/test_gslice_plain_XXXXXX.exr";
-    int pfd = mkstemps(ppath, 4);
-    close(pfd);
-    nbt_table *Pb = NULL;
-    char perr[256];
-    nbt_status pst = nbt_table_write_exr(P, ppath, NBT_EXR_ZIP);
-    if (pst == NBT_OK)
-        pst = nbt_table_read_exr(ppath, &Pb, perr, sizeof perr);
-    unlink(ppath);
-    t_true(pst == NBT_OK && Pb->form == NBT_FORM_PLAIN && Pb->nch == 1 && nbt_table_is_gslice(Pb),
+    nbt_table *Pb = exr_round_trip(P);
+    nbt_status pst = Pb ? NBT_OK : NBT_EIO;
+    t_true(Pb && Pb->form == NBT_FORM_PLAIN && Pb->nch == 1 && nbt_table_is_gslice(Pb),
            "plain-form file reads back plain");
     for (int i = 0; pst == NBT_OK && i < 6; i++) {
         nbt_airlight_geom geo = {0.3, 0.5, 2.0, 1.0 + 3.0 * uni(), 0.1 + 2.9 * uni(), i % 2 ? INFINITY : 3.0};
