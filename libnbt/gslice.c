@@ -342,6 +342,62 @@ nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_
     return st;
 }
 
+/* ---- mixtures of HG lobes ---- */
+
+typedef struct {
+    const nbt_table *t, *t2;
+    const nbt_airlight_geom *ag;
+    const nbt_surface_geom *sg;
+    double fallback_tol;
+} mix_ctx;
+
+static nbt_status mix_lobe(const mix_ctx *c, double g, double *L, double *E)
+{
+    return c->ag ? nbt_airlight_table_g(c->t, g, c->ag, L, E)
+                 : nbt_surface_table_g(c->t, c->t2, g, c->sg, c->fallback_tol, L, E);
+}
+
+/* sum_i w_i (lobe i), bound sum_i |w_i| (its bound): the quantity is linear in p */
+static nbt_status hg_mix(const mix_ctx *c, size_t n, const double *w, const double *g, double *L, double *abserr)
+{
+    *L = *abserr = NAN;
+    double ws = 0;
+    for (size_t i = 0; i < n && n <= NBT_HG_MIX_MAX; i++)
+        ws += w[i];
+    if (n < 1 || n > NBT_HG_MIX_MAX || !(fabs(ws - 1.0) <= 1e-12))
+        NBT_FAIL(NBT_EDOM, "HG mixture: 1 to 8 lobes whose weights sum to 1");
+    nbt_status st = NBT_OK;
+    double s = 0, e = 0;
+    for (size_t i = 0; i < n; i++) {
+        double Li, Ei;
+        nbt_status si = mix_lobe(c, g[i], &Li, &Ei);
+        if (si != NBT_OK && si != NBT_ETOL)
+            return si;
+        if (st == NBT_OK)
+            st = si;
+        s += w[i] * Li;
+        e += fabs(w[i]) * Ei;
+    }
+    *L = s;
+    *abserr = e;
+    return st;
+}
+
+nbt_status nbt_airlight_table_hg_mix(const nbt_table *t, size_t n, const double *w, const double *g,
+                                     const nbt_airlight_geom *geo, double *La, double *abserr)
+{
+    mix_ctx c = {t, NULL, geo, NULL, 0.0};
+    return hg_mix(&c, n, w, g, La, abserr);
+}
+
+nbt_status nbt_surface_table_hg_mix(const nbt_table *diffuse, const nbt_table *specular, size_t n, const double *w,
+                                    const double *g, const nbt_surface_geom *geo, double fallback_tol, double *Lp,
+                                    double *abserr)
+{
+    mix_ctx c = {diffuse, specular, NULL, geo, fallback_tol};
+    return hg_mix(&c, n, w, g, Lp, abserr);
+}
+
 /* ---- Legendre packs or g slices ---- */
 
 const char *nbt_basis_name(nbt_basis b)

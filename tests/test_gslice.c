@@ -49,6 +49,23 @@ static nbt_table *exr_round_trip(const nbt_table *t)
     return back;
 }
 
+/* two-term HG, a HG(g1) + (1 - a) HG(g2), tabulated at 4001 mu clustered at
+ * both ends (spacing ~3e-7 there): an independent phase object for the
+ * mixture's references (piecewise-linear error below 1e-7 relative) */
+static nbt_phase *tthg_tabulated(double a, double g1, double g2)
+{
+    enum { N = 4001 };
+    static double mu[N], pv[N];
+    nbt_phase *h1 = nbt_phase_hg(g1), *h2 = nbt_phase_hg(g2);
+    for (int i = 0; i < N; i++) {
+        mu[i] = i == 0 ? -1.0 : i == N - 1 ? 1.0 : -cos(M_PI * i / (N - 1));
+        pv[i] = a * nbt_phase_eval(h1, mu[i]) + (1 - a) * nbt_phase_eval(h2, mu[i]);
+    }
+    nbt_phase_free(h1);
+    nbt_phase_free(h2);
+    return nbt_phase_tabulated(N, mu, pv);
+}
+
 static double exact(const nbt_table *t, double x, double y, double g)
 {
     double v, e;
@@ -370,6 +387,28 @@ static void test_build_io(void)
     t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 2,
            "build: H in the tail form on an atanh g axis, quadratic in g");
     check_tail(t, 60);
+    /* a two-term HG from the same table (0.8 HG(0.55) + 0.2 HG(-0.25)) against the ray
+     * integral of the tabulated mixture */
+    {
+        double w[2] = {0.8, 0.2}, gg[2] = {0.55, -0.25}, worst = 0;
+        nbt_phase *tt = tthg_tabulated(0.8, 0.55, -0.25);
+        for (int k = 0; k < 8; k++) {
+            nbt_airlight_geom geo = {0.3, 0.5, 2.0, 0.5 + 5.0 * uni(), 0.1 + 2.9 * uni(), k % 2 ? INFINITY : 4.0};
+            double L, E, R, RE;
+            nbt_status sm = nbt_airlight_table_hg_mix(t, 2, w, gg, &geo, &L, &E);
+            nbt_airlight_direct(tt, &geo, 1e-9, &R, &RE);
+            worst = fmax(worst, sm == NBT_OK ? fabs(L - R) / (E + RE + 1e-6 * fabs(R)) : INFINITY);
+        }
+        t_true(worst <= 1, "two-term HG airlight = its ray integral within the summed bounds (worst %.2f of them)",
+               worst);
+        nbt_airlight_geom geo = {0.3, 0.5, 2.0, 2.0, 1.0, INFINITY};
+        double L, E;
+        t_true(nbt_airlight_table_hg_mix(t, 2, (double[]){0.8, 0.3}, gg, &geo, &L, &E) == NBT_EDOM &&
+                   nbt_airlight_table_hg_mix(t, 0, w, gg, &geo, &L, &E) == NBT_EDOM &&
+                   nbt_airlight_table_hg_mix(t, 2, w, (double[]){0.55, -0.5}, &geo, &L, &E) == NBT_EDOM,
+               "HG mixture: weights not summing to 1, no lobe, a lobe outside the g range: NBT_EDOM");
+        nbt_phase_free(tt);
+    }
     nbt_table *back = exr_round_trip(t);
     t_true(back && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
                back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 2 &&
@@ -406,6 +445,19 @@ static void test_build_io(void)
     }
     t_true(worst <= 1e-2, "J rule tol 1e-2: 12 random surface lookups within 1e-2 of the direct integral (worst %.2e)",
            worst);
+    /* two-term HG (0.85 HG(0.9) + 0.15 HG(-0.5)) from the same J table against the direct
+     * integral of the tabulated mixture: within tol as above */
+    nbt_phase *tt = tthg_tabulated(0.85, 0.9, -0.5);
+    double wm = 0;
+    for (int k = 0; st == NBT_OK && k < 4; k++) {
+        nbt_surface_geom geo = {0.4, 0.5, 1.0, 0.5 + 19.0 * uni(), M_PI * uni(), 0.5, 1.0, 0, 1};
+        double L, E, R, RE;
+        nbt_surface_direct(tt, &geo, 1e-8, &R, &RE);
+        nbt_surface_table_hg_mix(t, NULL, 2, (double[]){0.85, 0.15}, (double[]){0.9, -0.5}, &geo, 0, &L, &E);
+        wm = fmax(wm, (fabs(L - R) - RE) / fabs(R));
+    }
+    nbt_phase_free(tt);
+    t_true(wm <= 1e-2, "two-term HG surface radiance within 1e-2 of its direct integral (worst %.2e)", wm);
     nbt_table_free(t);
 }
 

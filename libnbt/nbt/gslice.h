@@ -164,6 +164,24 @@ nbt_status nbt_airlight_table_g_lookup(const nbt_table *t, double g, const nbt_a
 nbt_status nbt_surface_table_g(const nbt_table *diffuse, const nbt_table *specular, double g,
                                const nbt_surface_geom *geo, double fallback_tol, double *Lp, double *abserr);
 
+/* Mixtures of HG lobes from the same g-sliced tables: p = sum_i w_i HG(g_i)
+ * with sum_i w_i = 1, e.g. two-term HG (w = {a, 1 - a}, g = {g_f, g_b}, a
+ * forward and a backward lobe). Airlight and the scattered part of surface
+ * radiance are linear in the phase function, and the direct term has total
+ * weight sum_i w_i = 1, so each is sum_i w_i (the lobe's value), its bound
+ * sum_i |w_i| (the lobe's bound), each lobe evaluated as above (fallbacks
+ * included). A shader does the same with nbt_airlight_g / nbt_surface_g per
+ * lobe. 1 <= n <= NBT_HG_MIX_MAX lobes, each g_i inside the table's range;
+ * NBT_EDOM when n is out of range or sum_i w_i differs from 1 by more than
+ * 1e-12. Status: the first lobe status other than NBT_OK (NBT_ETOL: the
+ * values are still summed). */
+#define NBT_HG_MIX_MAX 8
+nbt_status nbt_airlight_table_hg_mix(const nbt_table *t, size_t n, const double *w, const double *g,
+                                     const nbt_airlight_geom *geo, double *La, double *abserr);
+nbt_status nbt_surface_table_hg_mix(const nbt_table *diffuse, const nbt_table *specular, size_t n, const double *w,
+                                    const double *g, const nbt_surface_geom *geo, double fallback_tol, double *Lp,
+                                    double *abserr);
+
 /* The basis for a scene with a g range (s->have_g): nbt_basis_choose with
  * want = s->basis for its first set (H if airlight, else J^1, else the
  * first Phong J^n) over [0, max kappa_t x max distance] at s->tol with
