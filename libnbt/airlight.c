@@ -32,11 +32,9 @@ double nbt__s_of_t(double t)
  * cancellation by the caller. */
 static void weights_at(const nbt__weights *w, double c, double sn, double *f)
 {
-    if (w->nhg) /* as nbt__phase_eval_cs's HG, times 4 pi */
-        for (size_t i = 0; i < w->nhg; i++) {
-            double g = w->hg[i], d = 1.0 + g * g - 2.0 * g * c;
-            f[i] = (1.0 - g * g) / (d * sqrt(d));
-        }
+    if (w->nhg)
+        for (size_t i = 0; i < w->nhg; i++)
+            f[i] = nbt__hg_4pi(w->hg[i], c);
     else if (w->phase)
         f[0] = 4.0 * NBT_PI * nbt__phase_eval_cs(w->phase, c, sn);
     else if (w->b)

@@ -135,7 +135,8 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
             /* stencil centre and weights at the midpoint p = m + 1/2 */
             size_t mc = quad ? (c < 1 ? 1 : c > ng - 2 ? ng - 2 : c) : m;
             double tt = (double)m + 0.5 - (double)mc;
-            double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)};
+            double w[3];
+            nbt__quad_weights(tt, w);
             if (!quad)
                 w[0] = w[1] = 0.5, w[2] = 0.0; /* slices m, m + 1 */
             size_t m0 = quad ? mc - 1 : m; /* w[q] weighs slice m0 + q */

@@ -2,10 +2,13 @@
 #ifndef NBT_INTERNAL_H
 #define NBT_INTERNAL_H
 
+#include <math.h>
 #include <stddef.h>
 #include <nbt/error.h>
 #include <nbt/phase.h>
 #include <nbt/quad.h>
+#include <nbt/table.h>
+#include <nbt/airlight.h>
 
 #define NBT_PI 3.14159265358979323846
 #define NBT_PI_2 1.57079632679489661923
@@ -18,6 +21,26 @@ nbt_status nbt__fail(nbt_status s, const char *reason);
  * (the planners' errors go to the caller's buffer). Defined in plan.c. */
 nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
+
+/* 4 pi HG(g, mu): the Henyey-Greenstein phase function times 4 pi */
+static inline double nbt__hg_4pi(double g, double mu)
+{
+    double d = 1.0 + g * g - 2.0 * g * mu;
+    return (1.0 - g * g) / (d * sqrt(d));
+}
+
+/* A 3-D table's quadratic interpolation in its slice coordinate
+ * (interp2 = 2): the weights of slices mc - 1, mc, mc + 1 at p = mc + t. */
+static inline void nbt__quad_weights(double t, double w[3])
+{
+    w[0] = 0.5 * t * (t - 1.0);
+    w[1] = 1.0 - t * t;
+    w[2] = 0.5 * t * (t + 1.0);
+}
+
+/* Texel position p = s (n - 1) of x on axis a, split into the cell i0
+ * (clamped to [0, n - 2]) and the weight f = p - i0, as a sampler does. */
+void nbt__axis_cell(const nbt_axis *a, double x, size_t *i0, double *f);
 
 /* Weights of the airlight integrand: Legendre orders 0..kmax, or one
  * channel: 4 pi p(mu) when phase != NULL, or the truncated series
@@ -123,7 +146,6 @@ typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);
 nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx);
 unsigned nbt__nthreads(unsigned requested, size_t n);
 
-#include <nbt/airlight.h>
 /* G rows of J builds, shared between builds (libnbt/jcache.c): a row is
  * G_k(T, g_q) for k < fdim at all Q panel nodes, which depend on T, the
  * panel layout (ngeo, nhi, split; len = Q fdim values) and the quadrature

@@ -215,10 +215,8 @@ double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn)
         return 1.0 / (4.0 * NBT_PI);
     case NBT_PHASE_RAYLEIGH:
         return 3.0 / (16.0 * NBT_PI) * (1.0 + mu * mu);
-    case NBT_PHASE_HG: {
-        double g = p->g, d = 1.0 + g * g - 2.0 * g * mu;
-        return (1.0 - g * g) / (4.0 * NBT_PI * d * sqrt(d));
-    }
+    case NBT_PHASE_HG:
+        return nbt__hg_4pi(p->g, mu) / (4.0 * NBT_PI);
     case NBT_PHASE_GAUSS:
     case NBT_PHASE_SOG: {
         double s = 0;

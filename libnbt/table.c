@@ -199,8 +199,9 @@ double nbt_table_err_at(const nbt_table *t, size_t c, double x2)
 {
     if (!t->cell_err || c >= t->nch)
         return c < t->nch ? t->max_err[c] : NAN;
-    double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);
-    size_t m = (size_t)fmin(floor(p), (double)(t->axis[2].n - 2));
+    size_t m;
+    double f;
+    nbt__axis_cell(&t->axis[2], x2, &m, &f);
     double e = t->cell_err[m * t->nch + c];
     return isnan(e) ? t->max_err[c] : e;
 }
@@ -225,8 +226,7 @@ void nbt_table_free(nbt_table *t)
     free(t);
 }
 
-/* texel position p = s (n-1), split into cell and weight as a sampler does */
-static void cell(const nbt_axis *a, double x, size_t *i0, double *f)
+void nbt__axis_cell(const nbt_axis *a, double x, size_t *i0, double *f)
 {
     double p = nbt_axis_to_unit(a, x) * (double)(a->n - 1);
     double fl = floor(p);
@@ -252,8 +252,8 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
 {
     size_t i, j;
     double fx, fy;
-    cell(&t->axis[0], x0, &i, &fx);
-    cell(&t->axis[1], x1, &j, &fy);
+    nbt__axis_cell(&t->axis[0], x0, &i, &fx);
+    nbt__axis_cell(&t->axis[1], x1, &j, &fy);
     lookup_slice(t, 0, i, fx, j, fy, out);
 }
 
@@ -268,9 +268,9 @@ nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0
         return NBT_ENOMEM;
     }
     for (size_t i = 0; i < n0; i++)
-        cell(&t->axis[0], x0[i], &ij[i], &f[i]);
+        nbt__axis_cell(&t->axis[0], x0[i], &ij[i], &f[i]);
     for (size_t j = 0; j < n1; j++)
-        cell(&t->axis[1], x1[j], &ij[n0 + j], &f[n0 + j]);
+        nbt__axis_cell(&t->axis[1], x1[j], &ij[n0 + j], &f[n0 + j]);
     for (size_t j = 0; j < n1; j++)
         for (size_t i = 0; i < n0; i++)
             lookup_slice(t, 0, ij[i], f[i], ij[n0 + j], f[n0 + j], out + (j * n0 + i) * t->nch);
@@ -283,8 +283,8 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
 {
     size_t i, j, m;
     double fx, fy, fz, hi[NBT_TABLE_MAX_CH];
-    cell(&t->axis[0], x0, &i, &fx);
-    cell(&t->axis[1], x1, &j, &fy);
+    nbt__axis_cell(&t->axis[0], x0, &i, &fx);
+    nbt__axis_cell(&t->axis[1], x1, &j, &fy);
     if (t->axis[2].n < 2) {
         lookup_slice(t, 0, i, fx, j, fy, out);
         return;
@@ -293,7 +293,8 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
         /* quadratic through the nearest slice and its two neighbours */
         double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);
         double mc = fmin(fmax(floor(p + 0.5), 1.0), (double)(t->axis[2].n - 2)), tt = p - mc;
-        double w[3] = {0.5 * tt * (tt - 1.0), 1.0 - tt * tt, 0.5 * tt * (tt + 1.0)}, s[NBT_TABLE_MAX_CH];
+        double w[3], s[NBT_TABLE_MAX_CH];
+        nbt__quad_weights(tt, w);
         for (size_t c = 0; c < t->nch; c++)
             out[c] = 0.0;
         for (int q = 0; q < 3; q++) {
@@ -303,7 +304,7 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
         }
         return;
     }
-    cell(&t->axis[2], x2, &m, &fz);
+    nbt__axis_cell(&t->axis[2], x2, &m, &fz);
     lookup_slice(t, m, i, fx, j, fy, out);
     lookup_slice(t, m + 1, i, fx, j, fy, hi);
     for (size_t c = 0; c < t->nch; c++)
