@@ -313,18 +313,14 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
     if (r->half && (*out)->form == NBT_FORM_TAIL)
         return nbt__tail_round_half(*out);
     if (r->half && (*out)->form == NBT_FORM_LOG_ET) {
-        /* ln(e^T J) rounded to half: at most 2^-11 of |value| at a node, an
-         * error in ln J, i.e. relative */
+        /* ln(e^T J) rounded to half: the largest change at a node, times the
+         * lookup's weight sum, is an error in ln J, i.e. relative */
         nbt_table *t = *out;
-        double vmax = 0;
-        for (size_t i = 0; i < nbt_table_size(t); i++)
-            vmax = fmax(vmax, fabs(t->data[i]));
-        double e = ldexp(vmax, -11);
+        double e = nbt__lookup_weight_sum(t) * nbt__table_round_half_change(t, 0);
         for (size_t m = 0; m + 1 < t->axis[2].n; m++)
             t->cell_err[m] += e;
         t->max_err[0] += e;
-    }
-    if (r->half)
+    } else if (r->half)
         nbt_table_round_half(*out);
     return NBT_OK;
 }

@@ -394,17 +394,8 @@ double nbt__tail_gauss(double g, double u, double e0, double s0, double ds, int 
 nbt_status nbt__tail_round_half(nbt_table *t)
 {
     size_t n = nbt_table_size(t) / t->nch;
-    float *c0 = malloc(n * sizeof *c0);
-    if (!c0)
-        NBT_FAIL(NBT_ENOMEM, "g-sliced H table (tail form): out of memory");
-    for (size_t i = 0; i < n; i++)
-        c0[i] = t->data[i * t->nch];
-    nbt_table_round_half(t);
-    double d = 0;
-    for (size_t i = 0; i < n; i++)
-        d = fmax(d, fabs((double)t->data[i * t->nch] - (double)c0[i]));
-    free(c0);
-    double er = expm1(d);
+    /* the log values move by at most d, a lookup by the weights' sum times d */
+    double er = expm1(nbt__lookup_weight_sum(t) * nbt__table_round_half_change(t, 0));
     /* the map before rounding is not kept: add the rounding, then a margin of
      * a half-precision step (2^-10 relative) so that the rounded map is not
      * below it */

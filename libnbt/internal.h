@@ -38,6 +38,17 @@ static inline void nbt__quad_weights(double t, double w[3])
     w[2] = 0.5 * t * (t + 1.0);
 }
 
+/* Sum of |weights| of one lookup: bilinear 1, quadratic in g (interp2 = 2)
+ * at most 1.25 (at t = +-1/2): a change of at most d at every node moves a
+ * lookup by at most this times d. */
+static inline double nbt__lookup_weight_sum(const nbt_table *t)
+{
+    return t->interp2 == 2 && t->axis[2].n >= 3 ? 1.25 : 1.0;
+}
+
+/* nbt_table_round_half, returning the largest change of channel c. */
+double nbt__table_round_half_change(nbt_table *t, size_t c);
+
 /* Texel position p = s (n - 1) of x on axis a, split into the cell i0
  * (clamped to [0, n - 2]) and the weight f = p - i0, as a sampler does. */
 void nbt__axis_cell(const nbt_axis *a, double x, size_t *i0, double *f);

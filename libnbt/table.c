@@ -346,10 +346,21 @@ double nbt_table_max_abs(const nbt_table *t)
 
 void nbt_table_round_half(nbt_table *t)
 {
+    nbt__table_round_half_change(t, 0);
+}
+
+double nbt__table_round_half_change(nbt_table *t, size_t c)
+{
     size_t n = nbt_table_size(t);
-    for (size_t i = 0; i < n; i++)
-        t->data[i] = to_half_and_back(t->data[i]);
+    double d = 0;
+    for (size_t i = 0; i < n; i++) {
+        float h = to_half_and_back(t->data[i]);
+        if (i % t->nch == c)
+            d = fmax(d, fabs((double)h - (double)t->data[i]));
+        t->data[i] = h;
+    }
     t->half = 1;
+    return d;
 }
 
 nbt_status nbt__table_set_prepare(nbt_table *const *ts, size_t nt, const nbt_phase *fixed, int **kmap,
