@@ -240,6 +240,18 @@ static void table_steps(const nbt_table *t, double step[3])
     }
 }
 
+/* A full-screen program from libnbt-gl's modules for cfg and main_src;
+ * asserts that it links (what names it in the test line). */
+static GLuint config_program(const nbt_gl_config *cfg, const char *main_src, const char *what)
+{
+    char err[4096] = "no shader source";
+    char *src = nbt_gl_shader_source(cfg, main_src);
+    GLuint p = src ? gl_fullscreen_program(src, err, sizeof err) : 0;
+    free(src);
+    t_true(p != 0, "%s: %s", what, p ? "ok" : err);
+    return p;
+}
+
 /* The raw nbt_lookup3 against nbt_table_lookup3 at W x H points read from a
  * texture: x0, x1 uniform over their ranges widened by 5% (clamping), x2 in
  * turn a slice node, a midpoint between slices (unit coordinate), a random
@@ -254,11 +266,7 @@ static void check_lookup3(nbt_table *t, const char *what)
         "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
         "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
         "  color = nbt_lookup3q(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
-    char err[4096];
-    char *src = nbt_gl_shader_source(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, t->interp2 == 2 ? LKQ : LK);
-    GLuint p = gl_fullscreen_program(src, err, sizeof err);
-    free(src);
-    t_true(p != 0, "lookup3 shader: %s", p ? "ok" : err);
+    GLuint p = config_program(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, t->interp2 == 2 ? LKQ : LK, "lookup3 shader");
     if (!p)
         return;
     float *pt = malloc(W * H * 4 * sizeof(float)), *px = malloc(W * H * 4 * sizeof(float));
@@ -397,11 +405,7 @@ static void test_gsliced(void)
         "  color.a = nbt_surface_g(0.15, 0.2, 2.385, 6.0, ths, thr, 0.7, 0.3, 20.0, gr);\n"
         "}\n";
     nbt_gl_config gc = {1, 1, 1, 0, 0, 0, 1};
-    char err[4096];
-    char *src = nbt_gl_shader_source(&gc, GS);
-    GLuint p = gl_fullscreen_program(src, err, sizeof err);
-    free(src);
-    t_true(p != 0, "g-sliced shader: %s", p ? "ok" : err);
+    GLuint p = config_program(&gc, GS, "g-sliced shader");
     const nbt_table *tabs[3] = {Hg, J1g, Jng};
     static const char *names[3] = {"nbt_H0", "nbt_J1_0", "nbt_Jn_0"};
     GLuint tex[3];
@@ -561,11 +565,7 @@ static void test_gsliced_direct(void)
         "  color = vec4(nbt_airlight_g(0.3, 0.5, 1.0, q.x, q.y, q.z, q.w), 0.0, 0.0, 1.0);\n"
         "}\n";
     nbt_gl_config gc = {1, 0, 0, 0, 0, 0, 1};
-    char err[4096];
-    char *src = nbt_gl_shader_source(&gc, GD);
-    GLuint p = gl_fullscreen_program(src, err, sizeof err);
-    free(src);
-    t_true(p != 0, "g-sliced direct-check shader: %s", p ? "ok" : err);
+    GLuint p = config_program(&gc, GD, "g-sliced direct-check shader");
     if (!p || !Hg) {
         nbt_table_free(Hg);
         return;
@@ -663,10 +663,7 @@ int main(void)
     }
     t_true(Ht[0] && Ht[1] && J1t[0] && J1t[1] && Jnt[0] && Jnt[1], "tables built");
     nbt_gl_config cfg = {2, 2, 2, 0, 1, 0, 0};
-    char *src = nbt_gl_shader_source(&cfg, MAIN);
-    GLuint prog = gl_fullscreen_program(src, err, sizeof err);
-    free(src);
-    t_true(prog != 0, "test shader: %s", prog ? "ok" : err);
+    GLuint prog = config_program(&cfg, MAIN, "test shader");
     GLuint fbo = gl_float_target(W, H);
     t_true(fbo != 0, "RGBA32F render target");
     /* create every texture on unit 0 first, then bind them to their units */
@@ -772,10 +769,7 @@ int main(void)
         /* the validators see a main without the test's loose uniform (Vulkan takes none) */
         validate(&bc, "layout(location = 0) out vec4 color;\n"
                       "void main() { color = vec4(nbt_beam_fit_psi(1.7, 0.9, 0.0685, 3.0, 0.9)); }\n");
-        src = nbt_gl_shader_source(&bc, FIT);
-        GLuint pf = gl_fullscreen_program(src, err, sizeof err);
-        free(src);
-        t_true(pf != 0, "fitted-model shader: %s", pf ? "ok" : err);
+        GLuint pf = config_program(&bc, FIT, "fitted-model shader");
         const nbt_beam_fit *fit = nbt_beam_fit_default();
         for (int inf = 0; inf < 2 && pf; inf++) {
             glUseProgram(pf);
@@ -820,9 +814,7 @@ int main(void)
         "  color.g = nbt_airlight(0.15, 0.2, 2.385, 5.0, 3.14159265358979, 25.0);\n"
         "  color.b = nbt_airlight(0.15, 20.0, 2.385, 5.0, 1.0, 1e30);\n"
         "  color.a = nbt_surface(0.15, 20.0, 2.385, 50.0, 0.0, 0.0, 0.7, 0.3, 20.0);\n}\n";
-    src = nbt_gl_shader_source(&cfg, SING);
-    GLuint ps = gl_fullscreen_program(src, err, sizeof err);
-    free(src);
+    GLuint ps = config_program(&cfg, SING, "singular-places shader");
     glUseProgram(ps);
     for (int i = 0; i < 6; i++)
         glUniform1i(glGetUniformLocation(ps, names[i]), i);
