@@ -21,7 +21,8 @@ int cmd_info(int argc, char **argv)
             puts("Usage: nbt-gen info FILE.exr [--at X,Y[,G]]\n"
                  "Prints the table's metadata; with --at, the bilinear (GPU-equivalent) values at\n"
                  "physical coordinates X (u or T) and Y (v or theta); on a 3-D (g-sliced) table the\n"
-                 "trilinear (sampler3D) value at X,Y,G (G: the slice axis, e.g. g; default its low end).");
+                 "value at X,Y,G as libnbt and the shaders look it up (trilinear, or quadratic in g for\n"
+                 "interp2 = 2; G: the slice axis, e.g. g; default its low end), in the table's value form.");
             return 0;
         } else
             die_usage("see 'nbt-gen info --help'");

@@ -250,7 +250,7 @@ static void tables_help(const char *cmd)
            "                 airlight series truncation stays below tol/2, and the tables' error\n"
            "                 target is tol/2 over the error amplification sum (2k+1)|g|^k\n"
            "  --basis B      with --g: legendre (the orders above), slices (one 3-D table of HG\n"
-           "                 slices over g, looked up trilinearly: nbt/gslice.h) or auto (default:\n"
+           "                 slices on an atanh g axis, quadratic in g: nbt/gslice.h) or auto (default:\n"
            "                 the smaller predicted build time; prints why); slices need --tol\n"
            "  --phase SPEC   fixed phase instead: iso, rayleigh, hg:g=G, gauss:B=B, table:FILE\n"
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
