@@ -7,56 +7,12 @@
 #include <time.h>
 #include <nbt/mc.h>
 #include "internal.h"
+#include "rng.h"
 
 #define NBATCH NBT_MC_BATCHES
 /* weighted estimator: roulette below this weight (default), survival probability (MCML's values) */
 #define MC_WROUL 1e-4
 #define MC_WROUL_P 0.1
-
-/* xoshiro256+ seeded from (seed, photon index) by splitmix64: each photon's
- * stream depends on nothing else, whichever thread runs it. */
-typedef struct {
-    uint64_t s[4];
-} rng_t;
-
-static uint64_t splitmix(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
-static inline void rng_seed(rng_t *r, uint64_t seed, uint64_t photon)
-{
-    uint64_t x = seed ^ (photon * 0xd1b54a32d192ed03u);
-    splitmix(&x);
-    for (int i = 0; i < 4; i++)
-        r->s[i] = splitmix(&x);
-}
-
-static inline uint64_t rotl(uint64_t x, int k)
-{
-    return (x << k) | (x >> (64 - k));
-}
-
-/* uniform in [0, 1) */
-static inline double rng_u(rng_t *r)
-{
-    uint64_t *s = r->s, res = s[0] + s[3], t = s[1] << 17;
-    s[2] ^= s[0];
-    s[3] ^= s[1];
-    s[1] ^= s[2];
-    s[0] ^= s[3];
-    s[2] ^= t;
-    s[3] = rotl(s[3], 45);
-    return (double)(res >> 11) * 0x1.0p-53;
-}
-
-static double rng_cb(void *r)
-{
-    return rng_u(r);
-}
 
 typedef struct {
     const nbt_mc_config *cfg;
@@ -108,10 +64,10 @@ static inline void plane_index(const nbt_mc_config *cf, size_t *jp, double z)
     *jp = j;
 }
 
-static inline double sample_mu(const mc_ctx *c, rng_t *rs)
+static inline double sample_mu(const mc_ctx *c, nbt__rng *rs)
 {
     if (c->skind == NBT_PHASE_HG) { /* as nbt__phase_sample_mu, inline */
-        double g = c->sparam, u = rng_u(rs);
+        double g = c->sparam, u = nbt__rng_u(rs);
         if (fabs(g) < 1e-6)
             return 2.0 * u - 1.0;
         double f = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
@@ -119,13 +75,13 @@ static inline double sample_mu(const mc_ctx *c, rng_t *rs)
         return mu > 1.0 ? 1.0 : (mu < -1.0 ? -1.0 : mu);
     }
     if (c->skind == NBT_PHASE_GAUSS) { /* as nbt__phase_sample_mu: inverse CDF of theta^2 < pi^2 */
-        double th = sqrt(-4.0 * c->sparam * log1p(-c->sinv * rng_u(rs)));
+        double th = sqrt(-4.0 * c->sparam * log1p(-c->sinv * nbt__rng_u(rs)));
         return cos(fmin(th, NBT_PI));
     }
     /* a copy goes to the general sampler, so that the photon's own state
      * never has its address taken and can stay in registers */
-    rng_t t = *rs;
-    double mu = nbt__phase_sample_mu(c->cfg->phase, rng_cb, &t);
+    nbt__rng t = *rs;
+    double mu = nbt__phase_sample_mu(c->cfg->phase, nbt__rng_cb, &t);
     *rs = t;
     return mu;
 }
@@ -143,8 +99,8 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
     const double albedo = cf->albedo, bottom = c->b[0], top = c->top, slabw = c->slab ? 1.0 : 0.0;
     const double wroul = cf->roulette_weight > 0 ? cf->roulette_weight : MC_WROUL;
     for (uint64_t ph = p0; ph < p1; ph++) {
-        rng_t rs;
-        rng_seed(&rs, cf->seed, ph);
+        nbt__rng rs;
+        nbt__rng_seed(&rs, cf->seed, ph);
         double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
         size_t li = 0, jp = 0; /* layer; first tally plane above z */
         unsigned scattered = 0; /* scatterings so far */
@@ -155,7 +111,7 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                 /* delta tracking: tentative collisions at the majorant rate,
                  * real with probability rho(z)/rho_max */
                 for (;;) {
-                    double d = -log1p(-rng_u(&rs)) / (cf->sigma_t * cf->rho_max);
+                    double d = -log1p(-nbt__rng_u(&rs)) / (cf->sigma_t * cf->rho_max);
                     double z1 = z + d * uz;
                     if (z1 < bottom || z1 > top) { /* leaves through z = 0 (infinite: below -z_cut), or dropped below z_cut */
                         if (planes && scattered && uz > 0)
@@ -173,11 +129,11 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                     double rho = cf->rho_fn(z > 0 ? z : 0.0, cf->rho_data); /* infinite: rho(0) continues behind */
                     if (rho > cf->rho_max)
                         atomic_store(c->over, 1);
-                    if (rng_u(&rs) * cf->rho_max < rho)
+                    if (nbt__rng_u(&rs) * cf->rho_max < rho)
                         break;
                 }
             } else {
-                double tau = -log1p(-rng_u(&rs)); /* optical depth to the next interaction */
+                double tau = -log1p(-nbt__rng_u(&rs)); /* optical depth to the next interaction */
                 /* the common case: the interaction lies inside the current layer */
                 double dn = tau * c->kinv[li], z1 = z + dn * uz;
                 if (z1 > c->b[li] && z1 < c->b[li + 1]) { /* both tests, not a branch on the sign of uz */
@@ -246,12 +202,12 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                 break;
             events++;
             if (!weighted) {
-                if (rng_u(&rs) >= albedo)
+                if (nbt__rng_u(&rs) >= albedo)
                     break; /* absorbed */
             } else {
                 w *= albedo; /* implicit capture: the absorbed fraction leaves the weight */
                 if (w < wroul) { /* Russian roulette keeps E[w] */
-                    if (!(w > 0) || rng_u(&rs) >= MC_WROUL_P)
+                    if (!(w > 0) || nbt__rng_u(&rs) >= MC_WROUL_P)
                         break;
                     w *= 1.0 / MC_WROUL_P;
                 }
@@ -260,7 +216,7 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                 break; /* would scatter an (order_max+1)-th time */
             scattered++;
             double mu = sample_mu(c, &rs);
-            double s2 = 1.0 - mu * mu, st = sqrt(s2 > 0 ? s2 : 0.0), phi = 2.0 * NBT_PI * rng_u(&rs);
+            double s2 = 1.0 - mu * mu, st = sqrt(s2 > 0 ? s2 : 0.0), phi = 2.0 * NBT_PI * nbt__rng_u(&rs);
             if (!planes) {
                 /* no tally planes (a slab): nothing observes x, y, ux or uy, so
                  * only uz turns, and the azimuth enters through cos(phi) alone
