@@ -185,4 +185,9 @@ nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nb
  * 13 GB). Nonzero when plausible. */
 int nbt__exr_raw_plausible(const char *path, double raw_bytes);
 
+
+/* Non-negative least squares: x >= 0 minimising |A x - b| (A m x n,
+ * row-major; Lawson-Hanson); *resid (may be NULL) gets the final |A x - b|. */
+nbt_status nbt__nnls(const double *A, size_t m, size_t n, const double *b, double *x, double *resid);
+
 #endif
