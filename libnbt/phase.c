@@ -12,13 +12,14 @@
 
 struct nbt_phase {
     nbt_phase_kind kind;
-    double g;          /* HG */
+    double g;          /* HG; HG2: the first lobe's */
+    double g2, wmix;   /* HG2: the second lobe's g and the first lobe's weight */
     size_t n;          /* SOG components or table points */
     double *w, *B;     /* SOG (a single Gaussian is n = 1) */
     double *Z;         /* SOG: 1/(4 pi B (1 - exp(-pi^2/4B))) per component */
     double *mu, *p;    /* table */
     double *cdf;       /* table: 2 pi int_{-1}^{mu_i} p, cdf[n-1] = 1 */
-    char name[64];
+    char name[112];
 };
 
 /* The shortest %g form that reads back as the same double. */
@@ -65,6 +66,24 @@ nbt_phase *nbt_phase_hg(double g)
         char num[32];
         fmt_double(num, sizeof num, g);
         snprintf(p->name, sizeof p->name, "hg:g=%s", num);
+    }
+    return p;
+}
+
+nbt_phase *nbt_phase_hg2(double g1, double g2, double w)
+{
+    if (!(g1 > -1.0 && g1 < 1.0) || !(g2 > -1.0 && g2 < 1.0) || !(w >= 0.0 && w <= 1.0))
+        return NULL;
+    nbt_phase *p = phase_new(NBT_PHASE_HG2);
+    if (p) {
+        p->g = g1;
+        p->g2 = g2;
+        p->wmix = w;
+        char a[32], b[32], c[32];
+        fmt_double(a, sizeof a, g1);
+        fmt_double(b, sizeof b, g2);
+        fmt_double(c, sizeof c, w);
+        snprintf(p->name, sizeof p->name, "hg2:g1=%s,g2=%s,w=%s", a, b, c);
     }
     return p;
 }
@@ -217,6 +236,8 @@ double nbt__phase_eval_cs(const nbt_phase *p, double mu, double sn)
         return 3.0 / (16.0 * NBT_PI) * (1.0 + mu * mu);
     case NBT_PHASE_HG:
         return nbt__hg_4pi(p->g, mu) / (4.0 * NBT_PI);
+    case NBT_PHASE_HG2:
+        return (p->wmix * nbt__hg_4pi(p->g, mu) + (1.0 - p->wmix) * nbt__hg_4pi(p->g2, mu)) / (4.0 * NBT_PI);
     case NBT_PHASE_GAUSS:
     case NBT_PHASE_SOG: {
         double s = 0;
@@ -315,6 +336,15 @@ nbt_status nbt_phase_moments(const nbt_phase *p, size_t kmax, double *b)
         for (size_t k = 1; k <= kmax; k++)
             b[k] = b[k - 1] * p->g;
         return NBT_OK;
+    case NBT_PHASE_HG2: {
+        double a = 1, c = 1;
+        for (size_t k = 1; k <= kmax; k++) {
+            a *= p->g;
+            c *= p->g2;
+            b[k] = p->wmix * a + (1.0 - p->wmix) * c;
+        }
+        return NBT_OK;
+    }
     default:
         break;
     }
@@ -389,8 +419,10 @@ double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void 
         double q = 8.0 * uniform(rs) - 4.0, d = sqrt(q * q / 4.0 + 1.0);
         return cbrt(q / 2.0 + d) + cbrt(q / 2.0 - d);
     }
-    case NBT_PHASE_HG: {
-        double g = p->g, u = uniform(rs);
+    case NBT_PHASE_HG:
+    case NBT_PHASE_HG2: {
+        /* HG2: the lobe by its weight, then that lobe's inverse CDF */
+        double g = p->kind == NBT_PHASE_HG2 && !(uniform(rs) < p->wmix) ? p->g2 : p->g, u = uniform(rs);
         if (fabs(g) < 1e-6)
             return 2.0 * u - 1.0;
         double f = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
@@ -488,6 +520,29 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
             return NBT_EDOM;
         }
         *out = nbt_phase_hg(v);
+    } else if (!strncmp(spec, "hg2:", 4)) {
+        /* hg2:g1=G1,g2=G2,w=W: W HG(G1) + (1 - W) HG(G2) */
+        char buf[3][64];
+        double g1, g2, w;
+        const char *q = spec + 4;
+        int ok = 1;
+        for (int i = 0; i < 3 && ok; i++) {
+            size_t n = strcspn(q, ",");
+            ok = n < sizeof buf[i] && (i == 2 ? q[n] == '\0' : q[n] == ',');
+            if (ok) {
+                memcpy(buf[i], q, n);
+                buf[i][n] = '\0';
+                q += n + 1;
+            }
+        }
+        ok = ok && !strncmp(buf[0], "g1=", 3) && !strncmp(buf[1], "g2=", 3) && !strncmp(buf[2], "w=", 2) &&
+             parse_double(buf[0] + 3, &g1) && parse_double(buf[1] + 3, &g2) && parse_double(buf[2] + 2, &w);
+        if (!ok || !(g1 > -1.0 && g1 < 1.0) || !(g2 > -1.0 && g2 < 1.0) || !(w >= 0.0 && w <= 1.0)) {
+            snprintf(err, errlen, "phase '%s': expected hg2:g1=G1,g2=G2,w=W with -1 < G1, G2 < 1 and 0 <= W <= 1",
+                     spec);
+            return NBT_EDOM;
+        }
+        *out = nbt_phase_hg2(g1, g2, w);
     } else if (!strncmp(spec, "gauss:B=", 8)) {
         if (!parse_double(spec + 8, &v) || !(v > 0.0 && v <= NBT_PHASE_GAUSS_BMAX)) {
             snprintf(err, errlen, "phase '%s': B must be a number in (0, %g]", spec, NBT_PHASE_GAUSS_BMAX);
@@ -517,7 +572,8 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         return read_table_file(spec + 6, out, err, errlen);
     } else {
         snprintf(err, errlen,
-                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), gauss:B=B (0<B<=1000), table:FILE, sog:FILE",
+                 "unknown phase '%s': accepted are iso, rayleigh, hg:g=G (-1<G<1), hg2:g1=G1,g2=G2,w=W, gauss:B=B (0<B<=1000), "
+                 "table:FILE, sog:FILE",
                  spec);
         return NBT_EFORMAT;
     }

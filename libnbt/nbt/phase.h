@@ -20,7 +20,8 @@ typedef enum {
     NBT_PHASE_RAYLEIGH,  /* 3/(16pi) (1 + mu^2) */
     NBT_PHASE_GAUSS,     /* Shinya eq. 13 on the sphere, spread B > 0 (see below) */
     NBT_PHASE_SOG,       /* sum of Gaussians, weights w_i >= 0 summing to 1 */
-    NBT_PHASE_TABLE      /* piecewise linear in mu, normalised on creation */
+    NBT_PHASE_TABLE,     /* piecewise linear in mu, normalised on creation */
+    NBT_PHASE_HG2        /* two-term HG: w HG(g1) + (1 - w) HG(g2) */
 } nbt_phase_kind;
 
 /* Opaque, immutable once created: safe to share between threads. */
@@ -30,6 +31,9 @@ nbt_phase *nbt_phase_iso(void);
 nbt_phase *nbt_phase_rayleigh(void);
 /* NULL unless -1 < g < 1. */
 nbt_phase *nbt_phase_hg(double g);
+/* Two-term Henyey-Greenstein, w HG(g1) + (1 - w) HG(g2) (e.g. a forward
+ * lobe and a weak backward one); NULL unless -1 < g1, g2 < 1, 0 <= w <= 1. */
+nbt_phase *nbt_phase_hg2(double g1, double g2, double w);
 /* Gaussian phase function of Shinya et al. eq. 13, p(s) = exp(-|s|^2/4B)/(4 pi B)
  * for the 2-D deflection s, mapped onto the sphere by polar angle theta = |s|
  * (theta >= pi rejected, i.e. renormalised by 1 - exp(-pi^2/4B)):
@@ -46,7 +50,7 @@ nbt_phase *nbt_phase_sog(size_t n, const double *w, const double *B);
  * exactly -1 and 1), values >= 0, piecewise linear in mu, renormalised to 1. */
 nbt_phase *nbt_phase_tabulated(size_t n, const double *mu, const double *p);
 
-/* Parse a SPEC: "iso", "rayleigh", "hg:g=0.8", "gauss:B=0.0685",
+/* Parse a SPEC: "iso", "rayleigh", "hg:g=0.8", "hg2:g1=0.9,g2=-0.3,w=0.8", "gauss:B=0.0685",
  * "table:FILE" (FILE: lines "mu p"), "sog:FILE" (lines "w B": a sum of
  * Gaussians, as nbt-fit phase writes it). In both files a data line is
  * exactly two finite numbers, '#' starts a comment and blank lines are
