@@ -109,6 +109,54 @@ void nbt_mc_part_range(size_t part, size_t nparts, size_t *b0, size_t *b1);
 nbt_status nbt_mc_run_part(const nbt_mc_config *cfg, size_t b0, size_t b1, double *tally);
 nbt_status nbt_mc_finish(const nbt_mc_config *cfg, const double *tally, nbt_mc_result **out);
 
+
+/* Photon counts of screen kernels (nbt/screen.h's fitted higher orders):
+ * a pencil beam at the origin along +z in a homogeneous medium of unit
+ * extinction (lengths are optical depths), filling all space (infinite: the
+ * camera inside the medium) or z >= 0 only (the medium starts at the
+ * camera; a path that returns through z = 0 escapes). Plane z_j stands for
+ * an emitting wall that ends a path: only a photon's FIRST crossing of it
+ * counts, and only if it has scattered before (a first crossing by the
+ * unscattered beam is the direct part). Every photon runs at albedo 1; a
+ * crossing after n scatterings adds albedo_k^n to the tally of albedo k,
+ * which is the analog count at that albedo (so one set of paths serves
+ * every albedo). Radius bins in units of z_j: bin 0 is [0, e_0), bin b is
+ * [e_{b-1}, e_b), the last [e_{nedges-1}, inf). A path is followed until it
+ * has crossed every plane, escapes, drops below -z_cut (infinite; 0: twice
+ * the last plane + 20), or has scattered order_max times (0: until the
+ * largest albedo's weight is below 1e-9; an albedo of 1 needs a cap); the
+ * weight of paths cut at order_max is reported as a bound of what they
+ * could still add. Deterministic per seed for any thread count. */
+typedef struct {
+    const nbt_phase *phase;
+    int infinite;
+    size_t nplanes;
+    const double *z_planes;   /* optical depths, increasing, > 0 */
+    size_t nedges;
+    const double *edges;      /* bin edges in units of z_j, increasing, > 0 */
+    size_t nalbedo;
+    const double *albedo;     /* in [0, 1] */
+    unsigned order_max;
+    double z_cut;
+    uint64_t photons, seed;   /* photons >= 16 */
+    unsigned threads;         /* 0: all CPUs */
+    void (*progress)(double fraction, void *data);
+    void *progress_data;
+} nbt_mc_kernel_config;
+
+typedef struct {
+    size_t nplanes, nalbedo, nbins; /* nbins = nedges + 1 */
+    /* the mass (per launched photon) of first crossings in each bin and its
+     * standard error, [((plane * nalbedo + k) * 2 + o) * nbins + bin],
+     * o = 0: after exactly one scattering, o = 1: after two or more */
+    double *mass, *mass_se;
+    double *lost;       /* per albedo: weight of the paths cut at order_max, per photon */
+    unsigned order_max; /* the cap used */
+} nbt_mc_kernel_result;
+
+nbt_status nbt_mc_kernel_run(const nbt_mc_kernel_config *cfg, nbt_mc_kernel_result **out);
+void nbt_mc_kernel_result_free(nbt_mc_kernel_result *r);
+
 #ifdef __cplusplus
 }
 #endif
