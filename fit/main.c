@@ -12,6 +12,7 @@ static void help(void)
          "       nbt-fit kernel [...] fit alpha, beta of the narrow-beam kernel to photon counts\n"
          "       nbt-fit phase [...]  fit a sum of Gaussian lobes to a phase function\n"
          "       nbt-fit model [...]  fit the kernel model (nbt_beam_fit) over depth, albedo and phase width\n"
+         "       nbt-fit screenmodel [...]  fit nbt-scatter's model of the higher scattering orders for a phase\n"
          "       nbt-fit --version\n\n"
          "'nbt-fit COMMAND --help' describes each command. Exit status: 0 success,\n"
          "1 failure (including an output that cannot be written), 2 bad usage or an input\n"
@@ -22,7 +23,7 @@ int main(int argc, char **argv)
 {
     cli_prog = "nbt-fit";
     if (argc < 2)
-        die_usage("say what to do: mc, kernel, phase or model (see 'nbt-fit --help')");
+        die_usage("say what to do: mc, kernel, phase, model or screenmodel (see 'nbt-fit --help')");
     const char *c = argv[1];
     if (!strcmp(c, "--help") || !strcmp(c, "-h")) {
         help();
@@ -34,6 +35,8 @@ int main(int argc, char **argv)
     }
     if (!strcmp(c, "mc"))
         return cmd_mc(argc - 1, argv + 1);
+    if (!strcmp(c, "screenmodel"))
+        return cmd_screenmodel(argc - 1, argv + 1);
     if (!strcmp(c, "kernel") || !strcmp(c, "phase") || !strcmp(c, "model")) {
 #ifdef HAVE_CERES
         if (!strcmp(c, "model"))
@@ -44,5 +47,5 @@ int main(int argc, char **argv)
             "libeigen3-dev libgoogle-glog-dev and re-run configure)", c);
 #endif
     }
-    die_usage("unknown command '%s': mc, kernel, phase, model (see 'nbt-fit --help')", c);
+    die_usage("unknown command '%s': mc, kernel, phase, model, screenmodel (see 'nbt-fit --help')", c);
 }

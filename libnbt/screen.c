@@ -15,10 +15,12 @@ struct nbt_screen_kernel {
     void *ctx;
     nbt_beam_medium m;
     nbt_kernel_correction corr;
-    double g; /* ELEK: mean cosine of the lobes */
+    double g;                 /* ELEK: mean cosine of the lobes */
+    nbt__phase_kern *pk;      /* FITTED, FIRST: the family for a phase */
+    nbt_screen_kernel *ch[3]; /* an RGB kernel: one per channel (owned); else NULL */
 };
 
-static const char *const KNAMES[] = {"moment", "smallangle", "corrected", "single", "lineint", "elek"};
+static const char *const KNAMES[] = {"moment", "smallangle", "corrected", "single", "lineint", "elek", "fitted", "first"};
 
 const char *nbt_skernel_name(nbt_skernel_kind kind)
 {
@@ -53,7 +55,8 @@ nbt_screen_kernel *nbt_screen_kernel_alloc(nbt_skernel_kind kind, const nbt_beam
         return NULL;
     }
     if ((unsigned)kind > NBT_SKERNEL_ELEK || (kind == NBT_SKERNEL_CORRECTED && !corr)) {
-        nbt__fail(NBT_EINVAL, "screen: unknown kernel, or CORRECTED without a correction");
+        nbt__fail(NBT_EINVAL, "screen: unknown kernel, or CORRECTED without a correction (FITTED and FIRST: "
+                              "nbt_screen_kernel_phase)");
         return NULL;
     }
     nbt_screen_kernel *k = kernel_new();
@@ -93,12 +96,66 @@ nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx)
     return k;
 }
 
+nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t, double albedo, const nbt_phase *p,
+                                           nbt_screen_geometry geo, const nbt_screen_model *model)
+{
+    if (kind != NBT_SKERNEL_FITTED && kind != NBT_SKERNEL_FIRST) {
+        nbt__fail(NBT_EINVAL, "screen: a kernel for a phase is FITTED or FIRST");
+        return NULL;
+    }
+    if (kind == NBT_SKERNEL_FITTED && !model && !(model = nbt_screen_model_default())) {
+        nbt__fail(NBT_EINVAL, "screen: the compiled-in kernel model could not be read");
+        return NULL;
+    }
+    nbt__phase_kern *pk = nbt__phase_kern_alloc(p, sigma_t, albedo, geo, kind == NBT_SKERNEL_FITTED ? model : NULL);
+    if (!pk)
+        return NULL;
+    nbt_screen_kernel *k = kernel_new();
+    if (!k) {
+        nbt__phase_kern_free(pk);
+        return NULL;
+    }
+    k->kind = kind;
+    k->pk = pk;
+    return k;
+}
+
+nbt_screen_kernel *nbt_screen_kernel_rgb(nbt_screen_kernel *r, nbt_screen_kernel *g, nbt_screen_kernel *b)
+{
+    nbt_screen_kernel *k = r && g && b && !r->ch[0] && !g->ch[0] && !b->ch[0] ? kernel_new() : NULL;
+    if (!k) {
+        if (r && g && b)
+            nbt__fail(NBT_EINVAL, "screen: an RGB kernel takes three single-channel kernels");
+        else
+            nbt__fail(NBT_EINVAL, "screen: an RGB kernel needs three kernels");
+        nbt_screen_kernel_free(r);
+        nbt_screen_kernel_free(g);
+        nbt_screen_kernel_free(b);
+        return NULL;
+    }
+    k->kind = r->kind;
+    k->ch[0] = r;
+    k->ch[1] = g;
+    k->ch[2] = b;
+    return k;
+}
+
+unsigned nbt_screen_kernel_channels(const nbt_screen_kernel *k)
+{
+    return k && k->ch[0] ? 3u : 1u;
+}
+
 void nbt_screen_kernel_free(nbt_screen_kernel *k)
 {
+    if (!k)
+        return;
+    for (int c = 0; c < 3; c++)
+        nbt_screen_kernel_free(k->ch[c]);
+    nbt__phase_kern_free(k->pk);
     free(k);
 }
 
-static void add_atom(nbt_screen_kern *o, nbt_atom_shape s, double mass, double scale)
+void nbt__add_atom(nbt_screen_kern *o, nbt_atom_shape s, double mass, double scale)
 {
     if (o->n < NBT_SCREEN_MAX_ATOMS && mass > 0 && scale > 0 && isfinite(mass) && isfinite(scale)) {
         o->shape[o->n] = s;
@@ -122,13 +179,22 @@ static void lineint_atoms(const nbt_beam_medium *m, double z, nbt_screen_kern *o
         double y = 0.5 * z * (1.0 + x[j]), wy = 0.5 * z * w[j], Ah = ss * bm * (z - y);
         for (size_t i = 0; i < m->nlobes; i++) {
             double B = m->B[i], S = B + Ah, C2 = B * y * y * (1.0 - B / S), d = z - B * y / S;
-            add_atom(o, NBT_ATOM_GAUSS, ss * exp(-sa * z) * wy * exp(-ss * y) * m->w[i], sqrt(2.0 * (C2 + d * d * S)));
+            nbt__add_atom(o, NBT_ATOM_GAUSS, ss * exp(-sa * z) * wy * exp(-ss * y) * m->w[i], sqrt(2.0 * (C2 + d * d * S)));
         }
     }
 }
 
 nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_screen_kern *o)
 {
+    return nbt_screen_kernel_eval_ch(k, 0, D, o);
+}
+
+nbt_status nbt_screen_kernel_eval_ch(const nbt_screen_kernel *k, unsigned ch, double D, nbt_screen_kern *o)
+{
+    if (ch > 2)
+        NBT_FAIL(NBT_EINVAL, "screen: channel must be 0, 1 or 2");
+    if (k->ch[0])
+        k = k->ch[ch];
     o->n = 0;
     o->T = 1;
     if (!(D >= 0))
@@ -141,6 +207,8 @@ nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_scre
         return NBT_OK;
     if (k->fn)
         return k->fn(D, o, k->ctx);
+    if (k->pk)
+        return nbt__phase_kern_eval(k->pk, D, o);
     const nbt_beam_medium *m = &k->m;
     double ss = m->albedo * m->sigma_t, M0, M2, alpha, beta;
     nbt_status st = NBT_OK;
@@ -151,24 +219,27 @@ nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_scre
         st = nbt_beam_moments(m, k->kind == NBT_SKERNEL_MOMENT ? NBT_BEAM_ISHIMARU : NBT_BEAM_SMALLANGLE, D, &M0,
                               &M2, NULL);
         nbt_beam_kernel_params(M0, M2, &alpha, &beta);
-        add_atom(o, NBT_ATOM_ERFC, M0, beta);
+        nbt__add_atom(o, NBT_ATOM_ERFC, M0, beta);
         break;
     case NBT_SKERNEL_CORRECTED:
         st = nbt_kernel_corrected(&k->corr, m, D, &alpha, &beta);
-        add_atom(o, NBT_ATOM_ERFC, sqrt(2.0 * NBT_PI) * alpha * beta, beta);
+        nbt__add_atom(o, NBT_ATOM_ERFC, sqrt(2.0 * NBT_PI) * alpha * beta, beta);
         break;
     case NBT_SKERNEL_SINGLE: /* per lobe alpha = w ss e^{-tau}/(2 sqrt(pi B)), beta = D sqrt(2B): mass w ss D e^{-tau} */
         for (size_t i = 0; i < m->nlobes; i++)
-            add_atom(o, NBT_ATOM_ERFC, m->w[i] * ss * D * o->T, D * sqrt(2.0 * m->B[i]));
+            nbt__add_atom(o, NBT_ATOM_ERFC, m->w[i] * ss * D * o->T, D * sqrt(2.0 * m->B[i]));
         break;
     case NBT_SKERNEL_LINEINT:
         lineint_atoms(m, D, o);
         break;
+    case NBT_SKERNEL_FITTED:
+    case NBT_SKERNEL_FIRST:
+        break; /* built by nbt_screen_kernel_phase: k->pk */
     case NBT_SKERNEL_ELEK: {
         st = nbt_beam_moments(m, NBT_BEAM_ISHIMARU, D, &M0, &M2, NULL);
         double sa = m->sigma_t - ss;
         double inv = 2.0 * sa / (3.0 * D) + (ss > 0 ? 4.0 / (D * D * D * ss * (1.0 - k->g)) : INFINITY);
-        add_atom(o, NBT_ATOM_GAUSS, M0, sqrt(0.5 / inv));
+        nbt__add_atom(o, NBT_ATOM_GAUSS, M0, sqrt(0.5 / inv));
         break;
     }
     }
@@ -221,30 +292,63 @@ double nbt__gauss_cell(double s, long d)
     return 0.5 * (erfc((a - 0.5) * k) - erfc((a + 0.5) * k));
 }
 
+static int cmp_dbl(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
 size_t nbt__kern_nodes(const nbt_screen_kern *kn, double px, double *sig, double *wt, size_t max)
 {
     double gx[SCREEN_GL], gw[SCREEN_GL];
     nbt__gl_nodes(SCREEN_GL, gx, gw);
-    size_t n = 0;
+    size_t n = 0, ne = 0;
+    /* the ERFC atoms together are a mixture of Gaussians whose density over the
+     * deviation is a staircase, sum of mass/s over the atoms with s above it:
+     * integrated on panels between the atoms' scales and the octaves from 1/8 px */
+    double br[NBT_SCREEN_MAX_ATOMS + 64], smax = 0;
     for (size_t a = 0; a < kn->n; a++) {
-        double s = kn->scale[a] / px, mass = kn->mass[a];
-        if (kn->shape[a] == NBT_ATOM_GAUSS || s <= 0) {
+        double s = kn->scale[a] / px;
+        if (kn->shape[a] == NBT_ATOM_GAUSS || !(s > 0)) {
             if (n < max) {
-                sig[n] = s;
-                wt[n++] = mass;
+                sig[n] = s > 0 ? s : 0;
+                wt[n++] = kn->mass[a];
             }
+        } else {
+            br[ne++] = s;
+            smax = fmax(smax, s);
+        }
+    }
+    if (ne == 0)
+        return n;
+    for (double o = 0.125; o < smax && ne < sizeof br / sizeof br[0]; o *= 2)
+        br[ne++] = o;
+    qsort(br, ne, sizeof *br, cmp_dbl);
+    double lo = 0;
+    for (size_t b = 0; b < ne; b++) {
+        double hi = br[b];
+        if (!(hi > lo * (1 + 1e-12)))
             continue;
+        double dens = 0; /* constant on (lo, hi]: the atoms that reach past it */
+        for (size_t a = 0; a < kn->n; a++)
+            if (kn->shape[a] == NBT_ATOM_ERFC && kn->scale[a] / px >= hi * (1 - 1e-12))
+                dens += kn->mass[a] / (kn->scale[a] / px);
+        /* an octave takes SCREEN_GL nodes, a shorter panel proportionally fewer plus two (at least 6) */
+        int ng = SCREEN_GL;
+        double gxp[SCREEN_GL], gwp[SCREEN_GL];
+        const double *x = gx, *w = gw;
+        if (lo > 0 && log2(hi / lo) < 0.8) {
+            ng = (int)ceil(SCREEN_GL * log2(hi / lo)) + 2;
+            ng = ng < 6 ? 6 : ng > SCREEN_GL ? SCREEN_GL : ng;
+            nbt__gl_nodes((size_t)ng, gxp, gwp);
+            x = gxp;
+            w = gwp;
         }
-        /* uniform mixture of Gaussians over (0, s]: octave panels from 1/8 px */
-        double lo = 0, hi = fmin(s, 0.125);
-        while (lo < s) {
-            for (int j = 0; j < SCREEN_GL && n < max; j++) {
-                sig[n] = lo + 0.5 * (hi - lo) * (1.0 + gx[j]);
-                wt[n++] = mass * 0.5 * (hi - lo) * gw[j] / s;
-            }
-            lo = hi;
-            hi = fmin(s, 2 * hi);
+        for (int j = 0; j < ng && n < max; j++) {
+            sig[n] = lo + 0.5 * (hi - lo) * (1.0 + x[j]);
+            wt[n++] = dens * 0.5 * (hi - lo) * w[j];
         }
+        lo = hi;
     }
     return n;
 }
@@ -259,25 +363,16 @@ double nbt_screen_atom_pixel(nbt_atom_shape shape, double scale_px, long dx, lon
     return s;
 }
 
-/* mass of a unit atom outside radius a*scale */
-static double atom_tail(nbt_atom_shape shape, double a)
-{
-    if (shape == NBT_ATOM_GAUSS)
-        return exp(-0.5 * a * a);
-    /* sqrt(2 pi) int_a^inf G = sqrt(2 pi) (phi(a) - a G(a)) */
-    return exp(-0.5 * a * a) - sqrt(2.0 * NBT_PI) * a * 0.5 * erfc(a / sqrt(2.0));
-}
-
 long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail)
 {
     if (!(scale_px > 0) || !(tail > 0 && tail < 1))
         return 0;
     double lo = 0, hi = 1;
-    while (atom_tail(shape, hi) > tail && hi < 100)
+    while (nbt__atom_tail(shape, hi) > tail && hi < 100)
         hi *= 2;
     for (int i = 0; i < 60; i++) {
         double mid = 0.5 * (lo + hi);
-        if (atom_tail(shape, mid) > tail)
+        if (nbt__atom_tail(shape, mid) > tail)
             lo = mid;
         else
             hi = mid;
@@ -290,16 +385,16 @@ long nbt_screen_atom_radius(nbt_atom_shape shape, double scale_px, double tail)
 
 /* Pixel i's kernel as atoms, and the world length px of one pixel at its depth
  * (per-pixel kernels are in pixels already: px = 1). */
-static nbt_status input_atoms(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, nbt_screen_kern *kn,
-                              double *px)
+static nbt_status input_atoms(const nbt_screen_kernel *k, unsigned ch, const nbt_screen_input *in, size_t i,
+                              nbt_screen_kern *kn, double *px)
 {
     if (!in->pix) {
         *px = in->D[i] * in->dtheta;
-        return nbt_screen_kernel_eval(k, in->D[i], kn);
+        return nbt_screen_kernel_eval_ch(k, ch, in->D[i], kn);
     }
     kn->T = in->pix[i].T;
     kn->n = 0;
-    add_atom(kn, NBT_ATOM_ERFC, in->pix[i].M0, in->pix[i].beta_px);
+    nbt__add_atom(kn, NBT_ATOM_ERFC, in->pix[i].M0, in->pix[i].beta_px);
     *px = 1.0;
     return NBT_OK;
 }
@@ -327,52 +422,47 @@ static void pkern_from_atoms(const nbt_screen_kern *kn, double px, double tail, 
     pk->n = nbt__kern_nodes(kn, px, pk->sig, pk->wt, SCREEN_MAX_NODES);
 }
 
-nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, double D, double dtheta, double tail, long clip,
+nbt_status nbt__pixel_kernel(const nbt_screen_kernel *k, unsigned ch, double D, double dtheta, double tail, long clip,
                              nbt__pkern *pk)
 {
     nbt_screen_kern kn;
-    nbt_status st = nbt_screen_kernel_eval(k, D, &kn);
+    nbt_status st = nbt_screen_kernel_eval_ch(k, ch, D, &kn);
     if (st != NBT_OK)
         kn.n = 0;
     pkern_from_atoms(&kn, D * dtheta, tail, clip, pk);
     return st;
 }
 
-nbt_status nbt__input_kernel(const nbt_screen_kernel *k, const nbt_screen_input *in, size_t i, double tail,
+nbt_status nbt__input_kernel(const nbt_screen_kernel *k, unsigned ch, const nbt_screen_input *in, size_t i, double tail,
                              nbt__pkern *pk)
 {
     nbt_screen_kern kn;
     double px;
-    nbt_status st = input_atoms(k, in, i, &kn, &px);
+    nbt_status st = input_atoms(k, ch, in, i, &kn, &px);
     if (st != NBT_OK)
         kn.n = 0;
     pkern_from_atoms(&kn, px, tail, nbt__clip(in), pk);
     return st;
 }
 
-/* Quadrant weights wq[j*(R+1) + i] for offsets (i, j) >= 0. */
-nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap)
+/* Beyond this many pixels from the centre, the weights of a wide kernel come
+ * from its radial profile: the average of f over a unit square is
+ * f + (f_xx + f_yy)/24 + O(f^(4)/1920), and only nodes wider than
+ * SCREEN_FAR_RN/8 px reach that far (a narrower one is below e^-32 of its
+ * peak there); for those the dropped term is below ~1e-5 of the value.
+ * The profile is tabulated every 1/8 px and read by cubic interpolation. */
+#define SCREEN_FAR_RN 24
+#define SCREEN_FAR_H 0.125
+
+/* the separable sum of the nodes over offsets 0..box-1 per axis, into the quadrant w (row stride R1) */
+static void separable(const nbt__pkern *pk, double *w, double *c, size_t R1, size_t box)
 {
-    size_t R1 = (size_t)pk->R + 1, need = R1 * R1;
-    if (need > *cap) {
-        double *a = realloc(*wq, need * sizeof **wq), *b;
-        if (!a)
-            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
-        *wq = a;
-        b = realloc(*cell, need * sizeof **cell);
-        if (!b)
-            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
-        *cell = b;
-        *cap = need;
-    }
-    double *w = *wq, *c = *cell; /* c: 1-D cell integrals, node-major */
-    memset(w, 0, need * sizeof *w);
     for (size_t n = 0; n < pk->n; n++) {
-        double *e = c; /* reuse the first R1 of cell per node */
+        double *e = c;
         /* a node's support ends where its cells fall below 1e-16 of its centre */
         size_t last = 0;
         e[0] = nbt__gauss_cell(pk->sig[n], 0);
-        for (size_t i = 1; i < R1; i++) {
+        for (size_t i = 1; i < box; i++) {
             e[i] = nbt__gauss_cell(pk->sig[n], (long)i);
             if (!(e[i] > 1e-16 * e[0]))
                 break;
@@ -385,9 +475,71 @@ nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, 
                 row[i] += f * e[i];
         }
     }
-    for (size_t j = 1; j < R1; j++)
+}
+
+/* Quadrant weights wq[j*(R+1) + i] for offsets (i, j) >= 0. */
+nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, size_t *cap)
+{
+    size_t R1 = (size_t)pk->R + 1, need = R1 * R1;
+    int far = pk->R > SCREEN_FAR_RN;
+    /* cell holds one node's cells (R1), or the far profile (nt) */
+    size_t nt = far ? (size_t)ceil((sqrt(2.0) * (double)R1 + 4.0) / SCREEN_FAR_H) : 0;
+    if (need > *cap) {
+        double *a = realloc(*wq, need * sizeof **wq), *b;
+        if (!a)
+            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+        *wq = a;
+        b = realloc(*cell, (need > nt ? need : nt) * sizeof **cell);
+        if (!b)
+            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+        *cell = b;
+        *cap = need;
+    }
+    if (nt > *cap) { /* the far profile outgrows a small quadrant */
+        double *b = realloc(*cell, nt * sizeof **cell);
+        if (!b)
+            NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
+        *cell = b;
+    }
+    double *w = *wq, *c = *cell;
+    memset(w, 0, need * sizeof *w);
+    size_t box = far ? SCREEN_FAR_RN + 1 : R1;
+    separable(pk, w, c, R1, box);
+    for (size_t j = 1; j < box; j++)
         for (size_t i = 0; i < j; i++)
             w[j * R1 + i] = w[i * R1 + j];
+    if (!far)
+        return NBT_OK;
+    /* the radial profile f + lap f / 24 of the wide nodes at r = k h */
+    for (size_t k = 0; k < nt; k++)
+        c[k] = 0;
+    for (size_t n = 0; n < pk->n; n++) {
+        double sg = pk->sig[n];
+        if (!(sg > SCREEN_FAR_RN / 8.0))
+            continue;
+        double a = pk->wt[n] / (2.0 * NBT_PI * sg * sg), is2 = 1.0 / (sg * sg);
+        for (size_t k = 0; k < nt; k++) {
+            double r2 = (double)k * SCREEN_FAR_H * (double)k * SCREEN_FAR_H, g = a * exp(-0.5 * r2 * is2);
+            if (g == 0)
+                break;
+            c[k] += g * (1.0 + (r2 * is2 - 2.0) * is2 / 24.0);
+        }
+    }
+    for (size_t j = 0; j < R1; j++)
+        for (size_t i = j < box ? box : j; i < R1; i++) {
+            double r = sqrt((double)(i * i + j * j)) / SCREEN_FAR_H, t;
+            size_t k = (size_t)r;
+            if (k < 1)
+                k = 1;
+            if (k + 2 >= nt)
+                k = nt - 3;
+            t = r - (double)k;
+            /* Catmull-Rom through k-1 .. k+2 */
+            double f0 = c[k - 1], f1 = c[k], f2 = c[k + 1], f3 = c[k + 2];
+            double v = f1 + 0.5 * t * (f2 - f0 + t * (2.0 * f0 - 5.0 * f1 + 4.0 * f2 - f3 + t * (3.0 * (f1 - f2) + f3 - f0)));
+            w[j * R1 + i] = v;
+            w[i * R1 + j] = v;
+        }
     return NBT_OK;
 }
 
@@ -456,42 +608,48 @@ static nbt_status chunk_pass(size_t chunk, unsigned thread, void *vp)
     double *wq = NULL, *cell = NULL;
     size_t cap = 0;
     nbt_status st = NBT_OK;
+    /* a grey kernel serves the three colours at once; an RGB kernel one each */
+    unsigned nk = nbt_screen_kernel_channels(b->k), c0 = 0, c1 = 3;
+    if (in->pix)
+        nk = 1;
     for (size_t y = ya; y < yb && st == NBT_OK; y++)
-        for (size_t x = 0; x < in->w && st == NBT_OK; x++) {
-            size_t i = y * in->w + x;
-            const float *c = in->rgb + 3 * i;
-            int spread = c[0] != 0 || c[1] != 0 || c[2] != 0, gather = b->rule == NBT_SCREEN_NEAR;
-            st = nbt__input_kernel(b->k, in, i, b->tail, &pk);
-            if (b->T)
-                b->T[i] = pk.T;
-            if (st != NBT_OK || pk.n == 0 || !(spread || gather))
-                continue;
-            st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
-            double Di = nbt__depth_key(in->D[i]), s[3] = {0, 0, 0};
-            long R = pk.R, R1 = R + 1;
-            long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
-            long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
-            for (long yy = y0; yy <= y1 && st == NBT_OK; yy++) {
-                const double *row = wq + labs(yy - (long)y) * R1;
-                for (long xx = x0; xx <= x1; xx++) {
-                    size_t j = (size_t)yy * in->w + (size_t)xx;
-                    double Dj = nbt__depth_key(in->D[j]), wgt = row[labs(xx - (long)x)];
-                    if (gather && Dj > Di) {
-                        const float *cj = in->rgb + 3 * j;
-                        s[0] += wgt * cj[0];
-                        s[1] += wgt * cj[1];
-                        s[2] += wgt * cj[2];
-                    }
-                    if (spread && (!gather || Dj >= Di)) {
-                        out[3 * j] += wgt * c[0];
-                        out[3 * j + 1] += wgt * c[1];
-                        out[3 * j + 2] += wgt * c[2];
+        for (size_t x = 0; x < in->w && st == NBT_OK; x++)
+            for (unsigned kc = 0; kc < nk && st == NBT_OK; kc++) {
+                if (nk == 3)
+                    c0 = kc, c1 = kc + 1;
+                size_t i = y * in->w + x;
+                const float *c = in->rgb + 3 * i;
+                int spread = 0, gather = b->rule == NBT_SCREEN_NEAR;
+                for (unsigned ch = c0; ch < c1; ch++)
+                    spread |= c[ch] != 0;
+                st = nbt__input_kernel(b->k, kc, in, i, b->tail, &pk);
+                if (b->T && kc == 0)
+                    b->T[i] = pk.T;
+                if (st != NBT_OK || pk.n == 0 || !(spread || gather))
+                    continue;
+                st = nbt__pixel_weights(&pk, &wq, &cell, &cap);
+                double Di = nbt__depth_key(in->D[i]), s[3] = {0, 0, 0};
+                long R = pk.R, R1 = R + 1;
+                long y0 = (long)y - R < 0 ? 0 : (long)y - R, y1 = (long)y + R >= (long)in->h ? (long)in->h - 1 : (long)y + R;
+                long x0 = (long)x - R < 0 ? 0 : (long)x - R, x1 = (long)x + R >= (long)in->w ? (long)in->w - 1 : (long)x + R;
+                for (long yy = y0; yy <= y1 && st == NBT_OK; yy++) {
+                    const double *row = wq + labs(yy - (long)y) * R1;
+                    for (long xx = x0; xx <= x1; xx++) {
+                        size_t j = (size_t)yy * in->w + (size_t)xx;
+                        double Dj = nbt__depth_key(in->D[j]), wgt = row[labs(xx - (long)x)];
+                        if (gather && Dj > Di) {
+                            const float *cj = in->rgb + 3 * j;
+                            for (unsigned ch = c0; ch < c1; ch++)
+                                s[ch] += wgt * cj[ch];
+                        }
+                        if (spread && (!gather || Dj >= Di))
+                            for (unsigned ch = c0; ch < c1; ch++)
+                                out[3 * j + ch] += wgt * c[ch];
                     }
                 }
+                for (unsigned ch = c0; ch < c1; ch++)
+                    out[3 * i + ch] += s[ch];
             }
-            for (int ch = 0; ch < 3; ch++)
-                out[3 * i + ch] += s[ch];
-        }
     free(wq);
     free(cell);
     return st;
@@ -559,13 +717,16 @@ nbt_status nbt_screen_compare(const nbt_screen_input *in, const nbt_screen_kerne
         NBT_FAIL(NBT_ENOMEM, "screen: out of memory");
     }
     nbt_status st = NBT_OK;
+    unsigned nk = in->pix ? 1 : nbt_screen_kernel_channels(k);
     for (size_t i = 0; i < np && st == NBT_OK; i++) { /* the widest atom's scale in pixels; no nodes needed */
-        nbt_screen_kern kn;
-        double px;
-        st = input_atoms(k, in, i, &kn, &px);
         rad[i] = 0;
-        for (size_t a = 0; st == NBT_OK && a < kn.n; a++)
-            rad[i] = fmax(rad[i], kn.scale[a] / px);
+        for (unsigned kc = 0; kc < nk && st == NBT_OK; kc++) {
+            nbt_screen_kern kn;
+            double px;
+            st = input_atoms(k, kc, in, i, &kn, &px);
+            for (size_t a = 0; st == NBT_OK && a < kn.n; a++)
+                rad[i] = fmax(rad[i], kn.scale[a] / px);
+        }
     }
     /* mark the band: a disc of 2 radii around each discontinuity edge */
     for (size_t y = 0; y < h && st == NBT_OK; y++)

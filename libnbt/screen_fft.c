@@ -48,14 +48,15 @@ typedef struct {
     size_t px, py, nc, layer;
     long rx, ry; /* kernel extent kept: min(R, image size - 1) per axis */
     const unsigned short *lid;
-    const nbt__pkern *pk;
-    double *rbuf[4];
-    fftw_complex *K, *Ci[3], *A[3], *Cs[3], *out[3];
+    const nbt__pkern *pk; /* [layer * nk + kernel channel] */
+    unsigned nk;          /* kernels per layer: 1 (grey) or 3 (RGB) */
+    double *rbuf[6];
+    fftw_complex *K[3], *Ci[3], *A[3], *Cs[3], *out[3];
     fftw_plan fwd, inv;
     double *S;
 } fft_ctx;
 
-/* task 0..2: colour channel of the current layer; 3: its kernel */
+/* task 0..2: colour channel of the current layer; 3..3+nk-1: its kernels */
 static nbt_status forward_task(size_t t, unsigned thread, void *vp)
 {
     (void)thread;
@@ -63,8 +64,8 @@ static nbt_status forward_task(size_t t, unsigned thread, void *vp)
     const nbt_screen_input *in = f->in;
     double *r = f->rbuf[t];
     memset(r, 0, f->px * f->py * sizeof *r);
-    if (t == 3) {
-        const nbt__pkern *pk = &f->pk[f->layer];
+    if (t >= 3) {
+        const nbt__pkern *pk = &f->pk[f->layer * f->nk + (t - 3)];
         double *wq = NULL, *cell = NULL;
         size_t cap = 0;
         nbt_status st = pk->n ? nbt__pixel_weights(pk, &wq, &cell, &cap) : NBT_OK;
@@ -77,7 +78,7 @@ static nbt_status forward_task(size_t t, unsigned thread, void *vp)
         free(wq);
         free(cell);
         if (st == NBT_OK)
-            fftw_execute_dft_r2c(f->fwd, r, f->K);
+            fftw_execute_dft_r2c(f->fwd, r, f->K[t - 3]);
         return st;
     }
     for (size_t y = 0; y < in->h; y++)
@@ -95,7 +96,7 @@ static nbt_status combine_task(size_t ch, unsigned thread, void *vp)
 {
     (void)thread;
     fft_ctx *f = vp;
-    fftw_complex *K = f->K, *C = f->Ci[ch], *A = f->A[ch], *Cs = f->Cs[ch], *o = f->out[ch];
+    fftw_complex *K = f->K[f->nk == 3 ? ch : 0], *C = f->Ci[ch], *A = f->A[ch], *Cs = f->Cs[ch], *o = f->out[ch];
     for (size_t i = 0; i < f->nc; i++) {
         double kr = K[i][0], ki = K[i][1];
         if (f->rule == NBT_SCREEN_NEAR) {
@@ -180,14 +181,16 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
         }
         lid[i] = (unsigned short)lo;
     }
-    pk = malloc(nl * sizeof *pk);
+    unsigned nk = nbt_screen_kernel_channels(k);
+    pk = malloc(nl * nk * sizeof *pk);
     if (!pk) {
         st = nbt__fail(NBT_ENOMEM, "screen: out of memory");
         goto done;
     }
     long R = 0;
-    for (size_t l = 0; l < nl && st == NBT_OK; l++) {
-        st = nbt__pixel_kernel(k, isinf(keys[l]) ? INFINITY : keys[l], in->dtheta, tail, nbt__clip(in), &pk[l]);
+    for (size_t l = 0; l < nl * nk && st == NBT_OK; l++) {
+        double D = keys[l / nk];
+        st = nbt__pixel_kernel(k, (unsigned)(l % nk), isinf(D) ? INFINITY : D, in->dtheta, tail, nbt__clip(in), &pk[l]);
         if (pk[l].n && pk[l].R > R)
             R = pk[l].R;
     }
@@ -195,22 +198,24 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
         goto done;
     if (T)
         for (size_t i = 0; i < np; i++)
-            T[i] = pk[lid[i]].T;
+            T[i] = pk[lid[i] * nk].T;
     f.in = in;
     f.rule = rule;
     f.lid = lid;
     f.pk = pk;
+    f.nk = nk;
     f.S = S;
     f.rx = R < (long)in->w - 1 ? R : (long)in->w - 1;
     f.ry = R < (long)in->h - 1 ? R : (long)in->h - 1;
     f.px = good_size(in->w + (size_t)f.rx);
     f.py = good_size(in->h + (size_t)f.ry);
     f.nc = f.py * (f.px / 2 + 1);
-    for (int i = 0; i < 4; i++)
+    for (unsigned i = 0; i < 3 + nk; i++)
         if (!(f.rbuf[i] = fftw_malloc(f.px * f.py * sizeof(double))))
             st = NBT_ENOMEM;
-    if (!(f.K = fftw_malloc(f.nc * sizeof(fftw_complex))))
-        st = NBT_ENOMEM;
+    for (unsigned i = 0; i < nk; i++)
+        if (!(f.K[i] = fftw_malloc(f.nc * sizeof(fftw_complex))))
+            st = NBT_ENOMEM;
     for (int c = 0; c < 3; c++) {
         f.Ci[c] = fftw_malloc(f.nc * sizeof(fftw_complex));
         f.A[c] = fftw_malloc(f.nc * sizeof(fftw_complex));
@@ -224,7 +229,7 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
         goto done;
     }
     pthread_mutex_lock(&plan_lock);
-    f.fwd = fftw_plan_dft_r2c_2d((int)f.py, (int)f.px, f.rbuf[0], f.K, FFTW_ESTIMATE);
+    f.fwd = fftw_plan_dft_r2c_2d((int)f.py, (int)f.px, f.rbuf[0], f.K[0], FFTW_ESTIMATE);
     f.inv = fftw_plan_dft_c2r_2d((int)f.py, (int)f.px, f.out[0], f.rbuf[0], FFTW_ESTIMATE);
     pthread_mutex_unlock(&plan_lock);
     if (!f.fwd || !f.inv) {
@@ -243,7 +248,7 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
     }
     for (size_t l = 0; l < nl && st == NBT_OK; l++) {
         f.layer = l;
-        st = nbt__parallel_for(4, nthreads, forward_task, &f);
+        st = nbt__parallel_for(3 + nk, nthreads, forward_task, &f);
         if (st == NBT_OK)
             st = nbt__parallel_for(3, nthreads, combine_task, &f);
     }
@@ -256,9 +261,10 @@ done:
     if (f.inv)
         fftw_destroy_plan(f.inv);
     pthread_mutex_unlock(&plan_lock);
-    for (int i = 0; i < 4; i++)
+    for (int i = 0; i < 6; i++)
         fftw_free(f.rbuf[i]);
-    fftw_free(f.K);
+    for (int i = 0; i < 3; i++)
+        fftw_free(f.K[i]);
     for (int c = 0; c < 3; c++) {
         fftw_free(f.Ci[c]);
         fftw_free(f.A[c]);

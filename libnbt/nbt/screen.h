@@ -30,6 +30,7 @@
 #include <stddef.h>
 #include <nbt/beam.h>
 #include <nbt/error.h>
+#include <nbt/phase.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -38,7 +39,7 @@ extern "C" {
 /* Depths at or beyond this (Blender writes 1e10 for the background) are sky. */
 #define NBT_SCREEN_SKY 1e10
 
-#define NBT_SCREEN_MAX_ATOMS 48
+#define NBT_SCREEN_MAX_ATOMS 128
 
 typedef enum {
     NBT_ATOM_ERFC,  /* mass * (1/(sqrt(2 pi) scale r)) G(r/scale): the kernel alpha/r G(r/beta), scale = beta */
@@ -60,7 +61,10 @@ typedef enum {
     NBT_SKERNEL_CORRECTED,  /* the moment kernel with an nbt-fit correction (nbt_kernel_corrected) */
     NBT_SKERNEL_SINGLE,     /* single scattering Psi_1 (one erfc atom per lobe) */
     NBT_SKERNEL_LINEINT,    /* the eq. 16 line integral: Gaussians at Gauss-Legendre nodes in depth */
-    NBT_SKERNEL_ELEK        /* Elek et al.: one Gaussian of deviation W(D), mass M0 (g = the lobes' mean cosine) */
+    NBT_SKERNEL_ELEK,       /* Elek et al.: one Gaussian of deviation W(D), mass M0 (g = the lobes' mean cosine) */
+    NBT_SKERNEL_FITTED,     /* for a phase (nbt_screen_kernel_phase): the first order exactly plus a fitted
+                             * model's higher orders (nbt_screen_model) */
+    NBT_SKERNEL_FIRST       /* for a phase: the first order exactly, nothing more */
 } nbt_skernel_kind;
 
 /* A built-in kernel family over depth, or a caller's. */
@@ -77,9 +81,117 @@ nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx);
 void nbt_screen_kernel_free(nbt_screen_kernel *k);
 /* The kernel at distance D (>= 0, INFINITY or >= NBT_SCREEN_SKY for sky). */
 nbt_status nbt_screen_kernel_eval(const nbt_screen_kernel *k, double D, nbt_screen_kern *out);
-/* "moment", "smallangle", "corrected", "single", "lineint", "elek"; parse: NBT_EINVAL for others. */
+/* "moment", "smallangle", "corrected", "single", "lineint", "elek", "fitted", "first"; parse: NBT_EINVAL for others. */
 const char *nbt_skernel_name(nbt_skernel_kind kind);
 nbt_status nbt_skernel_parse(const char *name, nbt_skernel_kind *kind);
+
+/* ---- kernels built for a phase function ----
+ *
+ * The camera sees a wall at distance D through a homogeneous medium
+ * (sigma_t, albedo, any phase p). A kernel is then a radial function on the
+ * wall: the fraction of the wall's radiance at lateral distance r that
+ * reaches the pixel scattered, per unit area. Geometry:
+ *   NBT_SCREEN_INSIDE    the camera is inside the medium (fog around it; light
+ *                        may scatter behind the camera and come back),
+ *   NBT_SCREEN_ENTERING  the medium begins at the camera (vacuum behind it).
+ * Only the first time a light path meets the wall counts (the wall absorbs).
+ *
+ * The first scattering order is exact for any phase (a line integral over
+ * depth at the true scattering angle, with the longer oblique path's
+ * attenuation; no small-angle step): its cumulative radial mass is one
+ * integral over the scattering angle, fitted as a non-negative mixture of
+ * atoms on the slot grid below (relative L1 error of its radial masses
+ * ~1e-5) at optical depths 2^(i/4) and interpolated in log depth between
+ * them, with its total mass exact at every depth. Higher orders come from a
+ * model fitted to photon counts (nbt_mc_kernel_run) for the phase's family,
+ * interpolated over its parameter, the albedo and the optical depth.
+ *
+ * Shapes: masses of atoms whose scales are s_m = 2^(m/2) times a reference
+ * length (the depth D), m = NBT_SCREEN_SLOT_LO..NBT_SCREEN_SLOT_HI, one
+ * ERFC and one GAUSS atom per slot. */
+#define NBT_SCREEN_SLOT_LO (-34)
+#define NBT_SCREEN_SLOT_HI 22
+#define NBT_SCREEN_NSLOTS (NBT_SCREEN_SLOT_HI - NBT_SCREEN_SLOT_LO + 1)
+
+typedef enum { NBT_SCREEN_INSIDE = 0, NBT_SCREEN_ENTERING = 1 } nbt_screen_geometry;
+
+typedef struct {
+    double erfc[NBT_SCREEN_NSLOTS], gauss[NBT_SCREEN_NSLOTS]; /* index m - NBT_SCREEN_SLOT_LO */
+} nbt_screen_shape;
+
+/* s_m = 2^(m/2). */
+double nbt_screen_slot_scale(int m);
+
+/* Fits a shape to radial masses (NNLS; every atom non-negative): mass[b] is
+ * the mass in the annulus [e_{b-1}, e_b) of radii in units of the reference
+ * length (bin 0 from 0, bin nedges to infinity), se[b] its standard error
+ * (NULL: exact data, fitted to relative accuracy per bin). slot_step 1 uses
+ * every slot, 2 the whole octaves only. The total mass is kept (to ~1e-6).
+ * *misfit (may be NULL): sum |fit - mass| / sum mass over the bins. */
+nbt_status nbt_screen_shape_fit(size_t nedges, const double *edges, const double *mass, const double *se,
+                                int slot_step, nbt_screen_shape *out, double *misfit);
+
+/* Mass of a unit atom in the annulus a0 <= r/scale < a1 (a1 may be inf). */
+double nbt_screen_atom_mass(nbt_atom_shape shape, double a0, double a1);
+/* Mass of a shape in the annulus lo <= r < hi (units of its reference length; hi may be inf). */
+double nbt_screen_shape_mass(const nbt_screen_shape *s, double lo, double hi);
+
+/* A fitted model of the higher scattering orders (2, 3, ...) for a family of
+ * phase functions: shapes on a grid of (family parameter, albedo, optical
+ * depth), both geometries, from photon counts (nbt-fit screenmodel). The
+ * family is "hg" (parameter g) or one fixed phase (no parameter; a phase is
+ * recognised by its values). Immutable: safe to share between threads. */
+typedef struct nbt_screen_model nbt_screen_model;
+/* The model libnbt ships: HG, g in [0, 0.95], both geometries (doc/screenspace.md
+ * gives its range and measured error). */
+const nbt_screen_model *nbt_screen_model_default(void);
+/* Reads the text form nbt-fit screenmodel writes; err gets one line naming the file and line. */
+nbt_status nbt_screen_model_read(const char *path, nbt_screen_model **out, char *err, size_t errlen);
+void nbt_screen_model_free(nbt_screen_model *m);
+/* NBT_OK when m covers phase p in geometry geo; else NBT_EDOM with a one-line
+ * reason in err naming what the model holds (its family and range). */
+nbt_status nbt_screen_model_covers(const nbt_screen_model *m, const nbt_phase *p, nbt_screen_geometry geo, char *err,
+                                   size_t errlen);
+/* The higher orders at optical depth tau > 0 for phase p and albedo a:
+ * atom masses (fractions of the source's radiance) on the slots, reference
+ * length = the depth. Outside the fitted range of tau and albedo the model
+ * holds its edge shapes and scales the mass (doc/screenspace.md);
+ * *extrapolated (may be NULL) says when it did. */
+nbt_status nbt_screen_model_eval(const nbt_screen_model *m, const nbt_phase *p, nbt_screen_geometry geo, double albedo,
+                                 double tau, nbt_screen_shape *out, int *extrapolated);
+
+/* Building a model (nbt-fit screenmodel): a grid over the family parameter
+ * (g for the HG family; fixed != NULL: that phase alone, param ignored),
+ * the albedo (in (0, 1)) and the optical depth (two or more), all
+ * increasing; then each node's higher-order masses (absolute: the shape's
+ * sum is the node's mass), geometry by geometry. Interpolation: linear in
+ * -ln(1 - g), -ln(1 - albedo) and ln(tau) of the normalised shapes and of
+ * the log masses. write: the text form, via a temporary file. */
+nbt_screen_model *nbt_screen_model_alloc(const nbt_phase *fixed, size_t np, const double *param, size_t na,
+                                         const double *albedo, size_t nt, const double *tau);
+nbt_status nbt_screen_model_set(nbt_screen_model *m, nbt_screen_geometry geo, size_t ip, size_t ia, size_t it,
+                                const nbt_screen_shape *masses);
+nbt_status nbt_screen_model_write(const nbt_screen_model *m, const char *path, const char *comment, char *err,
+                                  size_t errlen);
+
+/* The kernel family for a phase: kind NBT_SKERNEL_FITTED (first order +
+ * model; model NULL: nbt_screen_model_default()) or NBT_SKERNEL_FIRST (the
+ * first order only; model ignored). p must outlive the kernel. NULL with a
+ * reason through the error handler on bad arguments or when the model does
+ * not cover p. */
+nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t, double albedo, const nbt_phase *p,
+                                           nbt_screen_geometry geo, const nbt_screen_model *model);
+
+/* ---- colour: a kernel per channel ---- */
+
+/* One kernel per channel (RGB media: sigma_t, albedo or phase per channel).
+ * Takes ownership of r, g, b (freed with the result, also on failure). */
+nbt_screen_kernel *nbt_screen_kernel_rgb(nbt_screen_kernel *r, nbt_screen_kernel *g, nbt_screen_kernel *b);
+/* 1 for a kernel that is the same in every channel, 3 for an RGB kernel. */
+unsigned nbt_screen_kernel_channels(const nbt_screen_kernel *k);
+/* The kernel of channel ch (0, 1, 2) at distance D; for a grey kernel every
+ * channel is the same. nbt_screen_kernel_eval is channel 0. */
+nbt_status nbt_screen_kernel_eval_ch(const nbt_screen_kernel *k, unsigned ch, double D, nbt_screen_kern *out);
 
 /* The weight a kernel of total mass 1 and one atom (shape, scale in pixels)
  * gives to the pixel at integer offset (dx, dy): its integral over that
