@@ -99,15 +99,15 @@ nbt_screen_kernel *nbt_screen_kernel_custom(nbt_screen_kernel_fn fn, void *ctx)
 nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t, double albedo, const nbt_phase *p,
                                            nbt_screen_geometry geo, const nbt_screen_model *model)
 {
-    if (kind != NBT_SKERNEL_FITTED && kind != NBT_SKERNEL_FIRST) {
-        nbt__fail(NBT_EINVAL, "screen: a kernel for a phase is FITTED or FIRST");
+    if (kind != NBT_SKERNEL_FITTED && kind != NBT_SKERNEL_FIRST && kind != NBT_SKERNEL_ELEK) {
+        nbt__fail(NBT_EINVAL, "screen: a kernel for a phase is FITTED, FIRST or ELEK");
         return NULL;
     }
-    if (kind == NBT_SKERNEL_FITTED && !model && !(model = nbt_screen_model_default())) {
+    if (kind != NBT_SKERNEL_FIRST && !model && !(model = nbt_screen_model_default())) {
         nbt__fail(NBT_EINVAL, "screen: the compiled-in kernel model could not be read");
         return NULL;
     }
-    nbt__phase_kern *pk = nbt__phase_kern_alloc(p, sigma_t, albedo, geo, kind == NBT_SKERNEL_FITTED ? model : NULL);
+    nbt__phase_kern *pk = nbt__phase_kern_alloc(p, sigma_t, albedo, geo, kind != NBT_SKERNEL_FIRST ? model : NULL);
     if (!pk)
         return NULL;
     nbt_screen_kernel *k = kernel_new();
@@ -117,6 +117,9 @@ nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t
     }
     k->kind = kind;
     k->pk = pk;
+    k->m.sigma_t = sigma_t; /* ELEK's width */
+    k->m.albedo = albedo;
+    k->g = nbt_phase_mean_cosine(p);
     return k;
 }
 
@@ -207,10 +210,10 @@ nbt_status nbt_screen_kernel_eval_ch(const nbt_screen_kernel *k, unsigned ch, do
         return NBT_OK;
     if (k->fn)
         return k->fn(D, o, k->ctx);
-    if (k->pk)
-        return nbt__phase_kern_eval(k->pk, D, o);
     const nbt_beam_medium *m = &k->m;
     double ss = m->albedo * m->sigma_t, M0, M2, alpha, beta;
+    if (k->pk && k->kind != NBT_SKERNEL_ELEK)
+        return nbt__phase_kern_eval(k->pk, D, o);
     nbt_status st = NBT_OK;
     o->T = exp(-m->sigma_t * D);
     switch (k->kind) {
@@ -236,7 +239,14 @@ nbt_status nbt_screen_kernel_eval_ch(const nbt_screen_kernel *k, unsigned ch, do
     case NBT_SKERNEL_FIRST:
         break; /* built by nbt_screen_kernel_phase: k->pk */
     case NBT_SKERNEL_ELEK: {
-        st = nbt_beam_moments(m, NBT_BEAM_ISHIMARU, D, &M0, &M2, NULL);
+        if (k->pk) { /* for a phase: the fitted kernel's whole mass */
+            st = nbt__phase_kern_eval(k->pk, D, o);
+            M0 = 0;
+            for (size_t a = 0; a < o->n; a++)
+                M0 += o->mass[a];
+            o->n = 0;
+        } else
+            st = nbt_beam_moments(m, NBT_BEAM_ISHIMARU, D, &M0, &M2, NULL);
         double sa = m->sigma_t - ss;
         double inv = 2.0 * sa / (3.0 * D) + (ss > 0 ? 4.0 / (D * D * D * ss * (1.0 - k->g)) : INFINITY);
         nbt__add_atom(o, NBT_ATOM_GAUSS, M0, sqrt(0.5 / inv));

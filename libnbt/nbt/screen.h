@@ -175,8 +175,10 @@ nbt_status nbt_screen_model_write(const nbt_screen_model *m, const char *path, c
                                   size_t errlen);
 
 /* The kernel family for a phase: kind NBT_SKERNEL_FITTED (first order +
- * model; model NULL: nbt_screen_model_default()) or NBT_SKERNEL_FIRST (the
- * first order only; model ignored). p must outlive the kernel. NULL with a
+ * model; model NULL: nbt_screen_model_default()), NBT_SKERNEL_FIRST (the
+ * first order only; model ignored) or NBT_SKERNEL_ELEK (Elek et al.'s
+ * Gaussian width with g = the phase's mean cosine, carrying the FITTED
+ * kernel's whole mass). p must outlive the kernel. NULL with a
  * reason through the error handler on bad arguments or when the model does
  * not cover p. */
 nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t, double albedo, const nbt_phase *p,
