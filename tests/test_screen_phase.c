@@ -1,0 +1,321 @@
+/* tests/test_screen_phase.c: screen kernels built for a phase function
+ * (nbt_screen_kernel_phase), RGB kernels and the fitted model's container,
+ * against independent quadrature, photon counts and closed forms. */
+#include <config.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <nbt/nbt.h>
+#include <nbt/mc.h>
+#include "testutil.h"
+
+/* ---- the first order by direct 2-D quadrature ----
+ * A wall at distance D (sigma_t = 1 units: D = tau) of unit radiance seen
+ * along its normal; light leaves the wall point at lateral distance r, meets
+ * the view ray at depth t after a path (D - t)/cos(th), scatters by th into
+ * the camera. Mass within r < rho D:
+ *   a int_0^{pi/2} 2 pi sin th p(cos th) int_{t0}^{D} e^{-t} e^{-(D-t)/cos th} dt dth,
+ * t0 = max(0, D - rho D cot th). The t integral is done numerically here
+ * (the library has it in closed form). */
+typedef struct {
+    const nbt_phase *p;
+    double D, rho, th;
+    nbt_quad_ws *ws;
+} fo_ctx;
+
+static int fo_t(double t, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    fo_ctx *c = vp;
+    f[0] = exp(-t - (c->D - t) / cos(c->th));
+    return 0;
+}
+
+static int fo_th(double th, void *vp, unsigned fdim, double *f)
+{
+    (void)fdim;
+    fo_ctx *c = vp;
+    c->th = th;
+    double t0 = isinf(c->rho) ? 0 : fmax(0.0, c->D - c->rho * c->D / tan(th)), v = 0, e;
+    if (t0 < c->D)
+        nbt_quad_gk(c->ws, fo_t, c, 1, t0, c->D, 1e-300, 1e-12, &v, &e);
+    f[0] = 2.0 * M_PI * sin(th) * nbt_phase_eval(c->p, cos(th)) * v;
+    return 0;
+}
+
+static double first_ref(const nbt_phase *p, double D, double rho)
+{
+    fo_ctx c = {p, D, rho, 0, nbt_quad_ws_alloc(1, 2000)};
+    nbt_quad_ws *wo = nbt_quad_ws_alloc(1, 2000);
+    const double pts[] = {1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0, 1.4};
+    double v, e;
+    nbt_quad_gk_pts(wo, fo_th, &c, 1, 0, M_PI / 2, pts, sizeof pts / sizeof pts[0], 1e-300, 1e-10, &v, &e);
+    nbt_quad_ws_free(wo);
+    nbt_quad_ws_free(c.ws);
+    return v;
+}
+
+/* a kernel's mass within r < R (world units; R = inf: all of it) */
+static double kern_mass(const nbt_screen_kern *k, double R)
+{
+    double m = 0;
+    for (size_t a = 0; a < k->n; a++)
+        m += k->mass[a] * (isinf(R) ? 1.0 : nbt_screen_atom_mass(k->shape[a], 0, R / k->scale[a]));
+    return m;
+}
+
+static void test_first_order(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.9), *two = NULL;
+    char err[256];
+    nbt_phase_parse("hg2:g1=0.8,g2=-0.3,w=0.7", &two, err, sizeof err);
+    const nbt_phase *ps[2] = {hg, two};
+    /* sigma_t 0.5 and albedo 0.8 in the kernel: masses scale by the albedo, lengths by sigma_t */
+    const double st = 0.5, alb = 0.8;
+    const double taus[] = {2.0 /* a node of the shape grid */, 0.7 /* between nodes */, 11.3};
+    for (int ip = 0; ip < 2; ip++) {
+        nbt_screen_kernel *k = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, st, alb, ps[ip], NBT_SCREEN_INSIDE, NULL);
+        t_true(k != NULL, "first-order kernel for %s", nbt_phase_name(ps[ip]));
+        if (!k)
+            continue;
+        for (size_t it = 0; it < sizeof taus / sizeof taus[0]; it++) {
+            double tau = taus[it], D = tau / st;
+            nbt_screen_kern kn;
+            nbt_screen_kernel_eval(k, D, &kn);
+            t_rel(kn.T, exp(-tau), 1e-14, "first order %s tau %g: T", nbt_phase_name(ps[ip]), tau);
+            double tot = alb * first_ref(ps[ip], tau, INFINITY);
+            /* the whole mass is computed exactly (one integral over the angle) */
+            t_rel(kern_mass(&kn, INFINITY), tot, 1e-7, "first order %s tau %g: mass", nbt_phase_name(ps[ip]), tau);
+            const double rhos[] = {0.01, 0.05, 0.3, 2.0};
+            for (size_t ir = 0; ir < sizeof rhos / sizeof rhos[0]; ir++) {
+                double want = alb * first_ref(ps[ip], tau, rhos[ir]);
+                /* the radial shape: fitted on 1/4-octave radii to ~1e-5 at the depth nodes, and interpolated
+                 * linearly in log depth between them (a 2^(1/4) step: up to ~2e-3 of the mass) */
+                t_abs(kern_mass(&kn, rhos[ir] * D) / tot, want / tot, it == 0 ? 3e-4 : 3e-3,
+                      "first order %s tau %g: mass within %g D", nbt_phase_name(ps[ip]), tau, rhos[ir]);
+            }
+        }
+        nbt_screen_kernel_free(k);
+    }
+    nbt_phase_free(hg);
+    nbt_phase_free(two);
+}
+
+/* ---- photon counts of the first order agree with it (an independent route: paths, not angles) ---- */
+static void test_first_order_mc(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.75);
+    const double z[] = {1.5}, edges[] = {0.02, 0.1, 0.4}, alb[] = {1.0};
+    nbt_mc_kernel_config cfg = {hg, 1, 1, z, 3, edges, 1, alb, 1, 0, 400000, 7, 0, NULL, NULL};
+    nbt_mc_kernel_result *r = NULL;
+    t_true(nbt_mc_kernel_run(&cfg, &r) == NBT_OK, "mc kernel run");
+    nbt_screen_kernel *k = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, 1.0, 1.0, hg, NBT_SCREEN_INSIDE, NULL);
+    nbt_screen_kern kn;
+    nbt_screen_kernel_eval(k, 1.5, &kn);
+    double lo = 0;
+    for (size_t b = 0; r && b < 4; b++) {
+        double hi = b < 3 ? edges[b] * 1.5 : INFINITY;
+        double want = kern_mass(&kn, hi) - kern_mass(&kn, lo), got = r->mass[b], se = r->mass_se[b];
+        /* 4.5 standard errors plus the shape's interpolation (tau 1.5 is between nodes) */
+        t_abs(got, want, 4.5 * se + 2e-3 * kern_mass(&kn, INFINITY),
+              "first order vs photon counts, hg 0.75 tau 1.5, bin %zu (se %.2g)", b, se);
+        lo = hi;
+    }
+    nbt_mc_kernel_result_free(r);
+    nbt_screen_kernel_free(k);
+    nbt_phase_free(hg);
+}
+
+/* ---- pixel weights: the operator on one bright pixel is the kernel integrated over pixels ---- */
+static void test_far_weights(void)
+{
+    const size_t w = 91, h = 57, sx = 23, sy = 31;
+    float *rgb = calloc(w * h * 3, sizeof *rgb), *D = malloc(w * h * sizeof *D);
+    double *S = malloc(w * h * 3 * sizeof *S);
+    for (size_t i = 0; i < w * h; i++)
+        D[i] = 40.0f;
+    rgb[(sy * w + sx) * 3 + 1] = 1000.0f;
+    nbt_phase *hg = nbt_phase_hg(0.8);
+    /* tau 1 and a wide pixel angle: the kernel's core spans a few pixels, its tail many */
+    nbt_screen_kernel *k = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, 0.025, 0.9, hg, NBT_SCREEN_INSIDE, NULL);
+    double dtheta = 0.004;
+    nbt_screen_input in = {w, h, rgb, D, dtheta, NULL};
+    t_true(nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, 1e-9, 1, S, NULL) == NBT_OK, "brute force, one source");
+    nbt_screen_kern kn;
+    nbt_screen_kernel_eval(k, 40.0, &kn);
+    double px = 40.0 * dtheta;
+    const long off[][2] = {{0, 0}, {3, -2}, {-7, 11}, {25, 9}, {-20, -28}, {60, 20}, {-23, 25}};
+    for (size_t j = 0; j < sizeof off / sizeof off[0]; j++) {
+        double want = 0;
+        for (size_t a = 0; a < kn.n; a++)
+            want += kn.mass[a] * nbt_screen_atom_pixel(kn.shape[a], kn.scale[a] / px, off[j][0], off[j][1]);
+        size_t x = (size_t)((long)sx + off[j][0]), y = (size_t)((long)sy + off[j][1]);
+        /* within 24 px the weights are exact sums; beyond, a radial profile with its Laplacian correction
+         * (error ~ f''''/1920 relative, < 1e-4 for kernels smooth on the pixel scale) */
+        t_rel(S[(y * w + x) * 3 + 1], 1000.0 * want, 2e-4, "weight at offset (%ld, %ld)", off[j][0], off[j][1]);
+        t_abs(S[(y * w + x) * 3], 0, 0, "red stays dark at (%ld, %ld)", off[j][0], off[j][1]);
+    }
+    nbt_screen_kernel_free(k);
+    nbt_phase_free(hg);
+    free(rgb);
+    free(D);
+    free(S);
+}
+
+/* ---- an RGB kernel is three grey runs, channel by channel ---- */
+static void test_rgb(void)
+{
+    const size_t w = 48, h = 37;
+    float *rgb = malloc(w * h * 3 * sizeof *rgb), *D = malloc(w * h * sizeof *D);
+    for (size_t y = 0; y < h; y++)
+        for (size_t x = 0; x < w; x++) {
+            size_t i = y * w + x;
+            D[i] = x < 20 ? 3.0f : y < 15 ? 7.5f : INFINITY;
+            for (int c = 0; c < 3; c++)
+                rgb[3 * i + (size_t)c] = (float)(0.2 + 0.1 * c + ((x * 7 + y * 3 + (size_t)c) % 5) * 0.3);
+        }
+    nbt_phase *hg = nbt_phase_hg(0.85);
+    const double st[3] = {0.3, 0.2, 0.1}, alb[3] = {0.9, 0.95, 0.99};
+    nbt_screen_kernel *kc[3];
+    for (int c = 0; c < 3; c++)
+        kc[c] = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, st[c], alb[c], hg, NBT_SCREEN_INSIDE, NULL);
+    nbt_screen_kernel *k = nbt_screen_kernel_rgb(kc[0], kc[1], kc[2]);
+    t_true(k && nbt_screen_kernel_channels(k) == 3, "rgb kernel has three channels");
+    nbt_screen_input in = {w, h, rgb, D, 0.01, NULL};
+    double *S = malloc(w * h * 3 * sizeof *S), *Sc = malloc(w * h * 3 * sizeof *Sc);
+    t_true(nbt_screen_layered(&in, k, NBT_SCREEN_NEAR, 1e-8, 8, 1, S, NULL) == NBT_OK, "rgb layered");
+    for (int c = 0; c < 3; c++) {
+        nbt_screen_kernel *g = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, st[c], alb[c], hg, NBT_SCREEN_INSIDE, NULL);
+        nbt_screen_layered(&in, g, NBT_SCREEN_NEAR, 1e-8, 8, 1, Sc, NULL);
+        double d = 0, n = 0;
+        for (size_t i = 0; i < w * h; i++) {
+            d = fmax(d, fabs(S[3 * i + (size_t)c] - Sc[3 * i + (size_t)c]));
+            n = fmax(n, fabs(Sc[3 * i + (size_t)c]));
+        }
+        t_abs(d / n, 0, 1e-12, "rgb channel %d equals its grey run", c);
+        nbt_screen_kernel_free(g);
+    }
+    /* brute force agrees with the FFT channel by channel */
+    t_true(nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, 1e-8, 1, Sc, NULL) == NBT_OK, "rgb brute force");
+    double d = 0, n = 0;
+    for (size_t i = 0; i < w * h * 3; i++) {
+        d = fmax(d, fabs(S[i] - Sc[i]));
+        n = fmax(n, fabs(Sc[i]));
+    }
+    t_abs(d / n, 0, 1e-9, "rgb brute force = layered FFT");
+    nbt_screen_kernel_free(k);
+    nbt_phase_free(hg);
+    free(rgb);
+    free(D);
+    free(S);
+    free(Sc);
+}
+
+/* ---- the model container: set, write, read, evaluate ---- */
+static void test_model(void)
+{
+    const double g[] = {0.5, 0.9}, alb[] = {0.6, 0.95}, tau[] = {0.5, 4.0};
+    nbt_screen_model *m = nbt_screen_model_alloc(NULL, 2, g, 2, alb, 2, tau);
+    t_true(m != NULL, "model alloc");
+    for (int geo = 0; geo < 2; geo++)
+        for (size_t ip = 0; ip < 2; ip++)
+            for (size_t ia = 0; ia < 2; ia++)
+                for (size_t it = 0; it < 2; it++) {
+                    nbt_screen_shape s;
+                    memset(&s, 0, sizeof s);
+                    double M = 0.01 * (1 + (double)ip) * (1 + 3 * (double)ia) * (1 + 7 * (double)it) * (1 + geo);
+                    s.erfc[10 + ip + 2 * it] = 0.75 * M; /* where the mass lies depends on g and tau */
+                    s.gauss[20 + ia] = 0.25 * M;
+                    nbt_screen_model_set(m, (nbt_screen_geometry)geo, ip, ia, it, &s);
+                }
+    char path[] = "/tmp/nbt_test_modelXXXXXX";
+    int fd = mkstemp(path);
+    close(fd);
+    char err[256];
+    t_true(nbt_screen_model_write(m, path, "test", err, sizeof err) == NBT_OK, "model write");
+    nbt_screen_model *r = NULL;
+    t_true(nbt_screen_model_read(path, &r, err, sizeof err) == NBT_OK, "model read: %s", err);
+    unlink(path);
+    nbt_phase *p9 = nbt_phase_hg(0.9), *p7 = nbt_phase_hg(0.7), *p97 = nbt_phase_hg(0.97), *pn = nbt_phase_hg(-0.2);
+    t_true(r && nbt_screen_model_covers(r, p7, NBT_SCREEN_INSIDE, err, sizeof err) == NBT_OK, "covers g 0.7");
+    t_true(r && nbt_screen_model_covers(r, p97, NBT_SCREEN_INSIDE, err, sizeof err) == NBT_EDOM,
+           "refuses g 0.97 above its range");
+    t_true(r && nbt_screen_model_covers(r, pn, NBT_SCREEN_INSIDE, err, sizeof err) == NBT_EDOM,
+           "refuses g -0.2 below its range");
+    if (r) {
+        nbt_screen_shape o;
+        int ex = -1;
+        /* at a node: the set values (the text form keeps 3 digits) */
+        nbt_screen_model_eval(r, p9, NBT_SCREEN_ENTERING, 0.6, 4.0, &o, &ex);
+        double M = 0.01 * 2 * 1 * 8 * 2;
+        t_rel(o.erfc[10 + 1 + 2], 0.75 * M, 2e-3, "model at a node: erfc slot");
+        t_rel(o.gauss[20], 0.25 * M, 2e-3, "model at a node: gauss slot");
+        t_true(ex == 0, "model at a node is not an extrapolation");
+        /* between albedo nodes: log mass linear in -ln(1 - a) */
+        double a = 1 - sqrt(0.4 * 0.05), Mm = sqrt(0.01 * 1 * 1 * 1 * 0.01 * 1 * 4 * 1); /* g 0.5, tau 0.5, inside */
+        nbt_phase *p5 = nbt_phase_hg(0.5);
+        nbt_screen_model_eval(r, p5, NBT_SCREEN_INSIDE, a, 0.5, &o, &ex);
+        double tot = 0;
+        for (int s = 0; s < NBT_SCREEN_NSLOTS; s++)
+            tot += o.erfc[s] + o.gauss[s];
+        t_rel(tot, Mm, 3e-3, "model between albedo nodes: geometric mean of the masses");
+        t_rel(o.gauss[20] + o.gauss[21], 0.25 * Mm, 3e-3, "model between albedo nodes: shape kept");
+        nbt_phase_free(p5);
+    }
+    nbt_screen_model_free(r);
+    nbt_screen_model_free(m);
+    nbt_phase_free(p9);
+    nbt_phase_free(p7);
+    nbt_phase_free(p97);
+    nbt_phase_free(pn);
+}
+
+/* ---- the shipped model covers HG 0..0.95; the fitted kernel adds it to the exact first order ---- */
+static void test_fitted(void)
+{
+    const nbt_screen_model *m = nbt_screen_model_default();
+    t_true(m != NULL, "the shipped model is compiled in");
+    if (!m)
+        return;
+    nbt_phase *p = nbt_phase_hg(0.9);
+    nbt_screen_kernel *kf = nbt_screen_kernel_phase(NBT_SKERNEL_FITTED, 0.2, 0.95, p, NBT_SCREEN_INSIDE, NULL),
+                      *k1 = nbt_screen_kernel_phase(NBT_SKERNEL_FIRST, 0.2, 0.95, p, NBT_SCREEN_INSIDE, NULL),
+                      *ke = nbt_screen_kernel_phase(NBT_SKERNEL_ELEK, 0.2, 0.95, p, NBT_SCREEN_INSIDE, NULL);
+    nbt_screen_kern a, b, e;
+    nbt_screen_kernel_eval(kf, 10.0, &a);
+    nbt_screen_kernel_eval(k1, 10.0, &b);
+    nbt_screen_kernel_eval(ke, 10.0, &e);
+    nbt_screen_shape hi;
+    nbt_screen_model_eval(m, p, NBT_SCREEN_INSIDE, 0.95, 2.0, &hi, NULL);
+    double mh = nbt_screen_shape_mass(&hi, 0, INFINITY);
+    t_rel(kern_mass(&a, INFINITY), kern_mass(&b, INFINITY) + mh, 1e-12, "fitted = first order + model");
+    t_true(mh > 0.2 * kern_mass(&b, INFINITY), "higher orders matter at albedo 0.95, tau 2 (%g vs %g)", mh,
+           kern_mass(&b, INFINITY));
+    /* elek: one Gaussian of the fitted mass, 1/(2 W^2) = 2 sa/(3 D) + 4/(D^3 ss (1 - g)) (Elek et al.) */
+    t_true(e.n == 1 && e.shape[0] == NBT_ATOM_GAUSS, "elek kernel: one Gaussian");
+    t_rel(e.mass[0], kern_mass(&a, INFINITY), 1e-12, "elek kernel carries the fitted mass");
+    double inv = 2.0 * 0.2 * 0.05 / (3.0 * 10.0) + 4.0 / (1000.0 * 0.19 * 0.1);
+    t_rel(e.scale[0], sqrt(0.5 / inv), 1e-12, "elek width from the phase's mean cosine");
+    nbt_phase *out = nbt_phase_hg(0.97);
+    nbt_set_error_handler(NULL);
+    t_true(nbt_screen_kernel_phase(NBT_SKERNEL_FITTED, 0.2, 0.95, out, NBT_SCREEN_INSIDE, NULL) == NULL,
+           "fitted refuses g 0.97, outside the shipped model");
+    nbt_screen_kernel_free(kf);
+    nbt_screen_kernel_free(k1);
+    nbt_screen_kernel_free(ke);
+    nbt_phase_free(p);
+    nbt_phase_free(out);
+}
+
+int main(void)
+{
+    test_first_order();
+    test_first_order_mc();
+    test_far_weights();
+    test_rgb();
+    test_model();
+    test_fitted();
+    return t_done();
+}
