@@ -114,15 +114,17 @@ static int write_png(const char *path, const unsigned char *rgb, int w, int h)
 
 /* px holds (airlight, surface radiance, distance) per pixel; replace it by
  * the tone-mapped colour of airlight + T c + S, S the surfaces' light
- * scattered on its way (operator A; g = 0.9 -> a Gaussian lobe with
- * B = (1 - g)/2, whose mean cosine is close to g). */
+ * scattered on its way (operator A; the kernel built for the HG phase of
+ * g = 0.9 the shaders use: its first order exact, the higher orders from
+ * libnbt's fitted model, the camera inside the fog). */
 static int multiple_scattering(float *px, int pw, int ph, double kappa, double albedo, double exposure)
 {
     size_t n = (size_t)pw * (size_t)ph;
     float *rgb = malloc(n * 3 * sizeof *rgb), *D = malloc(n * sizeof *D), *Dq = malloc(n * sizeof *Dq);
     double *S = malloc(n * 3 * sizeof *S), *T = malloc(n * sizeof *T);
-    nbt_beam_medium m = nbt_beam_homogeneous(kappa, albedo, (1.0 - 0.9) / 2.0);
-    nbt_screen_kernel *k = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &m, NULL);
+    nbt_phase *hg = nbt_phase_hg(0.9);
+    nbt_screen_kernel *k = hg ? nbt_screen_kernel_phase(NBT_SKERNEL_FITTED, kappa, albedo, hg, NBT_SCREEN_INSIDE, NULL)
+                              : NULL;
     int rc = !rgb || !D || !Dq || !S || !T || !k;
     for (size_t i = 0; !rc && i < n; i++) {
         rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = px[4 * i + 1];
@@ -142,6 +144,7 @@ static int multiple_scattering(float *px, int pw, int ph, double kappa, double a
             px[4 * i + c] = (float)pow(tint[c] * (1.0 - exp(-exposure * L)), 1.0 / 2.2);
     }
     nbt_screen_kernel_free(k);
+    nbt_phase_free(hg);
     free(rgb);
     free(D);
     free(Dq);
