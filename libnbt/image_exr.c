@@ -29,6 +29,93 @@ int nbt__exr_raw_plausible(const char *path, double raw_bytes)
     return raw_bytes <= 1e4 * (double)st.st_size + 16.0 * 1024 * 1024;
 }
 
+/* ---- kept header attributes ---- */
+
+/* One attribute, its value flattened into bytes: POD and fixed-size
+ * structs as their C struct; string: the characters and a NUL; string
+ * vector: the strings each with its NUL (count in n); float vector: the
+ * floats; preview: exr_attr_preview_t's width, height then the RGBA bytes;
+ * opaque: the packed bytes as in the file. */
+typedef struct {
+    char *name, *type_name;
+    exr_attribute_type_t type;
+    int32_t n;
+    size_t size;
+    unsigned char *bytes;
+} kattr;
+
+struct nbt_image_attrs {
+    size_t n;
+    kattr *a;
+};
+
+static void attrs_free(nbt_image_attrs *l)
+{
+    if (!l)
+        return;
+    for (size_t i = 0; i < l->n; i++) {
+        free(l->a[i].name);
+        free(l->a[i].type_name);
+        free(l->a[i].bytes);
+    }
+    free(l->a);
+    free(l);
+}
+
+static void *memdup(const void *p, size_t n)
+{
+    void *q = malloc(n ? n : 1);
+    if (q && n)
+        memcpy(q, p, n);
+    return q;
+}
+
+static nbt_image_attrs *attrs_dup(const nbt_image_attrs *l)
+{
+    nbt_image_attrs *d = calloc(1, sizeof *d);
+    if (!d)
+        return NULL;
+    if (l->n && !(d->a = calloc(l->n, sizeof *d->a))) {
+        free(d);
+        return NULL;
+    }
+    for (size_t i = 0; i < l->n; i++, d->n++) {
+        kattr *k = &d->a[i];
+        *k = l->a[i];
+        k->name = strdup(l->a[i].name);
+        k->type_name = strdup(l->a[i].type_name);
+        k->bytes = memdup(l->a[i].bytes, l->a[i].size);
+        if (!k->name || !k->type_name || !k->bytes) {
+            d->n++;
+            attrs_free(d);
+            return NULL;
+        }
+    }
+    return d;
+}
+
+size_t nbt_image_attr_count(const nbt_image *im)
+{
+    return im && im->attrs ? im->attrs->n : 0;
+}
+
+const char *nbt_image_attr_name(const nbt_image *im, size_t i, const char **type_name)
+{
+    if (!im || !im->attrs || i >= im->attrs->n)
+        return NULL;
+    if (type_name)
+        *type_name = im->attrs->a[i].type_name;
+    return im->attrs->a[i].name;
+}
+
+const char *nbt_image_attr_string(const nbt_image *im, const char *name)
+{
+    for (size_t i = 0; name && i < nbt_image_attr_count(im); i++)
+        if (im->attrs->a[i].type == EXR_ATTR_STRING && !strcmp(im->attrs->a[i].name, name))
+            return (const char *)im->attrs->a[i].bytes;
+    return NULL;
+}
+
 nbt_image *nbt_image_alloc(size_t w, size_t h, int with_z)
 {
     if (w == 0 || h == 0 || h > SIZE_MAX / w)
@@ -41,6 +128,8 @@ nbt_image *nbt_image_alloc(size_t w, size_t h, int with_z)
         return NULL;
     im->w = w;
     im->h = h;
+    im->display.max_x = (int32_t)(w > (size_t)INT32_MAX ? INT32_MAX : w - 1);
+    im->display.max_y = (int32_t)(h > (size_t)INT32_MAX ? INT32_MAX : h - 1);
     im->rgb = calloc(n * 3, sizeof(float));
     im->z = with_z ? calloc(n, sizeof(float)) : NULL;
     if (!im->rgb || (with_z && !im->z)) {
@@ -56,6 +145,14 @@ void nbt_image_free(nbt_image *im)
         return;
     free(im->rgb);
     free(im->z);
+    free(im->rgb_layer);
+    free(im->z_name);
+    for (size_t i = 0; i < im->nchannels; i++) {
+        free(im->channels[i].name);
+        free(im->channels[i].data);
+    }
+    free(im->channels);
+    attrs_free(im->attrs);
     free(im);
 }
 
@@ -301,6 +398,178 @@ static void list_channels(exr_const_context_t ctx, int nparts, char *buf, size_t
 
 /* ---- reading ---- */
 
+/* Attributes that describe the layout of the part, which the writer sets
+ * itself; every other one is kept. */
+static int structural(const char *name)
+{
+    static const char *const S[] = {"channels", "compression", "dataWindow", "displayWindow", "lineOrder", "tiles",
+                                    "type", "name", "version", "chunkCount", "maxSamplesPerPixel"};
+    for (size_t i = 0; i < sizeof S / sizeof S[0]; i++)
+        if (!strcmp(name, S[i]))
+            return 1;
+    return 0;
+}
+
+/* Flattens one attribute into k (see kattr); 0 ok, -1 out of memory, 1 not
+ * keepable (a channel list under another name). */
+static int flatten_attr(const exr_attribute_t *a, kattr *k)
+{
+    memset(k, 0, sizeof *k);
+    k->type = a->type;
+    const void *src = NULL;
+    size_t sz = 0;
+    unsigned char *own = NULL;
+    switch (a->type) {
+    case EXR_ATTR_COMPRESSION:
+    case EXR_ATTR_ENVMAP:
+    case EXR_ATTR_LINEORDER: src = &a->uc, sz = sizeof a->uc; break;
+    case EXR_ATTR_DOUBLE: src = &a->d, sz = sizeof a->d; break;
+    case EXR_ATTR_FLOAT: src = &a->f, sz = sizeof a->f; break;
+    case EXR_ATTR_INT: src = &a->i, sz = sizeof a->i; break;
+    case EXR_ATTR_BOX2I: src = a->box2i, sz = sizeof *a->box2i; break;
+    case EXR_ATTR_BOX2F: src = a->box2f, sz = sizeof *a->box2f; break;
+    case EXR_ATTR_CHROMATICITIES: src = a->chromaticities, sz = sizeof *a->chromaticities; break;
+    case EXR_ATTR_KEYCODE: src = a->keycode, sz = sizeof *a->keycode; break;
+    case EXR_ATTR_M33F: src = a->m33f, sz = sizeof *a->m33f; break;
+    case EXR_ATTR_M33D: src = a->m33d, sz = sizeof *a->m33d; break;
+    case EXR_ATTR_M44F: src = a->m44f, sz = sizeof *a->m44f; break;
+    case EXR_ATTR_M44D: src = a->m44d, sz = sizeof *a->m44d; break;
+    case EXR_ATTR_RATIONAL: src = a->rational, sz = sizeof *a->rational; break;
+    case EXR_ATTR_TILEDESC: src = a->tiledesc, sz = sizeof *a->tiledesc; break;
+    case EXR_ATTR_TIMECODE: src = a->timecode, sz = sizeof *a->timecode; break;
+    case EXR_ATTR_V2I: src = a->v2i, sz = sizeof *a->v2i; break;
+    case EXR_ATTR_V2F: src = a->v2f, sz = sizeof *a->v2f; break;
+    case EXR_ATTR_V2D: src = a->v2d, sz = sizeof *a->v2d; break;
+    case EXR_ATTR_V3I: src = a->v3i, sz = sizeof *a->v3i; break;
+    case EXR_ATTR_V3F: src = a->v3f, sz = sizeof *a->v3f; break;
+    case EXR_ATTR_V3D: src = a->v3d, sz = sizeof *a->v3d; break;
+    case EXR_ATTR_STRING:
+        sz = (size_t)(a->string->length > 0 ? a->string->length : 0) + 1;
+        if (!(own = malloc(sz)))
+            return -1;
+        memcpy(own, a->string->str, sz - 1);
+        own[sz - 1] = '\0';
+        break;
+    case EXR_ATTR_STRING_VECTOR: {
+        const exr_attr_string_vector_t *v = a->stringvector;
+        for (int32_t i = 0; i < v->n_strings; i++)
+            sz += (size_t)(v->strings[i].length > 0 ? v->strings[i].length : 0) + 1;
+        if (!(own = malloc(sz ? sz : 1)))
+            return -1;
+        size_t off = 0;
+        for (int32_t i = 0; i < v->n_strings; i++) {
+            size_t n = (size_t)(v->strings[i].length > 0 ? v->strings[i].length : 0);
+            memcpy(own + off, v->strings[i].str, n);
+            own[off + n] = '\0';
+            off += n + 1;
+        }
+        k->n = v->n_strings;
+        break;
+    }
+    case EXR_ATTR_FLOAT_VECTOR:
+        src = a->floatvector->arr;
+        k->n = a->floatvector->length > 0 ? a->floatvector->length : 0;
+        sz = (size_t)k->n * sizeof(float);
+        break;
+    case EXR_ATTR_PREVIEW: {
+        const exr_attr_preview_t *p = a->preview;
+        size_t n = (size_t)p->width * p->height * 4;
+        sz = 2 * sizeof(uint32_t) + n;
+        if (!(own = malloc(sz)))
+            return -1;
+        memcpy(own, &p->width, sizeof(uint32_t));
+        memcpy(own + sizeof(uint32_t), &p->height, sizeof(uint32_t));
+        if (n)
+            memcpy(own + 2 * sizeof(uint32_t), p->rgba, n);
+        break;
+    }
+    case EXR_ATTR_OPAQUE:
+        src = a->opaque->packed_data;
+        sz = (size_t)(a->opaque->size > 0 ? a->opaque->size : 0);
+        break;
+    default: return 1; /* channel lists */
+    }
+    if (!own && !(own = memdup(src, sz)))
+        return -1;
+    k->bytes = own;
+    k->size = sz;
+    k->name = strdup(a->name);
+    k->type_name = strdup(a->type_name);
+    if (!k->name || !k->type_name) {
+        free(k->name), free(k->type_name), free(k->bytes);
+        return -1;
+    }
+    return 0;
+}
+
+/* The part's non-structural attributes; 0 ok, -1 out of memory. */
+static int keep_attrs(exr_const_context_t ctx, int part, nbt_image_attrs **out)
+{
+    int32_t n = 0;
+    *out = NULL;
+    if (exr_get_attribute_count(ctx, part, &n) != EXR_ERR_SUCCESS || n <= 0)
+        return 0;
+    nbt_image_attrs *l = calloc(1, sizeof *l);
+    if (!l || !(l->a = calloc((size_t)n, sizeof *l->a))) {
+        free(l);
+        return -1;
+    }
+    for (int32_t i = 0; i < n; i++) {
+        const exr_attribute_t *a = NULL;
+        if (exr_get_attribute_by_index(ctx, part, EXR_ATTR_LIST_FILE_ORDER, i, &a) != EXR_ERR_SUCCESS || !a ||
+            structural(a->name))
+            continue;
+        int r = flatten_attr(a, &l->a[l->n]);
+        if (r < 0) {
+            attrs_free(l);
+            return -1;
+        }
+        if (r == 0)
+            l->n++;
+    }
+    if (!l->n) {
+        attrs_free(l);
+        l = NULL;
+    }
+    *out = l;
+    return 0;
+}
+
+static size_t ptype_size(nbt_pixel_type t)
+{
+    return t == NBT_PIXEL_HALF ? 2 : 4;
+}
+
+/* The channels of the part other than the chosen RGB/Z ones (file order);
+ * subsampled ones listed with data NULL. 0 ok, -1 out of memory. */
+static int keep_channels(const exr_attr_chlist_t *cl, const chsel *sel, nbt_image *im)
+{
+    im->channels = calloc((size_t)cl->num_channels + 1, sizeof *im->channels);
+    if (!im->channels)
+        return -1;
+    for (int i = 0; i < cl->num_channels; i++) {
+        const exr_attr_chlist_entry_t *e = &cl->entries[i];
+        int chosen = 0;
+        for (int k = 0; k < 4; k++)
+            chosen |= sel->name[k] && !strcmp(sel->name[k], e->name.str);
+        if (chosen)
+            continue;
+        nbt_image_channel *c = &im->channels[im->nchannels];
+        if (!(c->name = strdup(e->name.str)))
+            return -1;
+        im->nchannels++;
+        c->type = (nbt_pixel_type)e->pixel_type;
+        c->x_sampling = e->x_sampling;
+        c->y_sampling = e->y_sampling;
+        c->linear = e->p_linear;
+        if (e->x_sampling == 1 && e->y_sampling == 1 &&
+            !(c->data = calloc(im->w * im->h, ptype_size(c->type))))
+            return -1;
+    }
+    return 0;
+}
+
+
 typedef struct {
     exr_const_context_t ctx;
     int part;
@@ -341,6 +610,17 @@ static exr_result_t decode_chunk(reader *r, const exr_chunk_info_t *ci, size_t x
             ch->user_bytes_per_element = (int16_t)sizeof(float);
             ch->user_data_type = EXR_PIXEL_FLOAT;
             break;
+        }
+        for (size_t k = 0; !ch->decode_to_ptr && k < r->im->nchannels; k++) {
+            nbt_image_channel *kc = &r->im->channels[k];
+            if (!kc->data || strcmp(ch->channel_name, kc->name))
+                continue;
+            size_t b = ptype_size(kc->type);
+            ch->decode_to_ptr = (uint8_t *)kc->data + (y0 * w + x0) * b;
+            ch->user_pixel_stride = (int32_t)b;
+            ch->user_line_stride = (int32_t)(w * b);
+            ch->user_bytes_per_element = (int16_t)b;
+            ch->user_data_type = (uint16_t)kc->type; /* unconverted */
         }
     }
     rv = exr_decoding_choose_default_routines(r->ctx, r->part, &r->dec);
@@ -411,9 +691,11 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
         goto done;
     }
 
-    exr_attr_box2i_t dw;
+    exr_attr_box2i_t dw, disp;
     exr_storage_t stor = EXR_STORAGE_SCANLINE;
-    if (exr_get_data_window(ctx, part, &dw) != EXR_ERR_SUCCESS || exr_get_storage(ctx, part, &stor) != EXR_ERR_SUCCESS) {
+    const exr_attr_chlist_t *pcl = NULL;
+    if (exr_get_data_window(ctx, part, &dw) != EXR_ERR_SUCCESS || exr_get_storage(ctx, part, &stor) != EXR_ERR_SUCCESS ||
+        exr_get_channels(ctx, part, &pcl) != EXR_ERR_SUCCESS || !pcl) {
         st = fail(NBT_EFORMAT, path, err, errlen, "no data window");
         goto done;
     }
@@ -427,7 +709,15 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
         st = fail(NBT_EFORMAT, path, err, errlen, "data window too wide (%lld pixels)", (long long)w64);
         goto done;
     }
-    if (!nbt__exr_raw_plausible(path, (double)w64 * (double)h64 * 4.0 * sizeof(float))) {
+    if (exr_get_display_window(ctx, part, &disp) != EXR_ERR_SUCCESS)
+        disp = dw;
+    for (int i = 0; i < pcl->num_channels; i++)
+        if ((unsigned)pcl->entries[i].pixel_type > (unsigned)NBT_PIXEL_FLOAT) {
+            st = fail(NBT_EFORMAT, path, err, errlen, "channel %s has an unknown pixel type %d", pcl->entries[i].name.str,
+                      (int)pcl->entries[i].pixel_type);
+            goto done;
+        }
+    if (!nbt__exr_raw_plausible(path, (double)w64 * (double)h64 * (3.0 + pcl->num_channels) * sizeof(float))) {
         st = fail(NBT_EFORMAT, path, err, errlen, "data window %lld x %lld is more than the file can hold: corrupt header",
                   (long long)w64, (long long)h64);
         goto done;
@@ -436,6 +726,18 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
         !(im = nbt_image_alloc((size_t)w64, (size_t)h64, sel.name[SEL_Z] != NULL))) {
         st = fail(NBT_ENOMEM, path, err, errlen, "out of memory for a %lld x %lld image", (long long)w64,
                   (long long)h64);
+        goto done;
+    }
+    im->x0 = dw.min.x;
+    im->y0 = dw.min.y;
+    im->display.min_x = disp.min.x;
+    im->display.min_y = disp.min.y;
+    im->display.max_x = disp.max.x;
+    im->display.max_y = disp.max.y;
+    if ((sel.layer && !(im->rgb_layer = strndup(sel.layer, sel.layer_len))) ||
+        (sel.name[SEL_Z] && strcmp(sel.name[SEL_Z], "Z") && !(im->z_name = strdup(sel.name[SEL_Z]))) ||
+        keep_channels(pcl, &sel, im) != 0 || keep_attrs(ctx, part, &im->attrs) != 0) {
+        st = fail(NBT_ENOMEM, path, err, errlen, "out of memory for the channels and attributes");
         goto done;
     }
     size_t w = im->w, h = im->h;
@@ -509,38 +811,245 @@ done:
 
 /* ---- writing ---- */
 
-static const char *const WCH[4] = {"R", "G", "B", "Z"};
+/* One output channel: where its values for image pixel (0, 0) are and how
+ * they are laid out. */
+typedef struct {
+    const char *name;
+    char *owned;            /* name when built here */
+    exr_pixel_type_t type;
+    int linear;
+    const uint8_t *base;
+    int32_t pixel_stride, line_stride, bpe;
+} wchan;
 
-nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char *const *attrs, size_t nattrs,
-                               char *err, size_t errlen)
+/* Sets one kept attribute on the output part. */
+static exr_result_t put_attr(exr_context_t ctx, int part, const kattr *k)
+{
+    const void *b = k->bytes;
+    const char *n = k->name;
+    switch (k->type) {
+    case EXR_ATTR_COMPRESSION: return exr_attr_set_compression(ctx, part, n, (exr_compression_t)k->bytes[0]);
+    case EXR_ATTR_ENVMAP: return exr_attr_set_envmap(ctx, part, n, (exr_envmap_t)k->bytes[0]);
+    case EXR_ATTR_LINEORDER: return exr_attr_set_lineorder(ctx, part, n, (exr_lineorder_t)k->bytes[0]);
+    case EXR_ATTR_DOUBLE: {
+        double d;
+        memcpy(&d, b, sizeof d);
+        return exr_attr_set_double(ctx, part, n, d);
+    }
+    case EXR_ATTR_FLOAT: {
+        float f;
+        memcpy(&f, b, sizeof f);
+        return exr_attr_set_float(ctx, part, n, f);
+    }
+    case EXR_ATTR_INT: {
+        int32_t v;
+        memcpy(&v, b, sizeof v);
+        return exr_attr_set_int(ctx, part, n, v);
+    }
+    case EXR_ATTR_BOX2I: return exr_attr_set_box2i(ctx, part, n, b);
+    case EXR_ATTR_BOX2F: return exr_attr_set_box2f(ctx, part, n, b);
+    case EXR_ATTR_CHROMATICITIES: return exr_attr_set_chromaticities(ctx, part, n, b);
+    case EXR_ATTR_KEYCODE: return exr_attr_set_keycode(ctx, part, n, b);
+    case EXR_ATTR_M33F: return exr_attr_set_m33f(ctx, part, n, b);
+    case EXR_ATTR_M33D: return exr_attr_set_m33d(ctx, part, n, b);
+    case EXR_ATTR_M44F: return exr_attr_set_m44f(ctx, part, n, b);
+    case EXR_ATTR_M44D: return exr_attr_set_m44d(ctx, part, n, b);
+    case EXR_ATTR_RATIONAL: return exr_attr_set_rational(ctx, part, n, b);
+    case EXR_ATTR_TILEDESC: return exr_attr_set_tiledesc(ctx, part, n, b);
+    case EXR_ATTR_TIMECODE: return exr_attr_set_timecode(ctx, part, n, b);
+    case EXR_ATTR_V2I: return exr_attr_set_v2i(ctx, part, n, b);
+    case EXR_ATTR_V2F: return exr_attr_set_v2f(ctx, part, n, b);
+    case EXR_ATTR_V2D: return exr_attr_set_v2d(ctx, part, n, b);
+    case EXR_ATTR_V3I: return exr_attr_set_v3i(ctx, part, n, b);
+    case EXR_ATTR_V3F: return exr_attr_set_v3f(ctx, part, n, b);
+    case EXR_ATTR_V3D: return exr_attr_set_v3d(ctx, part, n, b);
+    case EXR_ATTR_STRING: return exr_attr_set_string(ctx, part, n, b);
+    case EXR_ATTR_FLOAT_VECTOR: return exr_attr_set_float_vector(ctx, part, n, k->n, b);
+    case EXR_ATTR_STRING_VECTOR: {
+        const char **sv = malloc(((size_t)k->n + 1) * sizeof *sv);
+        if (!sv)
+            return EXR_ERR_OUT_OF_MEMORY;
+        const char *p = b;
+        for (int32_t i = 0; i < k->n; i++, p += strlen(p) + 1)
+            sv[i] = p;
+        exr_result_t rv = exr_attr_set_string_vector(ctx, part, n, k->n, sv);
+        free(sv);
+        return rv;
+    }
+    case EXR_ATTR_PREVIEW: {
+        exr_attr_preview_t pv;
+        memset(&pv, 0, sizeof pv);
+        memcpy(&pv.width, k->bytes, sizeof(uint32_t));
+        memcpy(&pv.height, k->bytes + sizeof(uint32_t), sizeof(uint32_t));
+        pv.rgba = k->bytes + 2 * sizeof(uint32_t);
+        return exr_attr_set_preview(ctx, part, n, &pv);
+    }
+    case EXR_ATTR_OPAQUE: return exr_attr_set_user(ctx, part, n, k->type_name, (int32_t)k->size, b);
+    default: return EXR_ERR_INVALID_ATTR;
+    }
+}
+
+static int box_inside(const nbt_box2i *in, const nbt_box2i *out)
+{
+    return in->min_x >= out->min_x && in->min_y >= out->min_y && in->max_x <= out->max_x && in->max_y <= out->max_y;
+}
+
+/* The writer of both entry points; legacy: nbt_image_write_exr's fixed
+ * layout (origin (0, 0), plain names, nothing kept). */
+static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr_write_opts *o, int legacy, char *err,
+                            size_t errlen)
 {
     static atomic_uint seq;
+    static const nbt_exr_write_opts none;
+    if (!o)
+        o = &none;
     if (err && errlen)
         err[0] = '\0';
     if (!path || !*path)
-        return fail(NBT_EINVAL, path, err, errlen, "nbt_image_write_exr: no path");
+        return fail(NBT_EINVAL, path, err, errlen, "%s: no path", legacy ? "nbt_image_write_exr" : "nbt_image_write_exr_ex");
     if (!im || !im->rgb || im->w == 0 || im->h == 0)
         return fail(NBT_EINVAL, path, err, errlen, "no image to write (empty or without pixels)");
     if (im->w > (size_t)INT32_MAX / (3 * sizeof(float)) || im->h > (size_t)INT32_MAX)
         return fail(NBT_EINVAL, path, err, errlen, "%zu x %zu pixels is too large for OpenEXR", im->w, im->h);
-    if (nattrs && (!attrs || nattrs > SIZE_MAX / 2))
-        return fail(NBT_EINVAL, path, err, errlen, "%zu attributes but no attribute list", nattrs);
-    for (size_t i = 0; i < nattrs; i++)
-        if (!attrs[2 * i] || !attrs[2 * i][0] || !attrs[2 * i + 1])
+    size_t w = im->w, h = im->h;
+    int64_t ox = legacy ? 0 : im->x0, oy = legacy ? 0 : im->y0;
+    if (ox + (int64_t)w - 1 > INT32_MAX || oy + (int64_t)h - 1 > INT32_MAX)
+        return fail(NBT_EINVAL, path, err, errlen, "data window (%lld, %lld) + %zu x %zu pixels exceeds OpenEXR's coordinates",
+                    (long long)ox, (long long)oy, w, h);
+    nbt_box2i data = {(int32_t)ox, (int32_t)oy, (int32_t)(ox + (int64_t)w - 1), (int32_t)(oy + (int64_t)h - 1)};
+    nbt_box2i win = o->window ? *o->window : data;
+    nbt_box2i disp = legacy ? data : o->display ? *o->display : im->display;
+    if (win.max_x < win.min_x || win.max_y < win.min_y || !box_inside(&win, &data))
+        return fail(NBT_EINVAL, path, err, errlen,
+                    "window (%d, %d) - (%d, %d) is not a non-empty box inside the image's data window (%d, %d) - (%d, %d)",
+                    win.min_x, win.min_y, win.max_x, win.max_y, data.min_x, data.min_y, data.max_x, data.max_y);
+    if (disp.max_x < disp.min_x || disp.max_y < disp.min_y)
+        return fail(NBT_EINVAL, path, err, errlen, "empty display window (%d, %d) - (%d, %d)", disp.min_x, disp.min_y,
+                    disp.max_x, disp.max_y);
+    if (o->nattrs && (!o->attrs || o->nattrs > SIZE_MAX / 2))
+        return fail(NBT_EINVAL, path, err, errlen, "%zu attributes but no attribute list", o->nattrs);
+    for (size_t i = 0; i < o->nattrs; i++)
+        if (!o->attrs[2 * i] || !o->attrs[2 * i][0] || !o->attrs[2 * i + 1])
             return fail(NBT_EINVAL, path, err, errlen, "attribute %zu has no name or no value", i);
+    if (o->nlayers && !o->layers)
+        return fail(NBT_EINVAL, path, err, errlen, "%zu layers but no layer list", o->nlayers);
+    for (size_t l = 0; l < o->nlayers; l++) {
+        const nbt_image_layer *L = &o->layers[l];
+        if (!L->name || !L->name[0] || L->nchan < 1 || L->nchan > 64 || !L->chan || !L->data)
+            return fail(NBT_EINVAL, path, err, errlen,
+                        "layer %zu (%s): needs a name, 1 to 64 channel names and data", l, L->name ? L->name : "no name");
+        for (size_t c = 0; c < L->nchan; c++)
+            if (!L->chan[c] || !L->chan[c][0])
+                return fail(NBT_EINVAL, path, err, errlen, "layer %s: channel %zu has no name", L->name, c);
+    }
 
-    size_t w = im->w, h = im->h, tlen = strlen(path) + 48;
-    char *tmp = malloc(tlen);
-    if (!tmp)
+    /* the channel table: main, caller's layers, then kept channels */
+    int keep_ch = !legacy && !o->drop_channels;
+    size_t cap = 4 + (keep_ch ? im->nchannels : 0);
+    for (size_t l = 0; l < o->nlayers; l++)
+        cap += o->layers[l].nchan;
+    wchan *ch = calloc(cap, sizeof *ch);
+    if (!ch)
         return fail(NBT_ENOMEM, path, err, errlen, "out of memory");
+    size_t nch = 0;
+    nbt_status st = NBT_OK;
+    const char *rl = legacy ? NULL : im->rgb_layer;
+    for (int k = 0; k < 4 && st == NBT_OK; k++) {
+        static const char *const C[4] = {"R", "G", "B", "Z"};
+        wchan *c = &ch[nch];
+        if (k == SEL_Z) {
+            if (!im->z)
+                break;
+            c->name = !legacy && im->z_name ? im->z_name : "Z";
+            c->base = (const uint8_t *)im->z;
+            c->pixel_stride = (int32_t)sizeof(float);
+        } else {
+            if (rl) {
+                size_t n = strlen(rl) + 3;
+                if (!(c->owned = malloc(n)))
+                    st = NBT_ENOMEM;
+                else
+                    snprintf(c->owned, n, "%s.%s", rl, C[k]);
+                c->name = c->owned;
+            } else
+                c->name = C[k];
+            c->base = (const uint8_t *)(im->rgb + k);
+            c->pixel_stride = (int32_t)(3 * sizeof(float));
+        }
+        c->type = EXR_PIXEL_FLOAT;
+        c->bpe = (int32_t)sizeof(float);
+        nch++;
+    }
+    /* layer prefix: the caller's, else the view layer of the RGB layer ("L.Pass" -> "L.") */
+    const char *pfx = o->layer_prefix ? o->layer_prefix : rl ? rl : "";
+    size_t pfx_len = o->layer_prefix ? strlen(pfx) : 0;
+    if (!o->layer_prefix && rl) {
+        const char *dot = strrchr(rl, '.');
+        pfx_len = dot ? (size_t)(dot - rl) + 1 : 0;
+    }
+    for (size_t l = 0; l < o->nlayers && st == NBT_OK; l++) {
+        const nbt_image_layer *L = &o->layers[l];
+        for (size_t c = 0; c < L->nchan && st == NBT_OK; c++) {
+            wchan *wc = &ch[nch];
+            size_t n = pfx_len + strlen(L->name) + strlen(L->chan[c]) + 2;
+            if (!(wc->owned = malloc(n))) {
+                st = NBT_ENOMEM;
+                break;
+            }
+            snprintf(wc->owned, n, "%.*s%s.%s", (int)pfx_len, pfx, L->name, L->chan[c]);
+            wc->name = wc->owned;
+            wc->type = EXR_PIXEL_FLOAT;
+            wc->bpe = (int32_t)sizeof(float);
+            wc->base = (const uint8_t *)(L->data + c);
+            wc->pixel_stride = (int32_t)(L->nchan * sizeof(float));
+            nch++;
+        }
+    }
+    size_t nmade = nch;
+    if (st == NBT_ENOMEM) {
+        st = fail(NBT_ENOMEM, path, err, errlen, "out of memory");
+        goto out;
+    }
+    for (size_t i = 0; i < nmade; i++)
+        for (size_t j = 0; j < i; j++)
+            if (!strcmp(ch[i].name, ch[j].name)) {
+                st = fail(NBT_EINVAL, path, err, errlen, "two channels named %s", ch[i].name);
+                goto out;
+            }
+    for (size_t i = 0; keep_ch && i < im->nchannels; i++) {
+        const nbt_image_channel *kc = &im->channels[i];
+        if (!kc->data || !kc->name)
+            continue; /* subsampled: not kept */
+        int taken = 0;
+        for (size_t j = 0; j < nmade; j++)
+            taken |= !strcmp(kc->name, ch[j].name); /* replaced by the caller's layer */
+        if (taken)
+            continue;
+        wchan *wc = &ch[nch++];
+        wc->name = kc->name;
+        wc->type = (exr_pixel_type_t)kc->type;
+        wc->linear = kc->linear;
+        wc->bpe = (int32_t)ptype_size(kc->type);
+        wc->base = kc->data;
+        wc->pixel_stride = wc->bpe;
+    }
+    for (size_t i = 0; i < nch; i++)
+        ch[i].line_stride = (int32_t)((size_t)ch[i].pixel_stride * w);
+
+    size_t tlen = strlen(path) + 48;
+    char *tmp = malloc(tlen);
+    if (!tmp) {
+        st = fail(NBT_ENOMEM, path, err, errlen, "out of memory");
+        goto out;
+    }
     snprintf(tmp, tlen, "%s.tmp%ld.%u", path, (long)getpid(), atomic_fetch_add(&seq, 1u));
     /* create it here for a reliable errno (the core library opens it again, truncating) */
     int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
     if (fd < 0) {
         int e = errno;
-        nbt_status s = fail(NBT_EIO, path, err, errlen, "cannot create %s: %s", tmp, strerror(e));
+        st = fail(NBT_EIO, path, err, errlen, "cannot create %s: %s", tmp, strerror(e));
         free(tmp);
-        return s;
+        goto out;
     }
     close(fd);
 
@@ -549,21 +1058,46 @@ nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char
     init.error_handler_fn = capture;
     init.user_data = libmsg;
     exr_context_t ctx = NULL;
-    int part = 0, nch = im->z ? 4 : 3;
+    int part = 0;
+    const nbt_image_attrs *ka = legacy || o->drop_attrs ? NULL : im->attrs;
+    float par = 1.0f, sww = 1.0f;
+    exr_attr_v2f_t swc;
+    swc.x = swc.y = 0.0f;
+    for (size_t i = 0; ka && i < ka->n; i++) {
+        if (ka->a[i].type == EXR_ATTR_FLOAT && !strcmp(ka->a[i].name, "pixelAspectRatio"))
+            memcpy(&par, ka->a[i].bytes, sizeof par);
+        if (ka->a[i].type == EXR_ATTR_FLOAT && !strcmp(ka->a[i].name, "screenWindowWidth"))
+            memcpy(&sww, ka->a[i].bytes, sizeof sww);
+        if (ka->a[i].type == EXR_ATTR_V2F && !strcmp(ka->a[i].name, "screenWindowCenter"))
+            memcpy(&swc, ka->a[i].bytes, sizeof swc);
+    }
+    exr_attr_box2i_t edw, edisp;
+    edw.min.x = win.min_x, edw.min.y = win.min_y, edw.max.x = win.max_x, edw.max.y = win.max_y;
+    edisp.min.x = disp.min_x, edisp.min.y = disp.min_y, edisp.max.x = disp.max_x, edisp.max.y = disp.max_y;
     exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
-        rv = exr_initialize_required_attr_simple(ctx, part, (int32_t)w, (int32_t)h, EXR_COMPRESSION_ZIP);
+        rv = exr_initialize_required_attr(ctx, part, &edisp, &edw, par, &swc, sww, EXR_LINEORDER_INCREASING_Y,
+                                          EXR_COMPRESSION_ZIP);
     /* pLinear = 0 (as OpenEXR's RGBA interface writes it): linear radiance is not perceptually linear */
-    for (int c = 0; c < nch && rv == EXR_ERR_SUCCESS; c++) {
-        int r = exr_add_channel(ctx, part, WCH[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-        rv = (exr_result_t)r;
-    }
-    size_t bad_attr = nattrs;
-    for (size_t i = 0; i < nattrs && rv == EXR_ERR_SUCCESS; i++)
-        if ((rv = exr_attr_set_string(ctx, part, attrs[2 * i], attrs[2 * i + 1])) != EXR_ERR_SUCCESS)
+    for (size_t c = 0; c < nch && rv == EXR_ERR_SUCCESS; c++)
+        rv = (exr_result_t)exr_add_channel(ctx, part, ch[c].name, ch[c].type,
+                                           ch[c].linear ? EXR_PERCEPTUALLY_LINEAR : EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    size_t bad_attr = o->nattrs;
+    for (size_t i = 0; i < o->nattrs && rv == EXR_ERR_SUCCESS; i++)
+        if ((rv = exr_attr_set_string(ctx, part, o->attrs[2 * i], o->attrs[2 * i + 1])) != EXR_ERR_SUCCESS)
             bad_attr = i;
+    /* kept attributes that the caller's and the layout's do not replace */
+    const char *bad_kept = NULL;
+    for (size_t i = 0; ka && i < ka->n && rv == EXR_ERR_SUCCESS; i++) {
+        const exr_attribute_t *have = NULL;
+        if (exr_get_attribute_by_name(ctx, part, ka->a[i].name, &have) == EXR_ERR_SUCCESS)
+            continue;
+        libmsg[0] = '\0';
+        if ((rv = put_attr(ctx, part, &ka->a[i])) != EXR_ERR_SUCCESS)
+            bad_kept = ka->a[i].name;
+    }
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctx);
     int32_t lpc = 1;
@@ -573,7 +1107,8 @@ nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char
         rv = EXR_ERR_INVALID_ARGUMENT;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     int started = 0;
-    for (int64_t y = 0; y < (int64_t)h && rv == EXR_ERR_SUCCESS; y += lpc) {
+    size_t col = (size_t)((int64_t)win.min_x - data.min_x);
+    for (int64_t y = win.min_y; y <= win.max_y && rv == EXR_ERR_SUCCESS; y += lpc) {
         exr_chunk_info_t ci;
         rv = exr_write_scanline_chunk_info(ctx, part, (int)y, &ci);
         if (rv != EXR_ERR_SUCCESS)
@@ -586,27 +1121,21 @@ nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char
         }
         if (rv != EXR_ERR_SUCCESS)
             break;
-        size_t y0 = (size_t)ci.start_y;
+        size_t row = (size_t)((int64_t)ci.start_y - data.min_y);
         for (int16_t c = 0; c < enc.channel_count; c++) {
-            exr_coding_channel_info_t *ch = &enc.channels[c];
-            int k = 0;
-            while (k < nch && strcmp(ch->channel_name, WCH[k]))
+            exr_coding_channel_info_t *ec = &enc.channels[c];
+            size_t k = 0;
+            while (k < nch && strcmp(ec->channel_name, ch[k].name))
                 k++;
             if (k == nch) {
                 rv = EXR_ERR_INVALID_ARGUMENT;
                 break;
             }
-            if (k == SEL_Z) {
-                ch->encode_from_ptr = (const uint8_t *)(im->z + y0 * w);
-                ch->user_pixel_stride = (int32_t)sizeof(float);
-                ch->user_line_stride = (int32_t)(w * sizeof(float));
-            } else {
-                ch->encode_from_ptr = (const uint8_t *)(im->rgb + y0 * w * 3 + (size_t)k);
-                ch->user_pixel_stride = (int32_t)(3 * sizeof(float));
-                ch->user_line_stride = (int32_t)(w * 3 * sizeof(float));
-            }
-            ch->user_bytes_per_element = (int16_t)sizeof(float);
-            ch->user_data_type = EXR_PIXEL_FLOAT;
+            ec->encode_from_ptr = ch[k].base + row * (size_t)ch[k].line_stride + col * (size_t)ch[k].pixel_stride;
+            ec->user_pixel_stride = ch[k].pixel_stride;
+            ec->user_line_stride = ch[k].line_stride;
+            ec->user_bytes_per_element = (int16_t)ch[k].bpe;
+            ec->user_data_type = (uint16_t)ch[k].type;
         }
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_encoding_choose_default_routines(ctx, part, &enc);
@@ -616,10 +1145,13 @@ nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char
     if (started)
         exr_encoding_destroy(ctx, &enc);
     exr_result_t fr = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
-    nbt_status st = NBT_OK;
-    if (bad_attr < nattrs) {
+    if (bad_attr < o->nattrs) {
         unlink(tmp);
-        st = fail(NBT_EINVAL, path, err, errlen, "attribute \"%s\" cannot be set (%s)", attrs[2 * bad_attr],
+        st = fail(NBT_EINVAL, path, err, errlen, "attribute \"%s\" cannot be set (%s)", o->attrs[2 * bad_attr],
+                  lib_detail(libmsg, rv));
+    } else if (bad_kept) {
+        unlink(tmp);
+        st = fail(NBT_EFORMAT, path, err, errlen, "kept attribute \"%s\" cannot be written (%s)", bad_kept,
                   lib_detail(libmsg, rv));
     } else if (rv != EXR_ERR_SUCCESS || fr != EXR_ERR_SUCCESS) {
         unlink(tmp);
@@ -631,5 +1163,76 @@ nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char
         st = fail(NBT_EIO, path, err, errlen, "cannot rename %s to it: %s", tmp, strerror(e));
     }
     free(tmp);
+out:
+    for (size_t i = 0; i < cap; i++)
+        free(ch[i].owned);
+    free(ch);
     return st;
+}
+
+nbt_status nbt_image_write_exr(const nbt_image *im, const char *path, const char *const *attrs, size_t nattrs,
+                               char *err, size_t errlen)
+{
+    nbt_exr_write_opts o;
+    memset(&o, 0, sizeof o);
+    o.attrs = attrs;
+    o.nattrs = nattrs;
+    return write_any(im, path, &o, 1, err, errlen);
+}
+
+nbt_status nbt_image_write_exr_ex(const nbt_image *im, const char *path, const nbt_exr_write_opts *opts, char *err,
+                                  size_t errlen)
+{
+    return write_any(im, path, opts, 0, err, errlen);
+}
+
+nbt_status nbt_image_copy_meta(nbt_image *dst, const nbt_image *src)
+{
+    if (!dst || !src || dst == src)
+        return nbt__fail(NBT_EINVAL, "nbt_image_copy_meta: no image, or the same image twice");
+    if (dst->w != src->w || dst->h != src->h) {
+        char line[160];
+        snprintf(line, sizeof line, "nbt_image_copy_meta: images differ in size (%zu x %zu and %zu x %zu)", dst->w,
+                 dst->h, src->w, src->h);
+        return nbt__fail(NBT_EINVAL, line);
+    }
+    nbt_image t;
+    memset(&t, 0, sizeof t);
+    int bad = 0;
+    if (src->rgb_layer && !(t.rgb_layer = strdup(src->rgb_layer)))
+        bad = 1;
+    if (src->z_name && !(t.z_name = strdup(src->z_name)))
+        bad = 1;
+    if (src->attrs && !(t.attrs = attrs_dup(src->attrs)))
+        bad = 1;
+    if (src->nchannels && !(t.channels = calloc(src->nchannels, sizeof *t.channels)))
+        bad = 1;
+    for (size_t i = 0; !bad && i < src->nchannels; i++, t.nchannels++) {
+        const nbt_image_channel *c = &src->channels[i];
+        t.channels[i] = *c;
+        t.channels[i].data = NULL;
+        if (!(t.channels[i].name = strdup(c->name)) ||
+            (c->data && !(t.channels[i].data = memdup(c->data, src->w * src->h * ptype_size(c->type)))))
+            bad = 1;
+    }
+    if (bad) {
+        free(t.rgb_layer), free(t.z_name), attrs_free(t.attrs);
+        for (size_t i = 0; i < t.nchannels; i++)
+            free(t.channels[i].name), free(t.channels[i].data);
+        free(t.channels);
+        return nbt__fail(NBT_ENOMEM, "nbt_image_copy_meta: out of memory");
+    }
+    free(dst->rgb_layer), free(dst->z_name), attrs_free(dst->attrs);
+    for (size_t i = 0; i < dst->nchannels; i++)
+        free(dst->channels[i].name), free(dst->channels[i].data);
+    free(dst->channels);
+    dst->x0 = src->x0;
+    dst->y0 = src->y0;
+    dst->display = src->display;
+    dst->rgb_layer = t.rgb_layer;
+    dst->z_name = t.z_name;
+    dst->attrs = t.attrs;
+    dst->channels = t.channels;
+    dst->nchannels = t.nchannels;
+    return NBT_OK;
 }

@@ -82,6 +82,8 @@ typedef struct {
     exr_tile_level_mode_t levels;
     const wch *ch;
     int nch;
+    const exr_attr_box2i_t *dispbox;   /* display window when not NULL (overrides disp) */
+    exr_result_t (*attrs)(exr_context_t, int); /* sets extra header attributes when not NULL */
 } wpart;
 
 /* One channel's values for a level, converted to its type (levels > 0: all 99). */
@@ -217,8 +219,10 @@ static int write_exr(const char *path, const wpart *parts, int nparts)
         exr_attr_v2f_t swc;
         swc.x = swc.y = 0.0f;
         if (rv == EXR_ERR_SUCCESS)
-            rv = exr_initialize_required_attr(ctx, idx, wp->disp ? &dispw : &dw, &dw, 1.0f, &swc, 1.0f,
-                                              EXR_LINEORDER_INCREASING_Y, wp->comp);
+            rv = exr_initialize_required_attr(ctx, idx, wp->dispbox ? wp->dispbox : wp->disp ? &dispw : &dw, &dw, 1.0f,
+                                              &swc, 1.0f, EXR_LINEORDER_INCREASING_Y, wp->comp);
+        if (rv == EXR_ERR_SUCCESS && wp->attrs)
+            rv = wp->attrs(ctx, idx);
         for (int c = 0; c < wp->nch && rv == EXR_ERR_SUCCESS; c++)
             rv = exr_add_channel(ctx, idx, wp->ch[c].name, wp->ch[c].type, EXR_PERCEPTUALLY_LOGARITHMIC,
                                  wp->ch[c].xs ? wp->ch[c].xs : 1, wp->ch[c].ys ? wp->ch[c].ys : 1);
@@ -239,7 +243,7 @@ static int write_exr(const char *path, const wpart *parts, int nparts)
 
 static wpart scan(int w, int h, exr_compression_t comp, const wch *ch, int nch)
 {
-    wpart p = {EXR_STORAGE_SCANLINE, comp, 0, 0, w, h, 0, 0, 0, EXR_TILE_ONE_LEVEL, ch, nch};
+    wpart p = {EXR_STORAGE_SCANLINE, comp, 0, 0, w, h, 0, 0, 0, EXR_TILE_ONE_LEVEL, ch, nch, NULL, NULL};
     return p;
 }
 
@@ -419,7 +423,7 @@ static void test_tiled(void)
     /* mipmapped, 8x5 tiles (partial edge tiles), ZIP, float RGB and UINT Z, origin (3, -4) */
     wch c4[] = {{"B", EXR_PIXEL_FLOAT, b, 0, 0}, {"G", EXR_PIXEL_FLOAT, g, 0, 0}, {"R", EXR_PIXEL_FLOAT, r, 0, 0},
                 {"Z", EXR_PIXEL_UINT, z, 0, 0}};
-    wpart p = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 3, -4, w, h, 1, 8, 5, EXR_TILE_MIPMAP_LEVELS, c4, 4};
+    wpart p = {EXR_STORAGE_TILED, EXR_COMPRESSION_ZIP, 3, -4, w, h, 1, 8, 5, EXR_TILE_MIPMAP_LEVELS, c4, 4, NULL, NULL};
     const char *path = in_dir("tiled.exr");
     nbt_image *im = NULL;
     char err[512] = "";
@@ -441,7 +445,7 @@ static void test_tiled(void)
     const int w2 = 13, h2 = 9;
     float *r2 = plane(w2, h2, 0), *g2 = plane(w2, h2, -1), *b2 = plane(w2, h2, 4);
     wch c3[] = {{"R", EXR_PIXEL_HALF, r2, 0, 0}, {"G", EXR_PIXEL_HALF, g2, 0, 0}, {"B", EXR_PIXEL_HALF, b2, 0, 0}};
-    wpart p2 = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 0, 0, w2, h2, 0, 16, 16, EXR_TILE_ONE_LEVEL, c3, 3};
+    wpart p2 = {EXR_STORAGE_TILED, EXR_COMPRESSION_NONE, 0, 0, w2, h2, 0, 16, 16, EXR_TILE_ONE_LEVEL, c3, 3, NULL, NULL};
     t_true(write_exr(path, &p2, 1) == 0, "tiled one level: test file written");
     s = nbt_image_read_exr(path, &im, err, sizeof err);
     t_true(s == NBT_OK && im && im->w == (size_t)w2 && im->h == (size_t)h2 && !im->z, "tiled one level: read (%s)",
@@ -750,11 +754,369 @@ static void test_errors(void)
     unlink(keep);
     nbt_image_free(one);
 
-    nbt_image empty = {0, 0, NULL, NULL};
+    nbt_image empty = {.w = 0, .rgb = NULL};
     s = nbt_image_write_exr(&empty, keep, NULL, 0, err, sizeof err);
     t_true(s == NBT_EINVAL && file_size(keep) < 0, "empty image: NBT_EINVAL (%s)", err);
     nbt_image_free(big);
     free(a), free(v);
+}
+
+/* ---- overscan, kept channels and attributes, nbt_image_write_exr_ex ---- */
+
+static exr_attr_box2i_t ebox(int x0, int y0, int x1, int y1)
+{
+    exr_attr_box2i_t b;
+    b.min.x = x0, b.min.y = y0, b.max.x = x1, b.max.y = y1;
+    return b;
+}
+
+static exr_result_t overscan_attrs(exr_context_t ctx, int p)
+{
+    exr_attr_m44f_t m;
+    for (int i = 0; i < 16; i++)
+        m.m[i] = (float)(i + 1) / 8.0f - 1.0f;
+    exr_attr_v2f_t v;
+    v.x = -1.5f, v.y = 2.25f;
+    const char *sv[2] = {"left", "right eye"};
+    exr_result_t rv = exr_attr_set_string(ctx, p, "owner", "nbt test");
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_int(ctx, p, "test.count", -12345);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_float(ctx, p, "test.fov", 0.6789f);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_m44f(ctx, p, "worldToCamera", &m);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_v2f(ctx, p, "test.v2f", &v);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_attr_set_string_vector(ctx, p, "test.sv", 2, sv);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_set_pixel_aspect_ratio(ctx, p, 1.25f);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_set_screen_window_width(ctx, p, 0.75f);
+    return rv;
+}
+
+/* Checks the header of a file written from the overscan input, with the
+ * core library: windows, channel names and types, attributes. */
+static void check_header(const char *path, const char *what, const exr_attr_box2i_t *dw_want,
+                         const exr_attr_box2i_t *disp_want, const char *const *names, const exr_pixel_type_t *types,
+                         int nnames, const char *owner)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet;
+    exr_context_t ctx = NULL;
+    if (exr_start_read(&ctx, path, &init) != EXR_ERR_SUCCESS) {
+        t_true(0, "%s: written file readable by the core library", what);
+        return;
+    }
+    exr_attr_box2i_t dw, disp;
+    exr_get_data_window(ctx, 0, &dw);
+    exr_get_display_window(ctx, 0, &disp);
+    t_true(dw.min.x == dw_want->min.x && dw.min.y == dw_want->min.y && dw.max.x == dw_want->max.x &&
+               dw.max.y == dw_want->max.y,
+           "%s: data window (%d, %d) - (%d, %d)", what, dw.min.x, dw.min.y, dw.max.x, dw.max.y);
+    t_true(disp.min.x == disp_want->min.x && disp.min.y == disp_want->min.y && disp.max.x == disp_want->max.x &&
+               disp.max.y == disp_want->max.y,
+           "%s: display window (%d, %d) - (%d, %d)", what, disp.min.x, disp.min.y, disp.max.x, disp.max.y);
+    const exr_attr_chlist_t *cl = NULL;
+    exr_get_channels(ctx, 0, &cl);
+    int ok = cl && cl->num_channels == nnames;
+    for (int i = 0; ok && i < nnames; i++) {
+        int found = 0;
+        for (int j = 0; j < cl->num_channels; j++)
+            if (!strcmp(cl->entries[j].name.str, names[i]) && cl->entries[j].pixel_type == types[i])
+                found = 1;
+        if (!found) {
+            printf("      channel %s of type %d missing\n", names[i], (int)types[i]);
+            ok = 0;
+        }
+    }
+    t_true(ok, "%s: %d channels with their names and types (file has %d)", what, nnames, cl ? cl->num_channels : -1);
+    const char *s = NULL;
+    int32_t len = 0, iv = 0, nsv = 2;
+    float f = 0, par = 0, sww = 0;
+    exr_attr_m44f_t m;
+    exr_attr_v2f_t v;
+    v.x = v.y = 0.0f;
+    const char *sv[2] = {NULL, NULL};
+    memset(&m, 0, sizeof m);
+    exr_attr_get_string(ctx, 0, "owner", &len, &s);
+    exr_attr_get_int(ctx, 0, "test.count", &iv);
+    exr_attr_get_float(ctx, 0, "test.fov", &f);
+    exr_attr_get_m44f(ctx, 0, "worldToCamera", &m);
+    exr_attr_get_v2f(ctx, 0, "test.v2f", &v);
+    exr_attr_get_string_vector(ctx, 0, "test.sv", &nsv, sv);
+    exr_get_pixel_aspect_ratio(ctx, 0, &par);
+    exr_get_screen_window_width(ctx, 0, &sww);
+    t_true(s && !strcmp(s, owner), "%s: string attribute owner = \"%s\" (got %s)", what, owner, s ? s : "none");
+    t_true(iv == -12345 && f == 0.6789f, "%s: int and float attributes copied (%d, %.9g)", what, iv, (double)f);
+    t_true(m.m[0] == -0.875f && m.m[6] == -0.125f && m.m[15] == 1.0f, "%s: m44f attribute copied", what);
+    t_true(v.x == -1.5f && v.y == 2.25f, "%s: v2f attribute copied", what);
+    t_true(nsv == 2 && sv[0] && !strcmp(sv[0], "left") && sv[1] && !strcmp(sv[1], "right eye"),
+           "%s: string vector attribute copied", what);
+    t_true(par == 1.25f && sww == 0.75f, "%s: pixelAspectRatio and screenWindowWidth kept (%g, %g)", what, (double)par,
+           (double)sww);
+    exr_finish(&ctx);
+}
+
+static const nbt_image_channel *find_kept(const nbt_image *im, const char *name)
+{
+    for (size_t i = 0; i < im->nchannels; i++)
+        if (!strcmp(im->channels[i].name, name))
+            return &im->channels[i];
+    return NULL;
+}
+
+static void test_overscan(void)
+{
+    /* data window (-7, -5) - (37, 25): 45 x 31, around a 30 x 20 display
+     * window (0, 0) - (29, 19) with unequal margins 7, 8 (x) and 5, 6 (y) */
+    const int w = 45, h = 31, X0 = -7, Y0 = -5, DW = 30, DH = 20;
+    size_t n = (size_t)w * (size_t)h;
+    float *r = plane(w, h, 0), *g = plane(w, h, 1), *b = plane(w, h, 2), *z = plane(w, h, 500);
+    float *a = plane(w, h, 3), *ev = plane(w, h, 0.3f), *idv = malloc(n * sizeof(float));
+    for (size_t i = 0; i < n; i++)
+        idv[i] = (float)(i * 3 + 1);
+    wch ch[] = {{"R", EXR_PIXEL_FLOAT, r, 0, 0},       {"G", EXR_PIXEL_FLOAT, g, 0, 0},
+                {"B", EXR_PIXEL_FLOAT, b, 0, 0},       {"Z", EXR_PIXEL_FLOAT, z, 0, 0},
+                {"A", EXR_PIXEL_HALF, a, 0, 0},        {"extra.V", EXR_PIXEL_FLOAT, ev, 0, 0},
+                {"id", EXR_PIXEL_UINT, idv, 0, 0}};
+    exr_attr_box2i_t disp = ebox(0, 0, DW - 1, DH - 1);
+    wpart p = scan(w, h, EXR_COMPRESSION_ZIP, ch, 7);
+    p.x0 = X0;
+    p.y0 = Y0;
+    p.dispbox = &disp;
+    p.attrs = overscan_attrs;
+    const char *in = in_dir("overscan.exr"), *out = in_dir("overscan_out.exr"), *full = in_dir("overscan_full.exr");
+    char err[512] = "";
+    nbt_image *im = NULL, *o = NULL;
+    t_true(write_exr(in, &p, 1) == 0, "overscan: test file written");
+    nbt_status s = nbt_image_read_exr(in, &im, err, sizeof err);
+    t_true(s == NBT_OK && im && im->w == (size_t)w && im->h == (size_t)h, "overscan: read the 45 x 31 data window (%s)",
+           err);
+    if (!im || im->w != (size_t)w || im->h != (size_t)h)
+        goto end;
+    t_true(im->x0 == X0 && im->y0 == Y0, "overscan: origin (%d, %d)", im->x0, im->y0);
+    t_true(im->display.min_x == 0 && im->display.min_y == 0 && im->display.max_x == DW - 1 &&
+               im->display.max_y == DH - 1,
+           "overscan: display window (%d, %d) - (%d, %d)", im->display.min_x, im->display.min_y, im->display.max_x,
+           im->display.max_y);
+    t_true(im->z && mismatches(im->rgb, 3, 0, r, n) + mismatches(im->rgb, 3, 2, b, n) + mismatches(im->z, 1, 0, z, n) == 0,
+           "overscan: RGB and Z exact");
+    t_true(!im->rgb_layer && !im->z_name, "overscan: plain names");
+    t_true(im->nchannels == 3, "overscan: 3 other channels kept (%zu)", im->nchannels);
+    const nbt_image_channel *ka = find_kept(im, "A"), *ke = find_kept(im, "extra.V"), *ki = find_kept(im, "id");
+    t_true(ka && ka->type == NBT_PIXEL_HALF && ke && ke->type == NBT_PIXEL_FLOAT && ki && ki->type == NBT_PIXEL_UINT,
+           "overscan: A HALF, extra.V FLOAT, id UINT kept in their types");
+    if (ka && ke && ki && ka->data && ke->data && ki->data) {
+        size_t bad = 0;
+        for (size_t i = 0; i < n; i++)
+            bad += ((const uint16_t *)ka->data)[i] != f2h(a[i]) || ((const float *)ke->data)[i] != ev[i] ||
+                   ((const uint32_t *)ki->data)[i] != (uint32_t)idv[i];
+        t_true(bad == 0, "overscan: kept channels' values exact (%zu wrong)", bad);
+    }
+    const char *tn = NULL;
+    int has_m44 = 0;
+    for (size_t i = 0; i < nbt_image_attr_count(im); i++)
+        if (!strcmp(nbt_image_attr_name(im, i, &tn), "worldToCamera"))
+            has_m44 = !strcmp(tn, "m44f");
+    t_true(nbt_image_attr_count(im) == 9, "overscan: 9 attributes kept (%zu)", nbt_image_attr_count(im));
+    t_true(has_m44 && nbt_image_attr_string(im, "owner") && !strcmp(nbt_image_attr_string(im, "owner"), "nbt test") &&
+               !nbt_image_attr_string(im, "test.count") && !nbt_image_attr_name(im, 9, NULL),
+           "overscan: attribute names, types, string value");
+
+    /* the caller's layers over the data window: S (3), offscreen (1) */
+    float *sl = malloc(n * 3 * sizeof(float)), *off = malloc(n * sizeof(float)), *ex = malloc(n * sizeof(float));
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
+            sl[3 * i + (size_t)c] = 0.01f * (float)i - 0.5f * (float)c;
+        off[i] = (float)(i % 13) / 16.0f;
+        ex[i] = -(float)i;
+    }
+    const char *rgbn[3] = {"R", "G", "B"}, *xn[1] = {"X"}, *vn[1] = {"V"};
+    nbt_image_layer layers[3] = {{"S", 3, rgbn, sl}, {"offscreen", 1, xn, off}, {"extra", 1, vn, ex}};
+    const char *attrs[4] = {"nbt.method", "crop", "owner", "nbt-scatter"};
+    nbt_exr_write_opts wo;
+    memset(&wo, 0, sizeof wo);
+    wo.window = &im->display;
+    wo.layers = layers;
+    wo.nlayers = 3;
+    wo.attrs = attrs;
+    wo.nattrs = 1;
+    s = nbt_image_write_exr_ex(im, out, &wo, err, sizeof err);
+    t_true(s == NBT_OK, "overscan: display window written (%s)", err);
+    static const char *const names[] = {"A", "B", "G", "R", "Z", "S.R", "S.G", "S.B", "offscreen.X", "extra.V", "id"};
+    static const exr_pixel_type_t types[] = {EXR_PIXEL_HALF,  EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT,
+                                             EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT,
+                                             EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_UINT};
+    check_header(out, "crop", &disp, &disp, names, types, 11, "nbt test");
+    s = nbt_image_read_exr(out, &o, err, sizeof err);
+    t_true(s == NBT_OK && o && o->w == (size_t)DW && o->h == (size_t)DH && o->x0 == 0 && o->y0 == 0,
+           "crop: reads back as the 30 x 20 display window (%s)", err);
+    if (o && o->w == (size_t)DW && o->h == (size_t)DH) {
+        const nbt_image_channel *oa = find_kept(o, "A"), *osr = find_kept(o, "S.R"), *osb = find_kept(o, "S.B"),
+                                *oof = find_kept(o, "offscreen.X"), *oev = find_kept(o, "extra.V"),
+                                *oid = find_kept(o, "id");
+        size_t bad = 0, checked = 0;
+        if (oa && osr && osb && oof && oev && oid && o->z)
+            for (int y = 0; y < DH; y++)
+                for (int x = 0; x < DW; x++) {
+                    size_t i = (size_t)(y * DW + x), j = (size_t)((y - Y0) * w + (x - X0));
+                    bad += o->rgb[3 * i] != r[j] || o->rgb[3 * i + 1] != g[j] || o->rgb[3 * i + 2] != b[j] ||
+                           o->z[i] != z[j] || ((const uint16_t *)oa->data)[i] != f2h(a[j]) ||
+                           ((const float *)osr->data)[i] != sl[3 * j] || ((const float *)osb->data)[i] != sl[3 * j + 2] ||
+                           ((const float *)oof->data)[i] != off[j] || ((const float *)oev->data)[i] != ex[j] ||
+                           ((const uint32_t *)oid->data)[i] != (uint32_t)idv[j];
+                    checked++;
+                }
+        t_true(checked == (size_t)(DW * DH) && bad == 0,
+               "crop: every pixel of every channel is the input's at (x+7, y+5) (%zu of %zu wrong)", bad, checked);
+        t_true(nbt_image_attr_string(o, "nbt.method") && !strcmp(nbt_image_attr_string(o, "nbt.method"), "crop"),
+               "crop: the caller's nbt.* attribute written");
+    }
+    nbt_image_free(o);
+    o = NULL;
+
+    /* the caller's string attribute replaces a kept one; the whole data window */
+    wo.window = NULL;
+    wo.nlayers = 0;
+    wo.attrs = attrs + 2;
+    wo.nattrs = 1;
+    s = nbt_image_write_exr_ex(im, full, &wo, err, sizeof err);
+    t_true(s == NBT_OK, "full: data window written (%s)", err);
+    exr_attr_box2i_t dwin = ebox(X0, Y0, X0 + w - 1, Y0 + h - 1);
+    static const char *const fnames[] = {"A", "B", "G", "R", "Z", "extra.V", "id"};
+    static const exr_pixel_type_t ftypes[] = {EXR_PIXEL_HALF,  EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT,
+                                              EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_UINT};
+    check_header(full, "full", &dwin, &disp, fnames, ftypes, 7, "nbt-scatter");
+    s = nbt_image_read_exr(full, &o, err, sizeof err);
+    if (s == NBT_OK && o->w == (size_t)w && o->h == (size_t)h) {
+        const nbt_image_channel *oe = find_kept(o, "extra.V");
+        t_true(o->x0 == X0 && o->y0 == Y0 && o->display.max_x == DW - 1 && mismatches(o->rgb, 3, 1, g, n) == 0 &&
+                   oe && !memcmp(oe->data, ev, n * sizeof(float)),
+               "full: round trip keeps origin, display window and values");
+    } else
+        t_true(0, "full: reads back (%s)", err);
+    nbt_image_free(o);
+    o = NULL;
+
+    /* refusals: nothing written */
+    const char *bad = in_dir("refused.exr");
+    nbt_box2i outside[3] = {{X0 - 1, 0, 10, 10}, {0, 0, X0 + w, 10}, {5, 5, 4, 10}};
+    for (int k = 0; k < 3; k++) {
+        memset(&wo, 0, sizeof wo);
+        wo.window = &outside[k];
+        s = nbt_image_write_exr_ex(im, bad, &wo, err, sizeof err);
+        t_true(s == NBT_EINVAL && strstr(err, "not a non-empty box inside the image's data window (-7, -5) - (37, 25)") &&
+                   file_size(bad) < 0,
+               "window %d outside or empty: NBT_EINVAL, nothing written (%s)", k, err);
+    }
+    memset(&wo, 0, sizeof wo);
+    nbt_image_layer twice[2] = {{"S", 3, rgbn, sl}, {"S", 1, rgbn, off}};
+    wo.layers = twice;
+    wo.nlayers = 2;
+    s = nbt_image_write_exr_ex(im, bad, &wo, err, sizeof err);
+    t_true(s == NBT_EINVAL && strstr(err, "two channels named S.R") && file_size(bad) < 0,
+           "two layers of one name: NBT_EINVAL (%s)", err);
+    nbt_image_layer empty[1] = {{"S", 0, rgbn, sl}};
+    wo.layers = empty;
+    wo.nlayers = 1;
+    s = nbt_image_write_exr_ex(im, bad, &wo, err, sizeof err);
+    t_true(s == NBT_EINVAL && file_size(bad) < 0, "layer without channels: NBT_EINVAL (%s)", err);
+    memset(&wo, 0, sizeof wo);
+    const char *cattr[2] = {"compression", "zip"};
+    wo.attrs = cattr;
+    wo.nattrs = 1;
+    s = nbt_image_write_exr_ex(im, bad, &wo, err, sizeof err);
+    t_true(s == NBT_EINVAL && strstr(err, "compression") && file_size(bad) < 0,
+           "a layout attribute as a string: NBT_EINVAL (%s)", err);
+
+    /* a new image given the input's metadata */
+    nbt_image *c = nbt_image_alloc((size_t)w, (size_t)h, 0), *c2 = nbt_image_alloc(3, 3, 0);
+    t_true(c && nbt_image_copy_meta(c, im) == NBT_OK && c->x0 == X0 && c->nchannels == 3 &&
+               nbt_image_attr_count(c) == 9 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
+           "copy_meta: same size copied, other size refused");
+    if (c) {
+        memcpy(c->rgb, im->rgb, n * 3 * sizeof(float));
+        memset(&wo, 0, sizeof wo);
+        wo.window = &c->display;
+        s = nbt_image_write_exr_ex(c, out, &wo, err, sizeof err);
+        static const char *const cn[] = {"A", "B", "G", "R", "extra.V", "id"};
+        static const exr_pixel_type_t ct[] = {EXR_PIXEL_HALF,  EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT,
+                                              EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_UINT};
+        t_true(s == NBT_OK, "copy_meta: written (%s)", err);
+        check_header(out, "copy_meta", &disp, &disp, cn, ct, 6, "nbt test");
+    }
+    nbt_image_free(c);
+    nbt_image_free(c2);
+    free(sl), free(off), free(ex);
+end:
+    nbt_image_free(im);
+    unlink(in), unlink(out), unlink(full);
+    free(r), free(g), free(b), free(z), free(a), free(ev), free(idv);
+}
+
+/* Blender's multilayer names: RGB and Z written back where they were, the
+ * layers beside them in the same view layer. */
+static void test_blender_names(void)
+{
+    nbt_image *im = nbt_image_alloc(6, 4, 1);
+    const char *path = in_dir("bl_out.exr");
+    char err[512] = "";
+    if (!im)
+        return;
+    for (size_t i = 0; i < 24; i++) {
+        im->rgb[3 * i] = (float)i, im->rgb[3 * i + 1] = 0.5f, im->rgb[3 * i + 2] = -1.0f;
+        im->z[i] = 10.0f + (float)i;
+    }
+    im->rgb_layer = strdup("ViewLayer.Combined");
+    im->z_name = strdup("ViewLayer.Depth.Z");
+    float t[24 * 3];
+    for (int i = 0; i < 72; i++)
+        t[i] = (float)i / 72.0f;
+    const char *rgbn[3] = {"R", "G", "B"};
+    nbt_image_layer L = {"T", 3, rgbn, t};
+    nbt_exr_write_opts wo;
+    memset(&wo, 0, sizeof wo);
+    wo.layers = &L;
+    wo.nlayers = 1;
+    nbt_status s = nbt_image_write_exr_ex(im, path, &wo, err, sizeof err);
+    static const char *const names[] = {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+                                        "ViewLayer.Depth.Z",    "ViewLayer.T.R",        "ViewLayer.T.G",
+                                        "ViewLayer.T.B"};
+    static const exr_pixel_type_t types[7] = {EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT,
+                                              EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT};
+    t_true(s == NBT_OK, "blender names: written (%s)", err);
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet;
+    exr_context_t ctx = NULL;
+    const exr_attr_chlist_t *cl = NULL;
+    int found = 0;
+    if (exr_start_read(&ctx, path, &init) == EXR_ERR_SUCCESS && exr_get_channels(ctx, 0, &cl) == EXR_ERR_SUCCESS)
+        for (int i = 0; i < 7; i++)
+            for (int j = 0; j < cl->num_channels; j++)
+                found += !strcmp(cl->entries[j].name.str, names[i]) && cl->entries[j].pixel_type == types[i];
+    t_true(found == 7 && cl && cl->num_channels == 7, "blender names: ViewLayer.Combined.*, ViewLayer.Depth.Z, ViewLayer.T.*");
+    if (ctx)
+        exr_finish(&ctx);
+    nbt_image *back = NULL;
+    s = nbt_image_read_exr(path, &back, err, sizeof err);
+    t_true(s == NBT_OK && back && back->rgb_layer && !strcmp(back->rgb_layer, "ViewLayer.Combined") && back->z &&
+               back->z[23] == 33.0f && back->rgb[3 * 5] == 5.0f && back->nchannels == 3,
+           "blender names: read back picks Combined and Depth, keeps T (%s)", err);
+    nbt_image_free(back);
+    wo.layer_prefix = "";
+    s = nbt_image_write_exr_ex(im, path, &wo, err, sizeof err);
+    cl = NULL;
+    found = 0;
+    if (s == NBT_OK && exr_start_read(&ctx, path, &init) == EXR_ERR_SUCCESS && exr_get_channels(ctx, 0, &cl) == EXR_ERR_SUCCESS)
+        for (int j = 0; j < cl->num_channels; j++)
+            found += !strcmp(cl->entries[j].name.str, "T.R");
+    t_true(found == 1, "blender names: layer_prefix \"\" gives T.R");
+    if (ctx)
+        exr_finish(&ctx);
+    unlink(path);
+    nbt_image_free(im);
 }
 
 int main(void)
@@ -775,6 +1137,8 @@ int main(void)
     test_origin();
     test_blender();
     test_grey_and_parts();
+    test_overscan();
+    test_blender_names();
     test_errors();
     int left = count_entries(dir);
     t_true(left == 0, "temporary directory empty at the end (%d entries)", left);
