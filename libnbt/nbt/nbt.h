@@ -13,6 +13,7 @@
 #include <nbt/beam.h>
 #include <nbt/mc.h>
 #include <nbt/screen.h>
+#include <nbt/screen_path.h>
 #include <nbt/image.h>
 #include <nbt/grid.h>
 
