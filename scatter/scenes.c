@@ -6,11 +6,11 @@
 #include <string.h>
 #include "scatter.h"
 
-static const char *const NAMES[] = {"plane", "step", "layers", "slant", "blocks"};
+static const char *const NAMES[] = {"plane", "step", "layers", "slant", "blocks", "lamps"};
 
 const char *scene_names(void)
 {
-    return "plane, step, layers, slant, blocks";
+    return "plane, step, layers, slant, blocks, lamps";
 }
 
 int scene_parse(const char *name)
@@ -40,20 +40,30 @@ static void texture(float *c, size_t x, size_t y, double tint)
     c[2] = (float)(v * (1.2 - 0.4 * tint));
 }
 
-static void lamp(nbt_image *im, size_t cx, size_t cy, double v)
+/* a 2x2 lamp at frame pixel (cx, cy) (may lie in the overscan border: ox, oy) */
+static void lamp(nbt_image *im, long cx, long cy, size_t ox, size_t oy, double v)
 {
-    for (size_t y = cy; y < cy + 2 && y < im->h; y++)
-        for (size_t x = cx; x < cx + 2 && x < im->w; x++) {
-            float *c = im->rgb + 3 * (y * im->w + x);
+    for (long y = cy; y < cy + 2; y++)
+        for (long x = cx; x < cx + 2; x++) {
+            long X = x + (long)ox, Y = y + (long)oy;
+            if (X < 0 || Y < 0 || X >= (long)im->w || Y >= (long)im->h)
+                continue;
+            float *c = im->rgb + 3 * ((size_t)Y * im->w + (size_t)X);
             c[0] = (float)v, c[1] = (float)(0.8 * v), c[2] = (float)(0.5 * v);
         }
 }
 
-nbt_image *scene_make(int kind, size_t w, size_t h)
+nbt_image *scene_make(int kind, size_t w, size_t h, size_t ox, size_t oy)
 {
-    nbt_image *im = nbt_image_alloc(w, h, 1);
+    /* the frame is w x h; the data window adds ox, oy pixels on each side (overscan), the scene
+     * continuing beyond the frame as a renderer's would */
+    nbt_image *im = nbt_image_alloc(w + 2 * ox, h + 2 * oy, 1);
     if (!im)
         return NULL;
+    im->x0 = -(int32_t)ox;
+    im->y0 = -(int32_t)oy;
+    im->display.min_x = 0, im->display.min_y = 0;
+    im->display.max_x = (int32_t)w - 1, im->display.max_y = (int32_t)h - 1;
     rng_state = 0x2385u;
     /* blocks: 10 rectangles at 6 depths over a far wall */
     size_t bx[10], by[10], bw[10], bh[10];
@@ -66,10 +76,11 @@ nbt_image *scene_make(int kind, size_t w, size_t h)
         by[b] = (size_t)((double)(h - bh[b]) * uniform());
         bz[b] = depths[(int)(6 * uniform())];
     }
-    for (size_t y = 0; y < h; y++)
-        for (size_t x = 0; x < w; x++) {
-            size_t i = y * w + x;
-            double fx = (x + 0.5) / (double)w, fy = (y + 0.5) / (double)h, Z = 6.0, tint = 1.0;
+    for (size_t Y = 0; Y < im->h; Y++)
+        for (size_t X = 0; X < im->w; X++) {
+            size_t i = Y * im->w + X;
+            long x = (long)X - (long)ox, y = (long)Y - (long)oy; /* frame pixel, negative in the border */
+            double fx = ((double)x + 0.5) / (double)w, fy = ((double)y + 0.5) / (double)h, Z = 6.0, tint = 1.0;
             switch (kind) {
             case 0: /* plane: one wall */
                 Z = 6.0;
@@ -88,10 +99,15 @@ nbt_image *scene_make(int kind, size_t w, size_t h)
             case 3: /* slant: a floor receding to the horizon, sky above it */
                 Z = fy < 0.4 ? 1e10 : 1.5 / (fy - 0.4 + 0.05);
                 break;
+            case 5: /* lamps: one wall with HDR lamps (below) */
+                Z = 6.0;
+                tint = 0.15;
+                break;
             case 4:
                 Z = 15.0;
                 for (int b = 0; b < 10; b++)
-                    if (x >= bx[b] && x < bx[b] + bw[b] && y >= by[b] && y < by[b] + bh[b] && bz[b] < Z)
+                    if (x >= (long)bx[b] && x < (long)(bx[b] + bw[b]) && y >= (long)by[b] &&
+                        y < (long)(by[b] + bh[b]) && bz[b] < Z)
                         Z = bz[b], tint = 0.5 + 0.08 * b;
                 break;
             }
@@ -99,18 +115,24 @@ nbt_image *scene_make(int kind, size_t w, size_t h)
             if (Z >= 1e10) {
                 im->rgb[3 * i] = 0.6f, im->rgb[3 * i + 1] = 0.7f, im->rgb[3 * i + 2] = 0.9f;
             } else
-                texture(im->rgb + 3 * i, x, y, tint);
+                texture(im->rgb + 3 * i, (size_t)(x + 4096), (size_t)(y + 4096), tint);
         }
     /* HDR lamps: in front of the step edge, on the near box, on the floor */
+    long W = (long)w, H = (long)h;
     if (kind == 1)
-        lamp(im, w / 2 - 3, h / 2, 200.0);
+        lamp(im, W / 2 - 3, H / 2, ox, oy, 200.0);
     else if (kind == 2)
-        lamp(im, (size_t)(0.6 * w), (size_t)(0.4 * h), 150.0);
+        lamp(im, (long)(0.6 * W), (long)(0.4 * H), ox, oy, 150.0);
     else if (kind == 3)
-        lamp(im, w / 3, (size_t)(0.7 * h), 100.0);
+        lamp(im, W / 3, (long)(0.7 * H), ox, oy, 100.0);
     else if (kind == 4)
-        lamp(im, bx[0] + bw[0] / 2, by[0] + bh[0] / 2, 120.0);
-    else
-        lamp(im, w / 2, h / 2, 50.0);
+        lamp(im, (long)(bx[0] + bw[0] / 2), (long)(by[0] + bh[0] / 2), ox, oy, 120.0);
+    else if (kind == 5) { /* five in the frame (one at its edge), two just outside it (seen with overscan) */
+        const double at[7][3] = {{0.5, 0.5, 300}, {0.2, 0.3, 150}, {0.8, 0.25, 200}, {0.3, 0.8, 100},
+                                 {0.97, 0.6, 250}, {-0.06, 0.45, 300}, {0.55, 1.08, 200}};
+        for (int j = 0; j < 7; j++)
+            lamp(im, (long)floor(at[j][0] * W), (long)floor(at[j][1] * H), ox, oy, at[j][2]);
+    } else
+        lamp(im, W / 2, H / 2, ox, oy, 50.0);
     return im;
 }
