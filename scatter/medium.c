@@ -67,6 +67,11 @@ static nbt_screen_kernel *channel_kernel(const scatter_medium *m, int c, nbt_ske
                                          const nbt_kernel_correction *corr)
 {
     if (m->nphase) {
+        const nbt_screen_model *model = m->model ? m->model : nbt_screen_model_default();
+        char err[512];
+        if (kind != NBT_SKERNEL_FIRST && model &&
+            nbt_screen_model_covers(model, medium_phase(m, c), m->geometry, err, sizeof err) != NBT_OK)
+            die_usage("--phase: %s: --kernel first for single scattering alone, or --model FILE", err);
         nbt_screen_kernel *k =
             nbt_screen_kernel_phase(kind, m->sigma_t[c], m->albedo[c], medium_phase(m, c), m->geometry, m->model);
         if (!k)

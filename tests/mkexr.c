@@ -1,5 +1,5 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
- * tests (mkexr OUT.exr noz|nan|negative|inf), and a constant density grid
+ * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
  * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE). */
 #include <config.h>
@@ -57,7 +57,15 @@ int main(int argc, char **argv)
         im->z[5 * 16 + 3] = -2.0f;
     else if (!strcmp(kind, "inf"))
         im->z[5 * 16 + 3] = INFINITY; /* sky: accepted */
-    int rc = nbt_image_write_exr(im, argv[1], NULL, 0, err, sizeof err) != NBT_OK;
+    else if (!strcmp(kind, "nanrgb"))
+        im->rgb[3 * (7 * 16 + 2) + 1] = NAN;
+    else if (!strcmp(kind, "negrgb"))
+        im->rgb[3 * (7 * 16 + 2) + 2] = -1e6f;
+    else if (!strcmp(kind, "border")) { /* a region render: the data window inside a larger display window */
+        im->x0 = 4, im->y0 = 2;
+        im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 31, im->display.max_y = 23;
+    }
+    int rc = nbt_image_write_exr_ex(im, argv[1], NULL, err, sizeof err) != NBT_OK;
     if (rc)
         fprintf(stderr, "%s\n", err);
     nbt_image_free(im);

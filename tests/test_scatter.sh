@@ -110,7 +110,7 @@ expect_usage "unknown kernel" "--kernel: 'x'" "$S" "$tmp/plane.exr" -o "$o" $M -
 expect_usage "fov 0" "--fov-y: '0'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 0 --sigma-t 0.1 --albedo 0.9 --B 0.01
 expect_usage "fov 180" "--fov-y: '180'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 180 --sigma-t 0.1 --albedo 0.9 --B 0.01
 expect_usage "albedo" "--albedo: '1.2'" "$S" "$tmp/plane.exr" -o "$o" --fov-y 30 --sigma-t 0.1 --albedo 1.2 --B 0.01
-expect_usage "no phase width" "--B B or --dtheta" "$S" "$tmp/plane.exr" -o "$o" --fov-y 30 --sigma-t 0.1 --albedo 0.9
+expect_usage "no phase width" "--phase SPEC (e.g. hg:g=0.9) or --B B" "$S" "$tmp/plane.exr" -o "$o" --fov-y 30 --sigma-t 0.1 --albedo 0.9
 expect_usage "both widths" "give one phase width" "$S" "$tmp/plane.exr" -o "$o" $M --B 0.01
 expect_usage "missing input" "nonexistent.exr" "$S" "$tmp/nonexistent.exr" -o "$o" $M
 expect_usage "not an EXR" "tmp" "$S" "$tmp/corr.txt" -o "$o" $M

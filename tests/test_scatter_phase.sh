@@ -1,0 +1,91 @@
+#!/bin/sh
+# tests/test_scatter_phase.sh: nbt-scatter with a Henyey-Greenstein medium
+# against its own path-traced reference of the same world (--method path),
+# RGB media, overscanned renders, the output's layers, and bad input.
+# The path tracer is independent of the kernels: the bounds below are the
+# kernels' measured error (doc/screenspace.md) plus twice the reference's own
+# binned noise, which --compare prints as ref_noise4.
+. "${top_srcdir:-.}/tests/testlib.sh"
+S=$(abspath "${NBT_SCATTER:-./nbt-scatter}")
+MK=$(abspath "${NBT_MKEXR:-./tests/mkexr}")
+H="--fov-y 40 --sigma-t 0.3 --albedo 0.95 --phase hg:g=0.9 --method ref-a --threads 2 --no-png"
+P="--fov-y 40 --sigma-t 0.3 --albedo 0.95 --phase hg:g=0.9 --method path --threads 2 --no-png --seed 3"
+
+# a wall with HDR lamps, 56x40 (non-square), and the same frame rendered with 25% overscan
+"$S" scene lamps --size 56x40 -o "$tmp/l.exr" && "$S" scene lamps --size 56x40 --overscan 0.25 -o "$tmp/lo.exr" &&
+  "$S" scene step --size 56x40 -o "$tmp/s.exr" && ok || bad "scenes"
+
+# within_ref NAME BOUND CMP-LINE: binned4 <= BOUND + 2 ref_noise4
+within_ref() {
+  d=$1; b=$2; shift 2
+  echo "$*" | awk -v b="$b" '{ for (i = 1; i < NF; i++) v[$i] = $(i + 1) }
+    END { exit !(("binned4" in v) && ("ref_noise4" in v) && v["binned4"] <= b + 2 * v["ref_noise4"]) }' && ok ||
+    bad "$d: binned4 within $b + 2 ref_noise4: $*"
+}
+
+# the fitted HG kernel against the path tracer (first order exact + fitted higher orders: ~2% error)
+"$S" "$tmp/l.exr" -o "$tmp/lp.exr" $P --spp 256 2>"$tmp/log" || bad "path: $(cat "$tmp/log")"
+grep -q "path tracing (256 samples per pixel" "$tmp/log" && ok || bad "path reports its samples: $(cat "$tmp/log")"
+line=$("$S" "$tmp/l.exr" -o "$tmp/lf.exr" $H --compare "$tmp/lp.exr" 2>"$tmp/log")
+within_ref "fitted kernel vs path" 0.03 "$line"
+grep -q "render with overscan" "$tmp/log" && ok || bad "a wide kernel on a plain render warns: $(cat "$tmp/log")"
+# single scattering alone misses most of the light at albedo 0.95, tau 1.8: the comparison sees it
+line=$("$S" "$tmp/l.exr" -o "$tmp/l1.exr" $H --kernel first --compare "$tmp/lp.exr" 2>/dev/null)
+echo "$line" | awk '{ exit !($2 + 0 > 0.3) }' && ok || bad "first order alone is far from the path tracer: $line"
+
+# depth steps (both operators' near-kernel rule matters at the edge)
+"$S" "$tmp/s.exr" -o "$tmp/sp.exr" $P --spp 128 2>/dev/null || bad "path, step"
+line=$("$S" "$tmp/s.exr" -o "$tmp/sf.exr" $H --compare "$tmp/sp.exr" 2>/dev/null)
+within_ref "fitted kernel vs path, step" 0.05 "$line"
+
+# RGB medium: per-channel sigma_t and albedo
+R="--sigma-t 0.4,0.3,0.15 --albedo 0.9,0.95,0.99"
+"$S" "$tmp/l.exr" -o "$tmp/rp.exr" --fov-y 40 $R --phase hg:g=0.85 --method path --threads 2 --no-png --spp 256 \
+  2>/dev/null || bad "path, rgb"
+line=$("$S" "$tmp/l.exr" -o "$tmp/rf.exr" --fov-y 40 $R --phase hg:g=0.85 --method ref-a --threads 2 --no-png \
+  --compare "$tmp/rp.exr" 2>/dev/null)
+within_ref "rgb medium vs path" 0.03 "$line"
+# a grey run is not the RGB one: the reference's attributes say so
+expect_usage "compare refuses another medium" "nbt.sigma_t" "$S" "$tmp/l.exr" -o "$tmp/x.exr" $H --compare "$tmp/rp.exr"
+expect_usage "compare refuses another input" "nbt.input" "$S" "$tmp/s.exr" -o "$tmp/x.exr" $H --compare "$tmp/lp.exr"
+
+# overscan: the operators use the border's light; the output is the display window
+"$S" "$tmp/lo.exr" -o "$tmp/lop.exr" $P --spp 256 2>/dev/null || bad "path, overscan"
+line=$("$S" "$tmp/lo.exr" -o "$tmp/lof.exr" $H --compare "$tmp/lop.exr" 2>"$tmp/log")
+within_ref "overscanned render vs path on the same world" 0.03 "$line"
+grep -q "(overscan)" "$tmp/log" && ok || bad "overscan is reported: $(cat "$tmp/log")"
+# the lamps just outside the frame light it: the plain render's result is darker than the reference with overscan
+# (the reference for the plain render would be refused: its input differs)
+line=$("$S" "$tmp/lo.exr" -o "$tmp/x.exr" $H --compare "$tmp/lof.exr" 2>/dev/null)
+echo "$line" | awk '{ exit !($8 > -1e-6 && $8 < 1e-6) }' && ok || bad "overscan run repeats exactly: $line"
+if command -v oiiotool >/dev/null 2>&1; then
+  info=$(oiiotool --info -v "$tmp/lof.exr")
+  echo "$info" | grep -Eq "56 x +40," && ok || bad "the output is the 56x40 display window: $info"
+  for c in S.R T.B offscreen.X; do
+    echo "$info" | grep -q "$c" && ok || bad "layer $c in the output: $info"
+  done
+else
+  echo "SKIP: oiiotool (Debian: openimageio-tools) not installed: the output's layers are not listed"
+fi
+
+# bad input: exit 2, one line, nothing written
+"$MK" "$tmp/nanrgb.exr" nanrgb && "$MK" "$tmp/negrgb.exr" negrgb && "$MK" "$tmp/border.exr" border || bad mkexr
+o="$tmp/out.exr"
+expect_usage "unknown phase" "--phase: " "$S" "$tmp/l.exr" -o "$o" $H --phase fog:g=1
+expect_usage "hg g out of range" "--phase: " "$S" "$tmp/l.exr" -o "$o" --fov-y 40 --sigma-t 0.3 --albedo 0.9 --phase hg:g=1.5
+expect_usage "two values" "not two" "$S" "$tmp/l.exr" -o "$o" $H --sigma-t 0.1,0.2
+expect_usage "four values" "one value or three" "$S" "$tmp/l.exr" -o "$o" $H --albedo 0.1,0.2,0.3,0.4
+expect_usage "two phases" "not two" "$S" "$tmp/l.exr" -o "$o" $H --phase hg:g=0.5
+expect_usage "phase and B" "give one phase" "$S" "$tmp/l.exr" -o "$o" $H --B 0.01
+expect_usage "moment kernel with a phase" "--kernel moment" "$S" "$tmp/l.exr" -o "$o" $H --kernel moment
+expect_usage "outside the shipped model" "g in \[0, 0.95\], not hg:g=0.98" "$S" "$tmp/l.exr" -o "$o" --fov-y 40 --sigma-t 0.3 \
+  --albedo 0.9 --phase hg:g=0.98
+expect_usage "display window outside the data window" "does not contain the display window" "$S" "$tmp/border.exr" \
+  -o "$o" $H
+expect_usage "NaN colour" "pixel (2, 7) channel G" "$S" "$tmp/nanrgb.exr" -o "$o" $H
+expect_usage "negative colour" "-1e+06 at pixel (2, 7) channel B" "$S" "$tmp/negrgb.exr" -o "$o" $H
+expect_usage "output not .exr" "must end in .exr" "$S" "$tmp/l.exr" -o "$tmp/x.png" $H
+expect_usage "output is the input" "is the input render" "$S" "$tmp/l.exr" -o "$tmp/l.exr" $H
+expect_usage "spp without path" "--spp and --noise belong to --method path" "$S" "$tmp/l.exr" -o "$o" $H --spp 5
+[ ! -e "$o" ] && [ ! -e "$tmp/x.png" ] && ok || bad "nothing written by refused runs"
+finish
