@@ -1,7 +1,12 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
  * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
- * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE). */
+ * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
+ * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
+ * kept, plus layers S = 0.25 RGB, T (R 0.5, G 0.25, B 0.125) and offscreen
+ * (the fraction of pixels x0..x of the row outside the display window),
+ * written over the display window (crop) or the data window (full), with
+ * the attribute nbt.method = layers; for the EXR tool tests. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -38,6 +43,37 @@ int main(int argc, char **argv)
         if (rc)
             fprintf(stderr, "%s\n", err);
         nbt_grid_free(g);
+        return rc;
+    }
+    if (argc == 5 && !strcmp(argv[2], "layers")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "%s\n", err);
+            return 1;
+        }
+        size_t n = in->w * in->h;
+        float *s = malloc(n * 3 * sizeof(float)), *t = malloc(n * 3 * sizeof(float)), *f = malloc(n * sizeof(float));
+        if (!s || !t || !f)
+            return 1;
+        for (size_t i = 0; i < n; i++) {
+            long x = in->x0 + (long)(i % in->w), y = in->y0 + (long)(i / in->w);
+            int outside = x < in->display.min_x || x > in->display.max_x || y < in->display.min_y || y > in->display.max_y;
+            for (int c = 0; c < 3; c++) {
+                s[3 * i + (size_t)c] = 0.25f * in->rgb[3 * i + (size_t)c];
+                t[3 * i + (size_t)c] = 0.5f / (float)(1 << c);
+            }
+            f[i] = outside ? 1.0f : 0.0f;
+        }
+        const char *rgb[3] = {"R", "G", "B"}, *x1[1] = {"X"}, *attrs[2] = {"nbt.method", "layers"};
+        nbt_image_layer layers[3] = {{"S", 3, rgb, s}, {"T", 3, rgb, t}, {"offscreen", 1, x1, f}};
+        nbt_exr_write_opts o = {.layers = layers, .nlayers = 3, .attrs = attrs, .nattrs = 1};
+        if (!strcmp(argv[4], "crop"))
+            o.window = &in->display;
+        int rc = nbt_image_write_exr_ex(in, argv[1], &o, err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
+        free(s), free(t), free(f);
+        nbt_image_free(in);
         return rc;
     }
     if (argc != 3)

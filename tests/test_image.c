@@ -4,7 +4,12 @@
  * window away from the origin, Blender multilayer names, luminance, multi
  * part) read back with known values, and failures: missing, non-EXR,
  * channel-less, ambiguous, subsampled and truncated files, and writes that
- * cannot complete (nothing left behind). */
+ * cannot complete (nothing left behind). nbt_image_write_exr_ex: an
+ * overscanned file (data window (-7, -5) - (37, 25) around a 30 x 20 display
+ * window) with HALF/FLOAT/UINT channels and string, int, float, m44f, v2f and
+ * string-vector attributes, cropped to the display window and checked pixel
+ * by pixel and through the core library's header; the whole data window;
+ * Blender names; refused windows, layers and attributes. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
 #include <errno.h>
@@ -1119,6 +1124,33 @@ static void test_blender_names(void)
     nbt_image_free(im);
 }
 
+/* A subsampled channel beside RGB: listed with its sampling, not kept, not written. */
+static void test_subsampled_kept(void)
+{
+    const int w = 8, h = 6;
+    float *r = plane(w, h, 0), *c = plane(w / 2, h / 2, 1);
+    wch ch[] = {{"B", EXR_PIXEL_FLOAT, r, 0, 0}, {"C", EXR_PIXEL_HALF, c, 2, 2}, {"G", EXR_PIXEL_FLOAT, r, 0, 0},
+                {"R", EXR_PIXEL_FLOAT, r, 0, 0}};
+    wpart p = scan(w, h, EXR_COMPRESSION_NONE, ch, 4);
+    const char *in = in_dir("sub_in.exr"), *out = in_dir("sub_out.exr");
+    char err[512] = "";
+    nbt_image *im = NULL, *back = NULL;
+    t_true(write_exr(in, &p, 1) == 0, "subsampled: test file written");
+    nbt_status s = nbt_image_read_exr(in, &im, err, sizeof err);
+    t_true(s == NBT_OK && im && im->nchannels == 1 && !strcmp(im->channels[0].name, "C") &&
+               im->channels[0].x_sampling == 2 && im->channels[0].y_sampling == 2 && !im->channels[0].data,
+           "subsampled: C listed with its 2 x 2 sampling, no data (%s)", err);
+    nbt_exr_write_opts wo;
+    memset(&wo, 0, sizeof wo);
+    s = im ? nbt_image_write_exr_ex(im, out, &wo, err, sizeof err) : NBT_EINVAL;
+    t_true(s == NBT_OK && nbt_image_read_exr(out, &back, err, sizeof err) == NBT_OK && back->nchannels == 0,
+           "subsampled: left out of the written file (%s)", err);
+    nbt_image_free(im);
+    nbt_image_free(back);
+    unlink(in), unlink(out);
+    free(r), free(c);
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "/tmp/nbt-test-imageXXXXXX");
@@ -1139,6 +1171,7 @@ int main(void)
     test_grey_and_parts();
     test_overscan();
     test_blender_names();
+    test_subsampled_kept();
     test_errors();
     int left = count_entries(dir);
     t_true(left == 0, "temporary directory empty at the end (%d entries)", left);

@@ -62,7 +62,8 @@ typedef struct {
     nbt_image_attrs *attrs; /* its other header attributes; NULL when none */
 } nbt_image;
 
-/* A w x h image, every value 0, with a depth plane when with_z != 0.
+/* A w x h image, every value 0, with a depth plane when with_z != 0, origin
+ * (0, 0), display window = data window, no kept channels or attributes.
  * Returns NULL when w or h is 0, when w*h*3 floats overflow size_t, or when
  * memory runs out. Free with nbt_image_free. */
 nbt_image *nbt_image_alloc(size_t w, size_t h, int with_z);
