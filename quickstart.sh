@@ -37,7 +37,8 @@ if [ "$mode" = run ]; then
   fi
   # screen-space multiple scattering of a generated render (RGB + planar Z, as Blender writes it)
   ./nbt-scatter scene layers -o nbt-scatter-in.exr
-  ./nbt-scatter nbt-scatter-in.exr -o nbt-scatter.exr --fov-y 40 --sigma-t 0.25 --albedo 0.95 --dtheta 4
+  ./nbt-scatter nbt-scatter-in.exr -o nbt-scatter.exr --fov-y 40 --sigma-t 0.25 --albedo 0.95 --phase hg:g=0.9 \
+    --quantize 64
   echo "quickstart: a render seen through fog (multiple scattering) is ./nbt-scatter.png"
   exit 0
 fi

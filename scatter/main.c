@@ -52,6 +52,9 @@ static void help(void)
          "  -o, --output OUT.exr   output (required; must end in .exr and differ from the input)\n"
          "  --fov-y DEG            vertical field of view of the display window, (0, 180) (Blender: the\n"
          "                         camera's vertical angle, see doc/screenspace.md for sensor fit)\n"
+         "  --display-window X0,Y0,X1,Y1\n"
+         "                         the frame (EXR pixel coordinates, inclusive) inside a render that was made\n"
+         "                         larger for overscan but has no display window of its own\n"
          "  --sigma-t X|R,G,B      extinction coefficient per scene unit, > 0, one or per channel\n"
          "  --albedo A|R,G,B       single-scattering albedo, [0, 1], one or per channel\n"
          "  --phase SPEC           the phase function, as in nbt-gen: hg:g=G, hg2:g1=,g2=,w=, gauss:B=B,\n"
@@ -87,12 +90,16 @@ static void help(void)
          "                         (default 64), else brute force; --layers 0 forces brute force\n"
          "  --quantize L           approximate: snap the ray distances to L log-spaced layers and use the FFT\n"
          "                         (T stays exact); measure the error against brute force with --compare\n"
+         "  --extend F             ref-a, ref-b: beyond the data window, continue it as its mirror image\n"
+         "                         (colour and depth; lamps capped at 4x the border's median) for F times\n"
+         "                         the frame's larger side (default 0.25; 0: nothing beyond sends light)\n"
          "  --tail X               truncate each kernel where less than X of its mass lies outside (1e-7)\n"
          "  --threads N            0 = all cores (default)\n"
          "  --compare REF.exr      print 'relL1 X relRMS X edge X bias X max X binned4 X halo X' for the\n"
          "                         scattered part (binned4: 4x4 bins; halo: the bins within 12 px of a lamp)\n"
          "                         against REF.exr, an nbt-scatter output (e.g. --method path) for the\n"
-         "                         same input, camera and medium (checked from its nbt.* attributes)\n"
+         "                         same input, camera and medium (checked from its nbt.* attributes; a\n"
+         "                         different phase is allowed, with a note, to measure an approximation)\n"
          "  --no-png               no preview\n"
          "  --density FILE         heterogeneous medium: a density grid (.raw: nbt's raw grid; .vdb: OpenVDB,\n"
          "                         the float grid 'density' or --grid NAME) scaling sigma_t; per-pixel kernels\n"
@@ -192,7 +199,7 @@ static int cmd_scene(int argc, char **argv)
 
 typedef struct {
     const char *in, *out, *compare, *corr_path, *density, *grid_name, *model_path;
-    double fov, tail, step, noise;
+    double fov, tail, step, noise, extend;
     scatter_medium med;
     long spp;
     unsigned long long seed;
@@ -202,6 +209,8 @@ typedef struct {
     double cut, eps;
     const char *method_name;
     int kernel; /* -1: the method's default */
+    int disp_given;
+    nbt_box2i disp; /* --display-window: the frame inside a render that has no display window of its own */
     int ray_depth, png;
     long layers, threads, quantize;
 } opts;
@@ -217,7 +226,7 @@ static void parse(int argc, char **argv, opts *o)
 {
     enum { O_FOV = 256, O_ST, O_ALB, O_B, O_DTH, O_METHOD, O_KERNEL, O_DEPTH, O_LAYERS, O_TAIL, O_THREADS, O_CMP,
            O_NOPNG, O_CORR, O_DENS, O_GRID, O_CAM, O_LOOK, O_UP, O_STEP, O_QUANT, O_CUT, O_EPS, O_PHASE, O_MODEL,
-           O_GEO, O_SPP, O_NOISE, O_SEED };
+           O_GEO, O_SPP, O_NOISE, O_SEED, O_DISP, O_EXT };
     static const struct option lo[] = {
         {"output", 1, 0, 'o'},    {"fov-y", 1, 0, O_FOV},     {"sigma-t", 1, 0, O_ST},    {"albedo", 1, 0, O_ALB},
         {"B", 1, 0, O_B},         {"dtheta", 1, 0, O_DTH},    {"method", 1, 0, O_METHOD}, {"kernel", 1, 0, O_KERNEL},
@@ -227,6 +236,7 @@ static void parse(int argc, char **argv, opts *o)
         {"up", 1, 0, O_UP},         {"step", 1, 0, O_STEP},     {"quantize", 1, 0, O_QUANT},
         {"cut", 1, 0, O_CUT},       {"eps", 1, 0, O_EPS},       {"phase", 1, 0, O_PHASE},   {"model", 1, 0, O_MODEL},
         {"geometry", 1, 0, O_GEO},  {"spp", 1, 0, O_SPP},       {"noise", 1, 0, O_NOISE},   {"seed", 1, 0, O_SEED},
+        {"display-window", 1, 0, O_DISP}, {"extend", 1, 0, O_EXT},
         {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->fov = o->med.B = NAN;
@@ -234,6 +244,7 @@ static void parse(int argc, char **argv, opts *o)
     o->kernel = -1;
     o->png = 1;
     o->seed = 1;
+    o->extend = -1;
     int method_given = 0;
 #ifdef HAVE_GL
     o->method_name = "nbt";
@@ -277,7 +288,26 @@ static void parse(int argc, char **argv, opts *o)
             break;
         case O_SPP: o->spp = opt_long("--spp", optarg, 1, 1L << 30); break;
         case O_NOISE: o->noise = opt_double("--noise", optarg, 0, 1, 1, 1); break;
+        case O_EXT: o->extend = opt_double("--extend", optarg, 0, 0, 4, 0); break;
         case O_SEED: o->seed = (unsigned long long)opt_long("--seed", optarg, 0, 0x7fffffffL); break;
+        case O_DISP: {
+            long v[4];
+            char *end;
+            const char *p = optarg;
+            for (int i = 0; i < 4; i++) {
+                errno = 0;
+                v[i] = strtol(p, &end, 10);
+                if (end == p || errno || *end != (i < 3 ? ',' : '\0') || labs(v[i]) > (1L << 30))
+                    die_usage("--display-window: '%s' is not accepted: expected X0,Y0,X1,Y1 (integers, EXR pixel "
+                              "coordinates, inclusive)", optarg);
+                p = end + 1;
+            }
+            if (v[2] < v[0] || v[3] < v[1])
+                die_usage("--display-window: '%s' is not accepted: X1 >= X0 and Y1 >= Y0", optarg);
+            o->disp_given = 1;
+            o->disp = (nbt_box2i){(int32_t)v[0], (int32_t)v[1], (int32_t)v[2], (int32_t)v[3]};
+            break;
+        }
         case O_METHOD:
             method_given = 1;
             o->method_name = optarg;
@@ -394,6 +424,10 @@ static void parse(int argc, char **argv, opts *o)
                   "--method ref-a or a GL method, --kernel moment");
     if ((o->kernel == NBT_SKERNEL_CORRECTED) != (o->corr_path != NULL))
         die_usage("--kernel corrected and --correction FILE go together");
+    if (o->extend >= 0 && (o->method > 1 || o->density))
+        die_usage("--extend belongs to ref-a and ref-b on a homogeneous medium");
+    if (o->extend < 0)
+        o->extend = o->method <= 1 && !o->density ? 0.25 : 0;
     if (o->method == 3 && !o->spp)
         o->spp = o->noise > 0 ? 16 : 64;
 }
@@ -606,6 +640,21 @@ static void on_error(const char *reason, nbt_status st)
     fprintf(stderr, "nbt-scatter: %s\n", reason);
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* index x (any integer) reflected into [0, n): ..., 1, 0 | 0, 1, ..., n-1 | n-1, n-2, ... */
+static size_t mirror(long x, size_t n)
+{
+    long p = 2 * (long)n, r = x % p;
+    if (r < 0)
+        r += p;
+    return (size_t)(r < (long)n ? r : p - 1 - r);
+}
+
 /* FNV-1a over the frame's colours and depths: --compare refuses a reference made from another input */
 static unsigned long long input_hash(const nbt_image *im, const frame *fr)
 {
@@ -655,7 +704,10 @@ static void check_reference(const opts *o, const nbt_image *ref, const medium_at
         if (!v)
             die_usage("--compare: %s has no %s attribute: the reference must be an nbt-scatter output for the same "
                       "input and medium", o->compare, names[i]);
-        if (strcmp(v, want[i]))
+        if (strcmp(v, want[i]) && !strcmp(names[i], "nbt.phase")) /* an approximate phase against the true one */
+            fprintf(stderr, "nbt-scatter: note: --compare: %s was made with %s = %s, this run has %s\n", o->compare,
+                    names[i], v, want[i]);
+        else if (strcmp(v, want[i]))
             die_usage("--compare: %s was made with %s = %s, this run has %s: the reference must be for the same input "
                       "and medium", o->compare, names[i], v, want[i]);
     }
@@ -859,6 +911,8 @@ int main(int argc, char **argv)
         die_usage("%s", err);
     if (!im->z)
         die_usage("%s: no depth channel Z: nbt-scatter needs R, G, B and Z (Blender: enable the Z pass)", o.in);
+    if (o.disp_given)
+        im->display = o.disp;
     frame fr = frame_of(&o, im);
     int overscan = fr.w != im->w || fr.h != im->h;
     if (overscan && o.density)
@@ -904,6 +958,45 @@ int main(int argc, char **argv)
     in.pix = pix;
     char qhow[160];
     double gpu_ms = -1;
+    /* beyond the data window the CPU operators see the border continued as its mirror image (colour and planar
+     * depth): a wall that runs out of the frame keeps sending light, and a lamp cut by the edge is seen once
+     * more, not smeared into a streak as repeating the edge pixels would */
+    size_t P = o.method <= 1 && !pix ? (size_t)lround(o.extend * (double)(fr.w > fr.h ? fr.w : fr.h)) : 0;
+    float *xrgb = NULL, *xD = NULL;
+    double *xS = NULL, *Sop = S;
+    if (P) {
+        size_t W = im->w + 2 * P, H = im->h + 2 * P;
+        xrgb = malloc(W * H * 3 * sizeof *xrgb), xD = malloc(W * H * sizeof *xD), xS = malloc(W * H * 3 * sizeof *xS);
+        float *band = malloc(im->w * im->h * sizeof *band);
+        if (!xrgb || !xD || !xS || !band)
+            die("out of memory");
+        /* lamps are not continued: the mirror's brightness is capped at 4x the median of the border band */
+        size_t nb = 0;
+        for (size_t y = 0; y < im->h; y++)
+            for (size_t x = 0; x < im->w; x++)
+                if (x < 8 || y < 8 || x + 8 >= im->w || y + 8 >= im->h)
+                    band[nb++] = im->rgb[3 * (y * im->w + x)] + im->rgb[3 * (y * im->w + x) + 1] +
+                                 im->rgb[3 * (y * im->w + x) + 2];
+        qsort(band, nb, sizeof *band, cmp_float);
+        double cap = 4.0 * band[nb / 2];
+        free(band);
+        for (size_t y = 0; y < H; y++)
+            for (size_t x = 0; x < W; x++) {
+                long sx = (long)x - (long)P, sy = (long)y - (long)P;
+                size_t cx = mirror(sx, im->w), cy = mirror(sy, im->h);
+                size_t j = cy * im->w + cx, i = y * W + x;
+                memcpy(xrgb + 3 * i, im->rgb + 3 * j, 3 * sizeof *xrgb);
+                double lum = (double)xrgb[3 * i] + xrgb[3 * i + 1] + xrgb[3 * i + 2];
+                if ((cx != (size_t)sx || cy != (size_t)sy) && lum > cap)
+                    for (int c = 0; c < 3; c++)
+                        xrgb[3 * i + c] = (float)(xrgb[3 * i + c] * cap / lum);
+                double Z = im->z[j], u = ((double)sx + 0.5 - fr.cx) * dtheta, v = ((double)sy + 0.5 - fr.cy) * dtheta;
+                xD[i] = (cx == (size_t)sx && cy == (size_t)sy) || !isfinite(D[j]) || o.ray_depth || D[j] == 0
+                            ? D[j] : (float)(Z * sqrt(1.0 + u * u + v * v));
+            }
+        in = (nbt_screen_input){W, H, xrgb, xD, dtheta, NULL};
+        Sop = xS;
+    }
     if (o.method == 3) {
         const nbt_phase *ph = medium_phase(&o.med, 0);
         nbt_phase *gph = NULL;
@@ -957,14 +1050,15 @@ int main(int argc, char **argv)
         how = qhow;
 #endif
     } else if (o.quantize) {
-        float *Dq = malloc(np * sizeof *Dq);
+        const float *Din = in.D;
+        float *Dq = malloc(in.w * in.h * sizeof *Dq);
         if (!Dq)
             die("out of memory");
-        nbt_screen_quantize(D, np, (size_t)o.quantize, Dq);
+        nbt_screen_quantize(Din, in.w * in.h, (size_t)o.quantize, Dq);
         in.D = Dq;
         st = nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.quantize + 2 /* sky, D = 0 */, (unsigned)o.threads,
-                                S, NULL);
-        in.D = D;
+                                Sop, NULL);
+        in.D = Din;
         free(Dq);
         snprintf(qhow, sizeof qhow, "layered FFT on %ld quantised layers (approximate)", o.quantize);
         how = qhow;
@@ -972,20 +1066,28 @@ int main(int argc, char **argv)
         /* the FFT is exact when the distances form few layers; it says EDOM otherwise */
         nbt_set_error_handler(NULL);
         st = o.layers > 0 && !pix
-                 ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, S, T)
+                 ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, Sop, P ? NULL : T)
                  : NBT_EDOM;
         nbt_set_error_handler(on_error);
         if (st == NBT_EDOM) {
             how = "brute force";
-            if (np > 40000 && !pix)
+            if (in.w * in.h > 40000 && !pix)
                 fprintf(stderr, "nbt-scatter: more than %ld depth layers: brute force over %zu pixels, which can take "
                                 "minutes; --quantize 64 is an approximate, fast alternative (measure it with "
-                                "--compare)\n", o.layers, np);
-            st = nbt_screen_brute(&in, k, rule, o.tail, (unsigned)o.threads, S, T);
+                                "--compare)\n", o.layers, in.w * in.h);
+            st = nbt_screen_brute(&in, k, rule, o.tail, (unsigned)o.threads, Sop, P ? NULL : T);
         }
     }
     if (st != NBT_OK)
         die("scattering failed: %s", nbt_strerror(st));
+    if (P) { /* back to the data window */
+        for (size_t y = 0; y < im->h; y++)
+            memcpy(S + y * im->w * 3, xS + ((y + P) * in.w + P) * 3, im->w * 3 * sizeof *S);
+        in = (nbt_screen_input){im->w, im->h, im->rgb, D, dtheta, NULL};
+        free(xrgb);
+        free(xD);
+        free(xS);
+    }
     if (pix || o.method == 2)
         for (size_t i = 0; i < np * 3; i++) /* per-pixel kernels and the GL methods give their own T */
             T3[i] = T[i / 3];

@@ -299,7 +299,7 @@ expect_usage "unknown estimator" "--estimator" "$NBT_FIT" mc --albedo 0.5 --sigm
 expect_usage "order-max 0" "--order-max" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --order-max 0 -o "$tmp/x.csv"
 expect_usage "no output" "-o" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000
 expect_usage "unknown command" "frob" "$NBT_FIT" frob
-expect_usage "no command: all listed" "mc, kernel, phase or model" "$NBT_FIT"
+expect_usage "no command: all listed" "mc, kernel, phase, model or screenmodel" "$NBT_FIT"
 [ ! -e "$tmp/x.csv" ] && [ ! -e "$tmp/x.exr" ] && [ ! -e "$tmp/x.png" ] && ok || bad "rejected runs left output"
 # a missing or unreadable input file is bad input in every command that reads one: exit 2, one line with the OS reason
 miss=/nonexistent/dir/in

@@ -8,7 +8,8 @@
 . "${top_srcdir:-.}/tests/testlib.sh"
 S=$(abspath "${NBT_SCATTER:-./nbt-scatter}")
 MK=$(abspath "${NBT_MKEXR:-./tests/mkexr}")
-H="--fov-y 40 --sigma-t 0.3 --albedo 0.95 --phase hg:g=0.9 --method ref-a --threads 2 --no-png"
+# the operators see nothing beyond the data window (--extend 0): the path tracer's world is the data window
+H="--fov-y 40 --sigma-t 0.3 --albedo 0.95 --phase hg:g=0.9 --method ref-a --threads 2 --no-png --extend 0"
 P="--fov-y 40 --sigma-t 0.3 --albedo 0.95 --phase hg:g=0.9 --method path --threads 2 --no-png --seed 3"
 
 # a wall with HDR lamps, 56x40 (non-square), and the same frame rendered with 25% overscan
@@ -42,7 +43,7 @@ within_ref "fitted kernel vs path, step" 0.05 "$line"
 R="--sigma-t 0.4,0.3,0.15 --albedo 0.9,0.95,0.99"
 "$S" "$tmp/l.exr" -o "$tmp/rp.exr" --fov-y 40 $R --phase hg:g=0.85 --method path --threads 2 --no-png --spp 256 \
   2>/dev/null || bad "path, rgb"
-line=$("$S" "$tmp/l.exr" -o "$tmp/rf.exr" --fov-y 40 $R --phase hg:g=0.85 --method ref-a --threads 2 --no-png \
+line=$("$S" "$tmp/l.exr" -o "$tmp/rf.exr" --fov-y 40 $R --phase hg:g=0.85 --method ref-a --threads 2 --no-png --extend 0 \
   --compare "$tmp/rp.exr" 2>/dev/null)
 within_ref "rgb medium vs path" 0.03 "$line"
 # a grey run is not the RGB one: the reference's attributes say so
@@ -58,6 +59,18 @@ grep -q "(overscan)" "$tmp/log" && ok || bad "overscan is reported: $(cat "$tmp/
 # (the reference for the plain render would be refused: its input differs)
 line=$("$S" "$tmp/lo.exr" -o "$tmp/x.exr" $H --compare "$tmp/lof.exr" 2>/dev/null)
 echo "$line" | awk '{ exit !($8 > -1e-6 && $8 < 1e-6) }' && ok || bad "overscan run repeats exactly: $line"
+# a world larger than the render (the lamps' wall runs on, two lamps just outside the frame): with 15% overscan and
+# the border continued (the default --extend) the operator matches the path tracer on the larger world; the plain
+# render without either misses a fifth of the light
+"$S" scene lamps --size 56x40 --overscan 0.6 -o "$tmp/lw.exr" || bad "scene, wide world"
+"$S" "$tmp/lw.exr" -o "$tmp/lwp.exr" $P --spp 256 2>/dev/null || bad "path, wide world"
+line=$("$S" "$tmp/lo.exr" -o "$tmp/x.exr" ${H% --extend 0} --compare "$tmp/lwp.exr" 2>/dev/null)
+within_ref "overscan 25% + extension vs path on the wider world" 0.03 "$line"
+echo "$line" | awk '{ exit !($8 > -0.03 && $8 < 0.03) }' && ok || bad "overscan + extension: |bias| < 3%: $line"
+line=$("$S" "$tmp/l.exr" -o "$tmp/x.exr" $H --compare "$tmp/lwp.exr" 2>/dev/null)
+echo "$line" | awk '{ exit !($8 < -0.1) }' && ok || bad "no overscan, no extension: the light from outside is missing: $line"
+expect_usage "extend with path" "--extend belongs to ref-a and ref-b" "$S" "$tmp/l.exr" -o "$tmp/x.exr" $P --extend 0.1
+
 if command -v oiiotool >/dev/null 2>&1; then
   info=$(oiiotool --info -v "$tmp/lof.exr")
   echo "$info" | grep -Eq "56 x +40," && ok || bad "the output is the 56x40 display window: $info"
