@@ -89,7 +89,9 @@ static void help(void)
          "  --layers N             use the exact layered FFT when Z takes at most N distinct values\n"
          "                         (default 64), else brute force; --layers 0 forces brute force\n"
          "  --quantize L           approximate: snap the ray distances to L log-spaced layers and use the FFT\n"
-         "                         (T stays exact); measure the error against brute force with --compare\n"
+         "                         (T stays exact); measure the error against brute force with --compare.\n"
+         "                         Default with --phase: 64 when the depth has more than --layers values\n"
+         "                         (continuous depth); 0: never (exact, brute force)\n"
          "  --extend F             ref-a, ref-b: beyond the data window, continue it as its mirror image\n"
          "                         (colour and depth; lamps capped at 4x the border's median) for F times\n"
          "                         the frame's larger side (default 0.25; 0: nothing beyond sends light)\n"
@@ -245,6 +247,7 @@ static void parse(int argc, char **argv, opts *o)
     o->png = 1;
     o->seed = 1;
     o->extend = -1;
+    o->quantize = -1; /* auto: exact when the depths form few layers; else 64 layers for --phase, brute force for --B */
     int method_given = 0;
 #ifdef HAVE_GL
     o->method_name = "nbt";
@@ -354,7 +357,11 @@ static void parse(int argc, char **argv, opts *o)
         case O_LOOK: parse_vec3("--look-at", optarg, o->look); break;
         case O_UP: parse_vec3("--up", optarg, o->up); break;
         case O_STEP: o->step = opt_double("--step", optarg, 0, 1, 1e30, 0); break;
-        case O_QUANT: o->quantize = opt_long("--quantize", optarg, 2, 4096); break;
+        case O_QUANT:
+            o->quantize = opt_long("--quantize", optarg, 0, 4096);
+            if (o->quantize == 1)
+                die_usage("--quantize: '1' is not accepted: expected 0 (exact: brute force when needed) or 2..4096");
+            break;
         case O_CUT: o->cut = opt_double("--cut", optarg, 0, 1, 100, 0); break;
         case O_EPS: o->eps = opt_double("--eps", optarg, 0, 0, 100, 0); break;
         case 'h': help(); exit(0);
@@ -396,28 +403,27 @@ static void parse(int argc, char **argv, opts *o)
                   nbt_skernel_name((nbt_skernel_kind)o->kernel));
     if (o->model_path && (!phase || o->kernel == NBT_SKERNEL_FIRST))
         die_usage("--model: a fitted model serves --phase with --kernel fitted or elek");
-    if (o->method == 2 && phase && !(o->gl_method == NBT_GLS_ELEK && o->kernel == NBT_SKERNEL_ELEK))
-        die_usage("--method %s with --phase: the GL methods take one erfc kernel of a Gaussian phase; use ref-a or "
-                  "ref-b (CPU), path, or --method elek --kernel elek", o->method_name);
     if (o->method == 2 && o->gl_method == NBT_GLS_ELEK && phase)
         o->kernel = NBT_SKERNEL_ELEK;
-    if (o->method == 2 && (o->kernel == NBT_SKERNEL_LINEINT || (o->kernel == NBT_SKERNEL_ELEK && !phase) ||
-                           o->kernel == NBT_SKERNEL_SINGLE))
+    if (o->method == 2 && phase && o->gl_method != NBT_GLS_ELEK && o->kernel == NBT_SKERNEL_ELEK)
+        die_usage("--kernel elek: elek's Gaussian comes with --method elek");
+    if (o->method == 2 && !phase && (o->kernel == NBT_SKERNEL_LINEINT || o->kernel == NBT_SKERNEL_ELEK ||
+                                     o->kernel == NBT_SKERNEL_SINGLE))
         die_usage("--kernel %s: the GL methods take one erfc kernel per pixel (moment, smallangle, corrected); "
                   "elek's Gaussian comes with --method elek", nbt_skernel_name((nbt_skernel_kind)o->kernel));
     if (o->method == 2 && medium_channels(&o->med) == 3)
         die_usage("--method %s: the GL methods take one medium for all channels; an RGB medium needs ref-a, ref-b "
                   "or path", o->method_name);
-    if (o->method == 2 && o->quantize)
+    if (o->method == 2 && o->quantize > 0)
         die_usage("--quantize belongs to the CPU references");
-    if (o->method == 3 && (o->quantize || o->density || o->compare))
+    if (o->method == 3 && (o->quantize >= 0 || o->density || o->compare))
         die_usage("--method path: --quantize, --density and --compare belong to the screen-space methods (compare "
                   "their outputs with a path-traced one: run the method with --compare PATH.exr)");
     if (o->method != 3 && (o->spp || o->noise > 0))
         die_usage("--spp and --noise belong to --method path");
     if (o->density && (phase || medium_channels(&o->med) == 3))
         die_usage("--density: heterogeneous media take a Gaussian phase (--B) and one medium for all channels");
-    if (o->density && o->quantize)
+    if (o->density && o->quantize > 0)
         die_usage("--quantize and --density: per-pixel kernels have no layers to quantise");
     if (o->density && (o->method == 1 || o->kernel != NBT_SKERNEL_MOMENT))
         die_usage("--density: heterogeneous media use operator A with the moment kernel (eq. 28/29): "
@@ -571,11 +577,13 @@ static nbt_screen_pixkern *medium_kernels(const opts *o, const nbt_grid *g, cons
 
 #ifdef HAVE_GL
 /* a GL method: per-pixel kernels from the CPU, the passes on the GPU */
+#define GL_GROUPS 4
 static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_kernel *k, double *S, double *T,
                    double *gpu_ms)
 {
     size_t np = in->w * in->h;
-    float *M0 = malloc(np * sizeof *M0), *beta = malloc(np * sizeof *beta), *sig = NULL, *Sf = malloc(np * 3 * sizeof *Sf);
+    float *M0 = calloc(np * GL_GROUPS, sizeof *M0), *beta = calloc(np * GL_GROUPS, sizeof *beta), *sig = NULL,
+          *Sf = malloc(np * 3 * sizeof *Sf);
     if (!M0 || !beta || !Sf)
         die("out of memory");
     /* elek: its Gaussian (mass and deviation) from the ELEK kernel (for a phase: k itself) */
@@ -605,18 +613,49 @@ static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_k
         }
         if (nbt_screen_kernel_eval(k, in->D[i], &kn) != NBT_OK)
             die("the kernel at pixel %zu could not be evaluated", i);
-        T[i] = kn.T, M0[i] = kn.n ? (float)kn.mass[0] : 0.0f, beta[i] = kn.n ? (float)(kn.scale[0] / px) : 0.0f;
+        T[i] = kn.T;
+        /* a kernel of many atoms (built for a phase) becomes GL_GROUPS erfc kernels, one per band of scales
+         * (relative to D: below 1/64, 1/8, 1, above), each with its band's mass and second moment */
+        for (int g = 0; g < GL_GROUPS; g++) {
+            double m = 0, r2 = 0;
+            for (size_t a = 0; a < kn.n; a++) {
+                double l = log2(kn.scale[a] / in->D[i]), s = kn.scale[a] / px;
+                int ga = kn.n == 1 ? 0 : l < -6 ? 0 : l < -3 ? 1 : l < 0 ? 2 : 3;
+                if (ga != g)
+                    continue;
+                m += kn.mass[a];
+                r2 += kn.mass[a] * (kn.shape[a] == NBT_ATOM_ERFC ? 2.0 / 3.0 : 2.0) * s * s;
+            }
+            M0[(size_t)g * np + i] = (float)m;
+            beta[(size_t)g * np + i] = m > 0 ? (float)sqrt(1.5 * r2 / m) : 0.0f; /* erfc: <r^2> = 2 beta^2/3 */
+        }
     }
     char err[4096];
     if (egl_headless_open(err, sizeof err))
         die("--method %s needs OpenGL 4.3 through EGL: %s", o->method_name, err);
-    nbt_gls_input gi = {in->w, in->h, in->rgb, in->D, M0, beta, sig, in->dtheta, o->cut, o->eps};
-    nbt_status st = nbt_gls_run((nbt_gls_method)o->gl_method, &gi, Sf, gpu_ms);
-    egl_headless_close();
-    if (st != NBT_OK)
-        die("--method %s failed on GL: %s", o->method_name, nbt_strerror(st));
+    int ng = kel || in->pix || nbt_screen_kernel_channels(k) != 1 ? 1 : GL_GROUPS;
+    *gpu_ms = 0;
     for (size_t i = 0; i < np * 3; i++)
-        S[i] = Sf[i];
+        S[i] = 0;
+    for (int g = 0; g < ng; g++) {
+        int used = 0;
+        for (size_t i = 0; i < np && !used; i++)
+            used = M0[(size_t)g * np + i] > 0;
+        if (!used && g > 0)
+            continue;
+        double ms = 0;
+        nbt_gls_input gi = {in->w, in->h, in->rgb, in->D, M0 + (size_t)g * np, beta + (size_t)g * np, sig,
+                            in->dtheta, o->cut, o->eps};
+        nbt_status st = nbt_gls_run((nbt_gls_method)o->gl_method, &gi, Sf, &ms);
+        if (st != NBT_OK) {
+            egl_headless_close();
+            die("--method %s failed on GL: %s", o->method_name, nbt_strerror(st));
+        }
+        *gpu_ms += ms;
+        for (size_t i = 0; i < np * 3; i++)
+            S[i] += Sf[i];
+    }
+    egl_headless_close();
     nbt_screen_kernel_free(ke);
     free(M0);
     free(beta);
@@ -1049,7 +1088,7 @@ int main(int argc, char **argv)
         snprintf(qhow, sizeof qhow, "GL (%.3f ms GPU time)", gpu_ms);
         how = qhow;
 #endif
-    } else if (o.quantize) {
+    } else if (o.quantize > 0) {
         const float *Din = in.D;
         float *Dq = malloc(in.w * in.h * sizeof *Dq);
         if (!Dq)
@@ -1069,7 +1108,19 @@ int main(int argc, char **argv)
                  ? nbt_screen_layered(&in, k, rule, o.tail, (size_t)o.layers, (unsigned)o.threads, Sop, P ? NULL : T)
                  : NBT_EDOM;
         nbt_set_error_handler(on_error);
-        if (st == NBT_EDOM) {
+        if (st == NBT_EDOM && o.quantize < 0 && o.med.nphase && !pix) {
+            /* continuous depth and a wide kernel: brute force would take minutes; 64 layers cost ~0.3% */
+            const float *Din = in.D;
+            float *Dq = malloc(in.w * in.h * sizeof *Dq);
+            if (!Dq)
+                die("out of memory");
+            nbt_screen_quantize(Din, in.w * in.h, 64, Dq);
+            in.D = Dq;
+            st = nbt_screen_layered(&in, k, rule, o.tail, 66, (unsigned)o.threads, Sop, NULL);
+            in.D = Din;
+            free(Dq);
+            how = "layered FFT on 64 quantised layers (the depth has more than --layers values; --quantize 0: exact)";
+        } else if (st == NBT_EDOM) {
             how = "brute force";
             if (in.w * in.h > 40000 && !pix)
                 fprintf(stderr, "nbt-scatter: more than %ld depth layers: brute force over %zu pixels, which can take "
