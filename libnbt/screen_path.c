@@ -33,8 +33,8 @@
 #include "rng.h"
 
 #define EDGE_EPS 1e-9 /* footprint widening, pixels */
-#define RR_ORDER 2    /* Russian roulette from this order on (paths are long: albedo ~1, forced collisions) ... */
-#define RR_BETA 0.6   /* ... survival probability max-channel weight / RR_BETA when below 1 (larger: heavier tails, SEs from few spp too low) */
+#define RR_ORDER 2    /* Russian roulette from this order on (paths are long) ... */
+#define RR_BETA 0.6   /* ... survival max-channel weight / RR_BETA (larger: heavier tails) */
 #define NB_MAX 64     /* at most this many bright patches get per-vertex selection weights */
 #define NB_RATIO 16.0 /* a patch is bright when its power is this many times the mean */
 #define NB_FLOOR (0.01 / (4.0 * NBT_PI)) /* phase floor in the bright weights: never zero where light can come */
