@@ -38,6 +38,7 @@
 #define NB_MAX 64     /* at most this many bright patches get per-vertex selection weights */
 #define NB_RATIO 16.0 /* a patch is bright when its power is this many times the mean */
 #define NB_FLOOR (0.01 / (4.0 * NBT_PI)) /* phase floor in the bright weights: never zero where light can come */
+#define NB_TAB 512 /* the bright weights' phase: a table over s = sin(theta / 2), nearest entry */
 
 typedef struct {
     size_t w, h;
@@ -55,6 +56,7 @@ typedef struct {
     double blum[NB_MAX], bpos[NB_MAX][3], barea[NB_MAX];
     long *bslot; /* w*h: index into the bright list, -1: not bright */
     double pb;   /* probability of the bright list when a vertex sees any bright patch */
+    double ptab[NB_TAB + 1]; /* phase at s = k / NB_TAB, plus NB_FLOOR (weights only: any positive function) */
     /* medium */
     double sig[3], sigs[3], act[3];
     int nact;
@@ -87,8 +89,9 @@ static void bright_weights(const pctx *c, const double x[3], const double d[3], 
         double v0 = q[0] - x[0], v1 = q[1] - x[1], v2 = q[2] - x[2], wj = 0.0;
         if (v2 > 0) {
             double r2 = v0 * v0 + v1 * v1 + v2 * v2, ir = 1.0 / sqrt(r2);
-            double mu = (d[0] * v0 + d[1] * v1 + d[2] * v2) * ir;
-            wj = c->blum[j] * c->barea[j] * v2 * ir / r2 * (nbt_phase_eval(c->ph, mu) + NB_FLOOR);
+            double mu = (d[0] * v0 + d[1] * v1 + d[2] * v2) * ir, sh = sqrt(fmax(0.0, 0.5 * (1.0 - mu)));
+            int k = (int)(sh * NB_TAB + 0.5);
+            wj = c->blum[j] * c->barea[j] * v2 * ir / r2 * c->ptab[k > NB_TAB ? NB_TAB : k];
         }
         bw->w[j] = wj;
         bw->sum += wj;
@@ -560,6 +563,10 @@ nbt_status nbt_screen_path(const nbt_screen_world *W, const nbt_screen_path_medi
             } else
                 c.nb++;
             c.bidx[j] = i;
+        }
+        for (int k = 0; k <= NB_TAB; k++) {
+            double sh = (double)k / NB_TAB;
+            c.ptab[k] = nbt_phase_eval(c.ph, 1.0 - 2.0 * sh * sh) + NB_FLOOR;
         }
         for (size_t j = 0; j < c.nb; j++) {
             size_t i = c.bidx[j], ix = i % c.w, iy = i / c.w;
