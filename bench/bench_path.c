@@ -1,7 +1,9 @@
 /* bench/bench_path.c: time and 4x4-binned noise of the path-traced screen
  * reference (nbt_screen_path) at 160x120 on a wall with HDR lamps, HG g 0.9,
  * albedo 0.95, optical depth 2 to the wall, 2 threads; then the time to 1%
- * binned noise. Usage: bench_path [threads] [target] (defaults 2, 0.01). */
+ * binned noise. Usage: bench_path [threads] [target] [maxspp] [run] (defaults
+ * 2, 0.01, 64, 1; maxspp: the largest of 4, 16, 64 measured; run 0: predict
+ * the time to the target only). */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,6 +22,8 @@ int main(int argc, char **argv)
 {
     unsigned threads = argc > 1 ? (unsigned)atoi(argv[1]) : 2;
     double target = argc > 2 ? atof(argv[2]) : 0.01;
+    unsigned long maxspp = argc > 3 ? strtoul(argv[3], NULL, 10) : 64;
+    int run = argc > 4 ? atoi(argv[4]) : 1;
     const size_t w = 160, h = 120;
     const double Zw = 4.0, sigma = 0.5; /* tau 2 to the wall */
     float *rgb = malloc(w * h * 3 * sizeof *rgb), *Z = malloc(w * h * sizeof *Z);
@@ -52,7 +56,7 @@ int main(int argc, char **argv)
     printf("# spp  seconds  binned_noise(4x4)  predicted_spp_for_%g  predicted_seconds\n", target);
     double rate = 0, noise1 = 0;
     unsigned long spp_list[3] = {4, 16, 64};
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < 3 && spp_list[k] <= maxspp; k++) {
         nbt_screen_path_opts o = {.spp = spp_list[k], .seed = 1, .nthreads = threads};
         double t0 = now();
         if (nbt_screen_path(&W, &m, &o, S, se, NULL) != NBT_OK)
@@ -65,7 +69,7 @@ int main(int argc, char **argv)
         fflush(stdout);
     }
     double pred = (noise1 / target) * (noise1 / target) * rate;
-    if (pred < 600) {
+    if (run && pred < 600) {
         nbt_screen_path_opts o = {.spp = 32, .seed = 2, .nthreads = threads, .target_noise = target,
                                   .max_spp = 100000, .progress = 1};
         unsigned long done = 0;

@@ -33,8 +33,12 @@
 #include "rng.h"
 
 #define EDGE_EPS 1e-9 /* footprint widening, pixels */
-#define RR_ORDER 8    /* Russian roulette from this order on ... */
-#define RR_BETA 0.1   /* ... for paths whose largest channel weight is below this */
+#define RR_ORDER 2    /* Russian roulette from this order on (paths are long) ... */
+#define RR_BETA 0.6   /* ... survival max-channel weight / RR_BETA (larger: heavier tails) */
+#define NB_MAX 64     /* at most this many bright patches get per-vertex selection weights */
+#define NB_RATIO 16.0 /* a patch is bright when its power is this many times the mean */
+#define NB_FLOOR (0.01 / (4.0 * NBT_PI)) /* phase floor in the bright weights: never zero where light can come */
+#define NB_TAB 512 /* the bright weights' phase: a table over s = sin(theta / 2), nearest entry */
 
 typedef struct {
     size_t w, h;
@@ -44,7 +48,15 @@ typedef struct {
     size_t nlights;
     double *cdf;    /* nlights, increasing to 1 */
     size_t *lidx;   /* world pixel of each light */
-    double *pick;   /* w*h: probability of choosing each pixel (0: never) */
+    double *pick;   /* w*h: probability of choosing each pixel from the rest (0: never or bright) */
+    /* bright patches (HDR lamps): chosen with probability pb by a per-vertex weight
+     * lum A cos / r^2 (phase + floor) at their centres; the rest by power */
+    size_t nb;
+    size_t bidx[NB_MAX];
+    double blum[NB_MAX], bpos[NB_MAX][3], barea[NB_MAX];
+    long *bslot; /* w*h: index into the bright list, -1: not bright */
+    double pb;   /* probability of the bright list when a vertex sees any bright patch */
+    double ptab[NB_TAB + 1]; /* phase at s = k / NB_TAB, plus NB_FLOOR (weights only: any positive function) */
     /* medium */
     double sig[3], sigs[3], act[3];
     int nact;
@@ -63,6 +75,39 @@ typedef struct {
     double t;
     long idx; /* world pixel, -1: none */
 } phit;
+
+/* the bright patches' selection weights at one vertex */
+typedef struct {
+    double w[NB_MAX], sum, pb; /* pb: the bright list's probability here (0 when no bright patch is in front) */
+} bweights;
+
+static void bright_weights(const pctx *c, const double x[3], const double d[3], bweights *bw)
+{
+    bw->sum = 0.0;
+    for (size_t j = 0; j < c->nb; j++) {
+        const double *q = c->bpos[j];
+        double v0 = q[0] - x[0], v1 = q[1] - x[1], v2 = q[2] - x[2], wj = 0.0;
+        if (v2 > 0) {
+            double r2 = v0 * v0 + v1 * v1 + v2 * v2, ir = 1.0 / sqrt(r2);
+            double mu = (d[0] * v0 + d[1] * v1 + d[2] * v2) * ir, sh = sqrt(fmax(0.0, 0.5 * (1.0 - mu)));
+            int k = (int)(sh * NB_TAB + 0.5);
+            wj = c->blum[j] * c->barea[j] * v2 * ir / r2 * c->ptab[k > NB_TAB ? NB_TAB : k];
+        }
+        bw->w[j] = wj;
+        bw->sum += wj;
+    }
+    bw->pb = bw->sum > 0 ? (c->nlights > c->nb ? c->pb : 1.0) : 0.0;
+}
+
+/* probability (per unit area of the patch) that NEE at this vertex picks a point on patch id */
+static double pick_area_pdf(const pctx *c, const bweights *bw, size_t id)
+{
+    long s = c->nb ? c->bslot[id] : -1;
+    if (s >= 0)
+        return bw->pb * bw->w[s] / bw->sum / c->barea[s];
+    double Zj = c->Z[id];
+    return (1.0 - bw->pb) * c->pick[id] / (Zj * Zj * c->dth * c->dth);
+}
 
 /* The nearest patch along o + t d, 0 < t <= tmax. */
 static phit trace(const pctx *c, const double o[3], const double d[3], double tmax)
@@ -178,18 +223,37 @@ static void rotate(const double d[3], double mu, double phi, double out[3])
 }
 
 /* Next-event estimation from the collision x (travelling along d) to a patch chosen by power. */
-static void nee(const pctx *c, nbt__rng *r, const double x[3], const double d[3], const double beta[3], double L[3])
+static void nee(const pctx *c, nbt__rng *r, const double x[3], const double d[3], const double beta[3],
+                const bweights *bw, double L[3])
 {
     double u = nbt__rng_u(r);
-    size_t lo = 0, hi = c->nlights - 1;
-    while (lo < hi) { /* first cdf entry > u */
-        size_t mid = (lo + hi) / 2;
-        if (c->cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
+    size_t id;
+    if (u < bw->pb) { /* a bright patch by its weight here; u reused, rescaled */
+        double t = u / bw->pb * bw->sum, acc = 0.0;
+        size_t j = 0;
+        for (; j + 1 < c->nb; j++) {
+            acc += bw->w[j];
+            if (t < acc && bw->w[j] > 0)
+                break;
+        }
+        while (bw->w[j] <= 0) /* rounding at the top end: the last positive weight */
+            j--;
+        id = c->bidx[j];
+    } else {
+        if (c->nlights == c->nb)
+            return;
+        u = (u - bw->pb) / (1.0 - bw->pb);
+        size_t lo = 0, hi = c->nlights - c->nb - 1;
+        while (lo < hi) { /* first cdf entry > u */
+            size_t mid = (lo + hi) / 2;
+            if (c->cdf[mid] > u)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        id = c->lidx[lo];
     }
-    size_t id = c->lidx[lo], ix = id % c->w, iy = id / c->w;
+    size_t ix = id % c->w, iy = id / c->w;
     double Zj = c->Z[id];
     double pu = ((double)ix + nbt__rng_u(r) - c->cx) * c->dth, pv = (c->cy - (double)iy - nbt__rng_u(r)) * c->dth;
     if (!(x[2] < Zj))
@@ -198,7 +262,7 @@ static void nee(const pctx *c, nbt__rng *r, const double x[3], const double d[3]
     double dist = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     double w[3] = {v[0] / dist, v[1] / dist, v[2] / dist};
     double cosy = w[2];
-    double pn = c->pick[id] / (Zj * Zj * c->dth * c->dth) * dist * dist / cosy; /* solid angle */
+    double pn = pick_area_pdf(c, bw, id) * dist * dist / cosy; /* solid angle */
     double pp = nbt_phase_eval(c->ph, d[0] * w[0] + d[1] * w[1] + d[2] * w[2]);
     if (!(pp > 0))
         return;
@@ -245,8 +309,11 @@ static void sample(const pctx *c, nbt__rng *r, size_t px, size_t py, double L[3]
             break;
         for (int i = 0; i < 3; i++)
             x[i] += t * d[i];
-        if (c->nee && c->nlights)
-            nee(c, r, x, d, beta, L);
+        bweights bw;
+        if (c->nee && c->nlights) {
+            bright_weights(c, x, d, &bw);
+            nee(c, r, x, d, beta, &bw, L);
+        }
         /* the phase-sampled direction: its boundary term now, its integral next */
         double mu = nbt__phase_sample_mu(c->ph, nbt__rng_cb, r), wn[3];
         rotate(d, mu, 2.0 * NBT_PI * nbt__rng_u(r), wn);
@@ -255,9 +322,9 @@ static void sample(const pctx *c, nbt__rng *r, size_t px, size_t py, double L[3]
         if (h.idx >= 0) {
             if (wn[2] > 0) { /* the emitting face */
                 double wgt = 1.0;
-                if (c->nee && c->pick[h.idx] > 0) {
-                    double Zj = c->Z[h.idx];
-                    double pn = c->pick[h.idx] / (Zj * Zj * c->dth * c->dth) * h.t * h.t / wn[2];
+                double pa = c->nee && c->nlights ? pick_area_pdf(c, &bw, (size_t)h.idx) : 0.0;
+                if (pa > 0) {
+                    double pn = pa * h.t * h.t / wn[2];
                     double pp = nbt_phase_eval(c->ph, mu);
                     wgt = pp * pp / (pp * pp + pn * pn);
                 }
@@ -471,20 +538,63 @@ nbt_status nbt_screen_path(const nbt_screen_world *W, const nbt_screen_path_medi
     if (c.nlights) {
         c.cdf = malloc(c.nlights * sizeof *c.cdf);
         c.lidx = malloc(c.nlights * sizeof *c.lidx);
-        if (!c.cdf || !c.lidx) {
+        c.bslot = malloc(npix * sizeof *c.bslot);
+        if (!c.cdf || !c.lidx || !c.bslot) {
             st = failf(NBT_ENOMEM, "screen path: out of memory");
             goto done;
         }
-        double acc = 0.0;
-        size_t k = 0;
+        /* the bright list: every light when there are few, else the (at most
+         * NB_MAX) most powerful ones among those NB_RATIO times the mean */
         for (size_t i = 0; i < npix; i++)
-            if (c.pick[i] > 0) {
+            c.bslot[i] = -1;
+        double thr = c.nlights <= NB_MAX ? 0.0 : NB_RATIO * total / (double)c.nlights, btot = 0.0;
+        for (size_t i = 0; i < npix; i++) {
+            if (!(c.pick[i] > 0) || c.pick[i] < thr)
+                continue;
+            size_t j = c.nb;
+            if (j == NB_MAX) { /* full: replace the weakest if this one is stronger */
+                size_t mw = 0;
+                for (size_t k = 1; k < NB_MAX; k++)
+                    if (c.pick[c.bidx[k]] < c.pick[c.bidx[mw]])
+                        mw = k;
+                if (!(c.pick[i] > c.pick[c.bidx[mw]]))
+                    continue;
+                j = mw;
+            } else
+                c.nb++;
+            c.bidx[j] = i;
+        }
+        for (int k = 0; k <= NB_TAB; k++) {
+            double sh = (double)k / NB_TAB;
+            c.ptab[k] = nbt_phase_eval(c.ph, 1.0 - 2.0 * sh * sh) + NB_FLOOR;
+        }
+        for (size_t j = 0; j < c.nb; j++) {
+            size_t i = c.bidx[j], ix = i % c.w, iy = i / c.w;
+            double z = c.Z[i];
+            c.bslot[i] = (long)j;
+            c.blum[j] = c.pick[i] / (z * z);
+            c.barea[j] = z * z * c.dth * c.dth;
+            c.bpos[j][0] = z * ((double)ix + 0.5 - c.cx) * c.dth;
+            c.bpos[j][1] = z * (c.cy - (double)iy - 0.5) * c.dth;
+            c.bpos[j][2] = z;
+            btot += c.pick[i];
+        }
+        /* the bright list's share: its power fraction, within [0.25, 0.9] when there is a rest */
+        c.pb = c.nb == c.nlights ? 1.0 : c.nb == 0 ? 0.0 : fmin(0.9, fmax(0.25, btot / total));
+        double rest = total - btot, acc = 0.0;
+        size_t k = 0;
+        for (size_t i = 0; i < npix; i++) {
+            if (c.bslot[i] >= 0)
+                c.pick[i] = 0.0;
+            else if (c.pick[i] > 0) {
                 acc += c.pick[i];
-                c.pick[i] /= total;
-                c.cdf[k] = acc / total;
+                c.pick[i] /= rest;
+                c.cdf[k] = acc / rest;
                 c.lidx[k++] = i;
             }
-        c.cdf[c.nlights - 1] = 1.0;
+        }
+        if (k)
+            c.cdf[k - 1] = 1.0;
     }
     unsigned long maxspp = o->target_noise > 0 ? (o->max_spp ? o->max_spp : 64ul) : o->spp, n = 0;
     double *tmpse = se ? se : malloc(N * sizeof *tmpse);
@@ -514,5 +624,6 @@ done:
     free(c.sum2);
     free(c.cdf);
     free(c.lidx);
+    free(c.bslot);
     return st;
 }

@@ -22,9 +22,10 @@
  * filter), with its standard error. Volumetric path tracing: distances
  * sampled before the first surface (forced collision, one density for all
  * channels: the balance mixture of the channels' exponentials), next-event
- * estimation to the patches (chosen by power, a uniform point on the patch)
- * combined with phase sampling by the power heuristic, Russian roulette only
- * after many orders. Ray casting walks the pixels that a ray's projection
+ * estimation to the patches (a uniform point on a patch chosen by power or,
+ * for the few brightest, by power x solid angle x phase at the vertex)
+ * combined with phase sampling by the power heuristic, Russian roulette by
+ * the path weight from the second order on. Ray casting walks the pixels that a ray's projection
  * crosses and tests each patch exactly (see libnbt/screen_path.c).
  *
  * Deterministic: pixel i of pass k draws from its own generator, seeded by
