@@ -1,0 +1,29 @@
+#!/bin/sh
+# tests/test_cli_robust.sh: what a new user ran into (issue 20): scene files
+# with repeated keys or CR LF line ends, signals during a multi-file write,
+# g-sliced tables that miss their tolerance, extrapolated kernel values,
+# nbt-demo's options and output, --threads 0.
+. "${top_srcdir:-.}/tests/testlib.sh"
+NBT_GEN=$(abspath "${NBT_GEN:-./nbt-gen}")
+
+# ---- scene files: a key given twice is refused (file:line, both lines), nothing written
+printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\n# a comment\ndistance = 9\n' >"$tmp/dup.scene"
+expect_usage "scene: duplicate key" "dup.scene:5: distance is given twice (first at line 2)" \
+  "$NBT_GEN" scene "$tmp/dup.scene" -o "$tmp/dup"
+printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\nphong = 20\nphong = 40\n' >"$tmp/dup.scene"
+expect_usage "scene: phong twice" "dup.scene:5: phong is given twice (first at line 4)" \
+  "$NBT_GEN" scene "$tmp/dup.scene" -o "$tmp/dup"
+[ ! -e "$tmp/dup" ] && ok || bad "a refused scene left $tmp/dup"
+
+# ---- scene files with CR LF line ends read as with LF: the same tables and summary
+printf 'kappa_t = 0.2:0.5 # 1/m\ndistance = 8\nphase = hg:g=0.3\nairlight = yes\ndiffuse = no\nphong = 20, 40\ntol = 2e-2\nhalf = no\n' \
+  >"$tmp/lf.scene"
+sed 's/$/\r/' "$tmp/lf.scene" >"$tmp/crlf.scene"
+[ "$(tr -cd '\r' <"$tmp/crlf.scene" | wc -c)" -eq 8 ] && ok || bad "the CR LF scene has no CRs"
+mkdir "$tmp/lf" "$tmp/crlf"
+(cd "$tmp/lf" && "$NBT_GEN" scene ../lf.scene -o t --quiet >out 2>err); rc1=$?
+(cd "$tmp/crlf" && "$NBT_GEN" scene ../crlf.scene -o t --quiet >out 2>err); rc2=$?
+[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ -s "$tmp/crlf/t/J40_hg_g_0.3.exr" ] && [ ! -e "$tmp/crlf/t/J1_hg_g_0.3.exr" ] &&
+  cmp -s "$tmp/lf/out" "$tmp/crlf/out" && cmp -s "$tmp/lf/t/H_hg_g_0.3.exr" "$tmp/crlf/t/H_hg_g_0.3.exr" && ok ||
+  bad "CR LF scene: rc $rc1/$rc2, $(cat "$tmp/crlf/err") $(diff "$tmp/lf/out" "$tmp/crlf/out")"
+finish
