@@ -78,7 +78,7 @@ int cmd_scene(int argc, char **argv)
         else if (c == 'q')
             quiet = 1;
         else if (c == 'j')
-            threads = (unsigned)opt_long("--threads", optarg, 1, 64);
+            threads = (unsigned)opt_long("--threads", optarg, 0, 64);
         else if (c == 'h') {
             puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet]\n"
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"

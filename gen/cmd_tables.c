@@ -256,7 +256,7 @@ static void tables_help(const char *cmd)
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
            "  --half         store half floats\n"
-           "  --threads T    worker threads (default: all CPUs)\n"
+           "  --threads T    worker threads, 0..64 (default 0: all CPUs)\n"
            "  --no-preview   no PNG preview\n"
            "  --quiet        no progress lines on stderr (by default: the plan's predicted time, each set's\n"
            "                 start with its predicted time and its end with the actual time, and\n"
@@ -374,7 +374,7 @@ int cmd_tables(int argc, char **argv)
             break;
         case 'm': s.xmax = opt_double("--max", optarg, 0, 1, 1e6, 0); break;
         case 'H': s.half = 1; break;
-        case 'j': threads = (unsigned)opt_long("--threads", optarg, 1, 64); break;
+        case 'j': threads = (unsigned)opt_long("--threads", optarg, 0, 64); break;
         case 'P': preview = 0; break;
         case 'q': quiet = 1; break;
         case 'h': tables_help(cmd); return 0;

@@ -26,4 +26,17 @@ mkdir "$tmp/lf" "$tmp/crlf"
 [ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ -s "$tmp/crlf/t/J40_hg_g_0.3.exr" ] && [ ! -e "$tmp/crlf/t/J1_hg_g_0.3.exr" ] &&
   cmp -s "$tmp/lf/out" "$tmp/crlf/out" && cmp -s "$tmp/lf/t/H_hg_g_0.3.exr" "$tmp/crlf/t/H_hg_g_0.3.exr" && ok ||
   bad "CR LF scene: rc $rc1/$rc2, $(cat "$tmp/crlf/err") $(diff "$tmp/lf/out" "$tmp/crlf/out")"
+# ---- --threads 0 means all CPUs (as in nbt-scatter): the same tables as one thread
+NBT_FIT=$(abspath "${NBT_FIT:-./nbt-fit}")
+"$NBT_GEN" airlight --phase hg:g=0.4 --size 17x9 --threads 0 --no-preview --quiet -o "$tmp/t0.exr" >"$tmp/t0.out" 2>&1 &&
+  "$NBT_GEN" airlight --phase hg:g=0.4 --size 17x9 --threads 1 --no-preview --quiet -o "$tmp/t1.exr" >/dev/null 2>&1 &&
+  cmp -s "$tmp/t0.exr" "$tmp/t1.exr" && ok || bad "airlight --threads 0: $(cat "$tmp/t0.out")"
+"$NBT_GEN" scene "$tmp/lf.scene" -o "$tmp/sc0" --threads 0 --quiet >/dev/null 2>"$tmp/err" &&
+  cmp -s "$tmp/sc0/H_hg_g_0.3.exr" "$tmp/lf/t/H_hg_g_0.3.exr" && ok || bad "scene --threads 0: $(cat "$tmp/err")"
+expect_usage "--threads 65" "--threads.*65" "$NBT_GEN" airlight --phase iso --threads 65 -o "$tmp/t65.exr"
+# nbt-fit mc: results are identical for any --threads, 0 included
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --phase hg:g=0.7 --photons 20000 --slab 1.5 --seed 3 --threads 0 >"$tmp/m0" 2>"$tmp/err" &&
+  "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --phase hg:g=0.7 --photons 20000 --slab 1.5 --seed 3 --threads 1 >"$tmp/m1" 2>/dev/null &&
+  [ -s "$tmp/m0" ] && cmp -s "$tmp/m0" "$tmp/m1" && ok || bad "mc --threads 0: $(cat "$tmp/err")"
+
 finish
