@@ -39,4 +39,25 @@ expect_usage "--threads 65" "--threads.*65" "$NBT_GEN" airlight --phase iso --th
   "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --phase hg:g=0.7 --photons 20000 --slab 1.5 --seed 3 --threads 1 >"$tmp/m1" 2>/dev/null &&
   [ -s "$tmp/m0" ] && cmp -s "$tmp/m0" "$tmp/m1" && ok || bad "mc --threads 0: $(cat "$tmp/err")"
 
+# ---- nbt-demo: options are checked, the output before the work (when built with GL)
+if [ -n "${NBT_DEMO:-}" ] && [ -x "$NBT_DEMO" ]; then
+  NBT_DEMO=$(abspath "$NBT_DEMO")
+  mkdir "$tmp/demo" "$tmp/dir.png"
+  (cd "$tmp/demo" && "$NBT_DEMO" --foo >../out 2>../err); rc=$?
+  [ $rc -eq 2 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "unknown option '--foo'" "$tmp/err" &&
+    [ -z "$(ls -A "$tmp/demo")" ] && ok || bad "nbt-demo --foo: rc=$rc, $(cat "$tmp/err"), wrote: $(ls -A "$tmp/demo")"
+  expect_usage "nbt-demo --width without a value" "--width (missing)" "$NBT_DEMO" --width
+  expect_usage "nbt-demo --width 12x" "--width 12x is not accepted: an integer 16..4096" "$NBT_DEMO" --width 12x
+  expect_usage "nbt-demo two outputs" "one output only" "$NBT_DEMO" "$tmp/demo/a.png" "$tmp/demo/b.png"
+  expect_usage "nbt-demo output not .png" "must be a file name ending in .png" "$NBT_DEMO" "$tmp/demo/a.exr"
+  # one line, exit 1 and no rendering report: refused before the tables and drawing
+  expect_fail "nbt-demo unwritable output" "cannot write '$tmp/missing/x.png': No such file" "$NBT_DEMO" "$tmp/missing/x.png"
+  expect_fail "nbt-demo output a directory" "cannot write '$tmp/dir.png': Is a directory" "$NBT_DEMO" "$tmp/dir.png"
+  [ -z "$(ls -A "$tmp/demo")" ] && ok || bad "refused nbt-demo runs left $(ls -A "$tmp/demo")"
+  # a real run: the picture (6 panels of 16x12 by 2 rows) and nothing else
+  PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
+  "$NBT_DEMO" "$tmp/demo/d.png" --width 16 2>"$tmp/err" && [ "$("$PNGCHECK" "$tmp/demo/d.png")" = "96 24" ] &&
+    [ "$(ls -A "$tmp/demo")" = "d.png" ] && ok || bad "nbt-demo --width 16: $(cat "$tmp/err"), $(ls -A "$tmp/demo")"
+fi
+
 finish
