@@ -60,4 +60,41 @@ if [ -n "${NBT_DEMO:-}" ] && [ -x "$NBT_DEMO" ]; then
     [ "$(ls -A "$tmp/demo")" = "d.png" ] && ok || bad "nbt-demo --width 16: $(cat "$tmp/err"), $(ls -A "$tmp/demo")"
 fi
 
+# ---- a signal during a multi-file write removes the run's files: the
+# temporaries (PATH.tmpPID) and the finished files of the set and of the
+# sets before it, and the directory the run created; the exit is by the signal.
+# wait_for COND PID: poll (50 ms, at most 60 s) until the shell test COND holds
+wait_for() {
+  i=0
+  while [ $i -lt 1200 ] && kill -0 "$2" 2>/dev/null; do
+    if eval "$1"; then return 0; fi
+    sleep 0.05; i=$((i + 1))
+  done
+  return 1
+}
+# (1) between sets: set 1 (H) written, set 2 (J^20) being built
+printf 'kappa_t = 0.5\ndistance = 20\ng = 0:0.5\nbasis = legendre\ndiffuse = no\nphong = 20\ntol = 1e-3\n' >"$tmp/sig.scene"
+"$NBT_GEN" scene "$tmp/sig.scene" -o "$tmp/sig" >"$tmp/sig.out" 2>"$tmp/sig.err" &
+pid=$!
+if wait_for '[ -s "$tmp/sig/H_k0-3.png" ] && grep -q "set 2/2 J20: building" "$tmp/sig.err"' $pid; then
+  kill -TERM $pid; wait $pid; rc=$?
+  [ $rc -eq 143 ] && [ ! -e "$tmp/sig" ] && grep -q "interrupted: the files of this run were removed" "$tmp/sig.err" && ok ||
+    bad "SIGTERM between sets: rc=$rc, left: $(ls "$tmp/sig" 2>&1 | tr '\n' ' ')"
+else
+  wait $pid; bad "SIGTERM between sets: the moment was missed: $(cat "$tmp/sig.err")"
+fi
+# (2) while writing: some of a 16-file set finished, others still temporaries; the
+# directory existed before, so it stays (empty)
+mkdir "$tmp/sigw"
+"$NBT_GEN" airlight --kmax 63 --size 385x385 --max 4 -o "$tmp/sigw/h.exr" >"$tmp/sig.out" 2>"$tmp/sig.err" &
+pid=$!
+if wait_for 'ls "$tmp/sigw" | grep -q "[.]tmp[0-9]" && ls "$tmp/sigw" | grep -q "[.]exr\$"' $pid; then
+  seen=$(ls "$tmp/sigw" | tr '\n' ' ')
+  kill -TERM $pid; wait $pid; rc=$?
+  [ $rc -eq 143 ] && [ -d "$tmp/sigw" ] && [ -z "$(ls -A "$tmp/sigw")" ] && ok ||
+    bad "SIGTERM while writing: rc=$rc, seen: $seen, left: $(ls -A "$tmp/sigw" | tr '\n' ' ')"
+else
+  wait $pid; bad "SIGTERM while writing: the moment was missed: $(cat "$tmp/sig.err"), $(ls "$tmp/sigw" | wc -l) files"
+fi
+
 finish
