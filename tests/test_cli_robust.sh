@@ -97,4 +97,15 @@ else
   wait $pid; bad "SIGTERM while writing: the moment was missed: $(cat "$tmp/sig.err"), $(ls "$tmp/sigw" | wc -l) files"
 fi
 
+# ---- eval psi --model fitted: no per-point bound, so the error column is nan (it
+# was 0); outside the fitted tau range (the default model's is [0.5, 10]) the
+# value is called an extrapolation
+"$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1.3 --B 0.0685 --z 2.3 --r 0.7 --model fitted >"$tmp/out" 2>"$tmp/err" &&
+  [ "$(cut -d' ' -f2 "$tmp/out")" = nan ] && ! grep -q extrapolation "$tmp/err" && ok ||
+  bad "fitted psi in range: $(cat "$tmp/out" "$tmp/err")"
+"$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1.3 --B 0.0685 --z 30 --r 0.7 --model fitted >"$tmp/out" 2>"$tmp/err" &&
+  [ "$(cut -d' ' -f2 "$tmp/out")" = nan ] &&
+  grep -q "tau = sigma_t z = 39 is outside the fitted range \[0.5, 10\]: the value is an extrapolation" "$tmp/err" && ok ||
+  bad "fitted psi outside the range: $(cat "$tmp/out" "$tmp/err")"
+
 finish
