@@ -108,4 +108,18 @@ fi
   grep -q "tau = sigma_t z = 39 is outside the fitted range \[0.5, 10\]: the value is an extrapolation" "$tmp/err" && ok ||
   bad "fitted psi outside the range: $(cat "$tmp/out" "$tmp/err")"
 
+# ---- docs: every nbt-fit command of --help is in the man page's SYNOPSIS; the README
+# names both variables Open MPI's mpirun needs as root; shaders.md names every
+# sampler macro the modules use
+srcdir=${top_srcdir:-.}
+syn=$(sed -n '/^\.SH SYNOPSIS/,/^\.SH DESCRIPTION/p' "$srcdir/doc/nbt-fit.1")
+for c in mc kernel model phase screenmodel; do
+  echo "$syn" | grep -q "^\.B nbt-fit $c" && ok || bad "nbt-fit.1 SYNOPSIS lacks '$c'"
+done
+grep -q "OMPI_ALLOW_RUN_AS_ROOT=1" "$srcdir/README.md" && grep -q "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1" "$srcdir/README.md" &&
+  ok || bad "README: mpirun as root"
+for m in $(cat "$srcdir"/shaders/*.glsl | grep -o '^NBT_SAMPLER[A-Z0-9]*' | sort -u); do
+  grep -q "\`$m\`" "$srcdir/doc/shaders.md" && ok || bad "shaders.md does not name $m"
+done
+
 finish
