@@ -7,15 +7,19 @@
  * kernel of a Gaussian lobe of the same mean cosine, depth in 64 layers).
  * Columns five and six are g = 0.9 and 0.95 drawn from one set of g-sliced
  * tables (HG g on a third axis, sampler3D) at the run-time uniform nbt_g.
- * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel) */
+ * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel; unknown
+ * options are refused, the output is opened before the work and renamed into place) */
 #include <config.h>
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
+#include <sys/stat.h>
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/gl.h>
 #include <GL/glext.h>
@@ -89,16 +93,21 @@ static nbt_table *assemble_gsliced(nbt_table_kind kind, int n, size_t N, const n
     return t;
 }
 
-static int write_png(const char *path, const unsigned char *rgb, int w, int h)
+/* the output's temporary, removed at exit unless renamed into place */
+static char tmp_path[4096];
+static void remove_tmp(void)
 {
-    FILE *f = fopen(path, "wb");
-    if (!f)
-        return 1;
+    if (tmp_path[0])
+        unlink(tmp_path);
+}
+
+/* 0 on success; f stays open (the caller closes it) */
+static int write_png(FILE *f, const unsigned char *rgb, int w, int h)
+{
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!png || !info || setjmp(png_jmpbuf(png))) {
         png_destroy_write_struct(&png, info ? &info : NULL);
-        fclose(f);
         return 1;
     }
     png_init_io(png, f);
@@ -109,7 +118,7 @@ static int write_png(const char *path, const unsigned char *rgb, int w, int h)
         png_write_row(png, (png_const_bytep)(rgb + (size_t)(h - 1 - y) * (size_t)w * 3)); /* GL rows are bottom-up */
     png_write_end(png, NULL);
     png_destroy_write_struct(&png, &info);
-    return fclose(f) != 0;
+    return ferror(f) != 0;
 }
 
 /* px holds (airlight, surface radiance, distance) per pixel; replace it by
@@ -219,10 +228,19 @@ int main(int argc, char **argv)
 {
     const char *out = "nbt-demo.png";
     int pw = 320;
+    int have_out = 0;
     for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--width") && i + 1 < argc)
-            pw = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--version")) {
+        if (!strcmp(argv[i], "--width")) {
+            char *end = NULL;
+            long v = i + 1 < argc ? strtol(argv[i + 1], &end, 10) : 0;
+            if (i + 1 >= argc || end == argv[i + 1] || *end || v < 16 || v > 4096) {
+                fprintf(stderr, "nbt-demo: --width %s is not accepted: an integer 16..4096\n",
+                        i + 1 < argc ? argv[i + 1] : "(missing)");
+                return 2;
+            }
+            pw = (int)v;
+            i++;
+        } else if (!strcmp(argv[i], "--version")) {
             printf("nbt-demo (nbt) %s\n", nbt_version());
             return 0;
         } else if (!strcmp(argv[i], "--help")) {
@@ -230,13 +248,38 @@ int main(int argc, char **argv)
                  "from g-sliced tables at a run-time g (columns) x kappa = 0.05, 0.2 (rows); each panel labelled\n"
                  "with its g and kappa.");
             return 0;
-        } else
+        } else if (argv[i][0] == '-' && argv[i][1]) {
+            /* an option taken for a file name wrote a PNG called "--foo" */
+            fprintf(stderr, "nbt-demo: unknown option '%s': accepted are OUT.png, --width W, --help, --version\n",
+                    argv[i]);
+            return 2;
+        } else if (have_out) {
+            fprintf(stderr, "nbt-demo: one output only: '%s' and '%s'\n", out, argv[i]);
+            return 2;
+        } else {
             out = argv[i];
+            have_out = 1;
+        }
     }
-    if (pw < 16 || pw > 4096) {
-        fprintf(stderr, "nbt-demo: --width %d is not accepted: 16..4096\n", pw);
+    size_t olen = strlen(out);
+    if (olen < 5 || strcmp(out + olen - 4, ".png")) {
+        fprintf(stderr, "nbt-demo: '%s' is not accepted: the output must be a file name ending in .png\n", out);
         return 2;
     }
+    /* the output is opened (as a temporary, renamed at the end) before the
+     * tables and rendering, seconds of work, not after them */
+    struct stat sb;
+    if (stat(out, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        fprintf(stderr, "nbt-demo: cannot write '%s': %s\n", out, strerror(EISDIR));
+        return 1;
+    }
+    snprintf(tmp_path, sizeof tmp_path, "%s.tmp%ld", out, (long)getpid());
+    FILE *fo = strlen(out) + 32 < sizeof tmp_path ? fopen(tmp_path, "wb") : NULL;
+    if (!fo) {
+        fprintf(stderr, "nbt-demo: cannot write '%s': %s\n", out, strerror(errno ? errno : ENAMETOOLONG));
+        return 1;
+    }
+    atexit(remove_tmp);
     enum { NCOL = 6 };
     int ph = pw * 3 / 4, W = NCOL * pw, H = 2 * ph;
     char err[4096];
@@ -333,7 +376,11 @@ int main(int argc, char **argv)
     glDeleteTextures(3, tex);
     for (int i = 0; i < 3; i++)
         nbt_table_free(t[i]);
-    int rc = write_png(out, img, W, H);
+    /* written to the temporary and renamed: never a half-written picture */
+    int rc = write_png(fo, img, W, H);
+    rc = fclose(fo) != 0 || rc != 0 || rename(tmp_path, out) != 0;
+    if (rc == 0)
+        tmp_path[0] = '\0';
     fprintf(stderr, "nbt-demo: %s (%dx%d): %d panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
             "(%s, CPU figures are for relative comparisons only); g = 0.9 from g-sliced tables differs from the "
             "fixed-phase panel by at most %d/255\n", out, W, H, 2 * NCOL,

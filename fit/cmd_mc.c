@@ -201,7 +201,7 @@ int cmd_mc(int argc, char **argv)
         case 'p': phase = optarg; break;
         case 'n': c.photons = (uint64_t)opt_double("--photons", optarg, 64, 0, 1e15, 0); have[2] = 1; break;
         case 'S': c.seed = (uint64_t)opt_long("--seed", optarg, 0, 0x7fffffffL); break;
-        case 'j': c.threads = (unsigned)opt_long("--threads", optarg, 1, 64); break;
+        case 'j': c.threads = (unsigned)opt_long("--threads", optarg, 0, 64); break;
         case 'z': planes = optarg; break;
         case 'r': c.r_bins = (size_t)opt_long("--r-bins", optarg, 1, 100000); break;
         case 'F': c.r_max_scale = opt_double("--r-max-scale", optarg, 0, 1, 1e6, 0); break;

@@ -324,7 +324,31 @@ static int eval_beam(const args_t *a, const char *what)
                       inf ? "infinite (--infinite)" : "half-space");
         double v;
         st = nbt_beam_fit_psi(f, inf, &m, z, r, &v);
-        print_result(st, v, 0);
+        if (st != NBT_OK)
+            die("evaluation failed: %s", nbt_strerror(st));
+        /* The model carries no per-point bound (its measured error is in
+         * doc/fit.md): the error column is nan, never a false 0. Outside
+         * the fitted range of tau, albedo or B its P_i are held at their
+         * edge values: an extrapolation, said on stderr. */
+        double zeta, lam, Bmix = 0;
+        for (size_t i = 0; i < m.nlobes; i++)
+            Bmix += m.w[i] * m.B[i];
+        if (nbt_beam_fit_equivalent(&m, z, &zeta, &lam) != NBT_OK)
+            zeta = z;
+        const double q[3] = {m.sigma_t * zeta, m.albedo, Bmix};
+        static const char *const qn[3] = {"tau = sigma_t z", "albedo", "B"};
+        printf("%.17g nan\n", v);
+        int outside = 0;
+        for (int i = 0; i < 3; i++)
+            if (f->range[i][0] < f->range[i][1] && (q[i] < f->range[i][0] || q[i] > f->range[i][1])) {
+                fprintf(stderr, "nbt-gen: warning: %s = %g is outside the fitted range [%g, %g]: the value is an "
+                        "extrapolation (the model's parameters held at the range's edge), with no error bound\n",
+                        qn[i], q[i], f->range[i][0], f->range[i][1]);
+                outside = 1;
+            }
+        if (!outside)
+            fprintf(stderr, "nbt-gen: note: the fitted model gives no per-point error bound (error column nan); its "
+                    "measured error against photon counts is in doc/fit.md\n");
     } else {
         static const char *names[] = {"ishimaru", "smallangle", "lineint", "single", "elek"};
         static const nbt_psi_model models[] = {NBT_PSI_ISHIMARU, NBT_PSI_SMALLANGLE, NBT_PSI_LINEINT, NBT_PSI_SINGLE,

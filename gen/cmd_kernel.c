@@ -11,6 +11,7 @@
 #include <string.h>
 #include "cli.h"
 #include "commands.h"
+#include "outputs.h"
 #include "preview.h"
 
 typedef struct {
@@ -21,6 +22,28 @@ typedef struct {
 } kctx;
 
 /* the fitted model's log-parameters P_i at (tau, albedo): smooth in ln tau, so they interpolate well */
+/* the files written through the registry of outputs.h: removed if the run
+ * fails later or is interrupted */
+static int write_exr(const nbt_table *t, const char *path)
+{
+    outputs_file *r = outputs_add(path);
+    if (!r || outputs_begin(r))
+        return 1;
+    int ok = nbt_table_write_exr(t, path, NBT_EXR_ZIP) == NBT_OK;
+    outputs_end(r, ok);
+    return !ok;
+}
+
+static int write_png(const nbt_table *t, const char *path)
+{
+    outputs_file *r = outputs_add(path);
+    if (!r || outputs_begin(r))
+        return 1;
+    int ok = preview_write_png(t, path) == 0;
+    outputs_end(r, ok);
+    return !ok;
+}
+
 static int fitted_fn(double tau, double albedo, double *out, void *vp)
 {
     const kctx *c = vp;
@@ -70,9 +93,9 @@ static int write_fitted(const char *out, const nbt_beam_fit *fit, int infinite, 
             die("tabulating the kernel model failed");
     }
     /* both files or neither */
-    if (nbt_table_write_exr(t[0], out, NBT_EXR_ZIP) != NBT_OK)
+    if (write_exr(t[0], out) != 0)
         die("cannot write '%s'", out);
-    if (nbt_table_write_exr(t[1], p4, NBT_EXR_ZIP) != NBT_OK) {
+    if (write_exr(t[1], p4) != 0) {
         remove(out);
         die("cannot write '%s'", p4);
     }
@@ -189,9 +212,9 @@ int cmd_kernel(int argc, char **argv)
         die("tabulating the kernel failed");
     char png[1024];
     snprintf(png, sizeof png, "%.*s.png", (int)(n - 4), out);
-    if (nbt_table_write_exr(t, out, NBT_EXR_ZIP) != NBT_OK)
+    if (write_exr(t, out) != 0)
         die("cannot write '%s'", out);
-    if (preview_write_png(t, png) != 0)
+    if (write_png(t, png) != 0)
         die("cannot write '%s'", png);
     printf("%s %zux%zu tau:log1p(c=1000)[%g,%g] albedo:linear[%g,%g]  max interp err alpha %.2e (rel %.2e) "
            "beta %.2e (rel %.2e)\n", out, W, H, t0, t1, a0, a1, t->max_err[0], t->max_err[0] / t->max_abs[0],

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include "cli.h"
 #include "commands.h"
+#include "outputs.h"
 #include "scene.h"
 
 /* The scene's sets as g-sliced tables (basis slices): H, J^1, J^n at the
@@ -42,7 +43,9 @@ static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, i
                       nbt_table_kind_name(rq[i].kind), rq[i].kind == NBT_TABLE_J ? "^n" : "", t[i]->axis[0].n,
                       t[i]->axis[1].n, t[i]->axis[2].n, secs);
     }
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+    if (mkdir(dir, 0777) == 0)
+        outputs_dir(dir); /* removed again if the run fails or is interrupted */
+    else if (errno != EEXIST)
         die("cannot create the directory '%s': %s", dir, strerror(errno));
     int rc = 0;
     for (size_t i = 0; i < n; i++) {
@@ -78,7 +81,7 @@ int cmd_scene(int argc, char **argv)
         else if (c == 'q')
             quiet = 1;
         else if (c == 'j')
-            threads = (unsigned)opt_long("--threads", optarg, 1, 64);
+            threads = (unsigned)opt_long("--threads", optarg, 0, 64);
         else if (c == 'h') {
             puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet]\n"
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"
@@ -121,7 +124,9 @@ int cmd_scene(int argc, char **argv)
         nbt_plan_legendre leg = nbt_plan_legendre_budget(plan);
         print_legendre(&leg, fmax(fabs(s.g[0]), fabs(s.g[1])));
     }
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+    if (mkdir(dir, 0777) == 0)
+        outputs_dir(dir); /* removed again if the run fails or is interrupted */
+    else if (errno != EEXIST)
         die("cannot create the directory '%s': %s", dir, strerror(errno));
     int rc = 0;
     size_t ns = nbt_plan_count(plan);

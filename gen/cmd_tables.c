@@ -14,6 +14,7 @@
 #include <unistd.h>
 #include "cli.h"
 #include "commands.h"
+#include "outputs.h"
 #include "preview.h"
 #include "progress.h"
 
@@ -83,6 +84,7 @@ typedef struct {
     const nbt_table *t;
     char *path;
     int png, ok, skip; /* skip: a preview not asked for */
+    outputs_file *reg; /* removed on a signal or a later failure (outputs.h) */
 } out_job;
 
 typedef struct {
@@ -96,8 +98,10 @@ static void *out_worker(void *vq)
     out_queue *q = vq;
     for (size_t i; (i = atomic_fetch_add(&q->next, 1)) < q->n;) {
         out_job *j = &q->job[i];
-        if (!j->skip)
-            j->ok = j->png ? preview_write_png(j->t, j->path) == 0 : nbt_table_write_exr(j->t, j->path, NBT_EXR_ZIP) == NBT_OK;
+        if (j->skip || outputs_begin(j->reg))
+            continue;
+        j->ok = j->png ? preview_write_png(j->t, j->path) == 0 : nbt_table_write_exr(j->t, j->path, NBT_EXR_ZIP) == NBT_OK;
+        outputs_end(j->reg, j->ok);
     }
     return NULL;
 }
@@ -155,7 +159,7 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
             size_t len = strlen(stems[s]) + 32;
             for (int png = 0; png < 2; png++) {
                 char *path = malloc(len);
-                job[i + (size_t)png] = (out_job){t, path, png, 0, png && !preview};
+                job[i + (size_t)png] = (out_job){t, path, png, 0, png && !preview, NULL};
                 if (!path) {
                     rc = 1;
                     break;
@@ -164,6 +168,10 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
                     snprintf(path, len, "%s.%s", stems[s], png ? "png" : "exr");
                 else
                     snprintf(path, len, "%s_k%d-%d.%s", stems[s], t->k[0], t->k[t->nch - 1], png ? "png" : "exr");
+                if (!job[i + (size_t)png].skip && !(job[i + (size_t)png].reg = outputs_add(path))) {
+                    rc = 1;
+                    break;
+                }
             }
         }
     if (rc != 0)
@@ -256,7 +264,7 @@ static void tables_help(const char *cmd)
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
            "  --half         store half floats\n"
-           "  --threads T    worker threads (default: all CPUs)\n"
+           "  --threads T    worker threads, 0..64 (default 0: all CPUs)\n"
            "  --no-preview   no PNG preview\n"
            "  --quiet        no progress lines on stderr (by default: the plan's predicted time, each set's\n"
            "                 start with its predicted time and its end with the actual time, and\n"
@@ -374,7 +382,7 @@ int cmd_tables(int argc, char **argv)
             break;
         case 'm': s.xmax = opt_double("--max", optarg, 0, 1, 1e6, 0); break;
         case 'H': s.half = 1; break;
-        case 'j': threads = (unsigned)opt_long("--threads", optarg, 1, 64); break;
+        case 'j': threads = (unsigned)opt_long("--threads", optarg, 0, 64); break;
         case 'P': preview = 0; break;
         case 'q': quiet = 1; break;
         case 'h': tables_help(cmd); return 0;
@@ -456,7 +464,9 @@ int cmd_default(int argc, char **argv)
         die_usage("unknown option '%s' (see 'nbt-gen --help')", argv[1]);
     const char *dir = "nbt-tables";
     check_writable_dir("nbt-gen", dir);
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+    if (mkdir(dir, 0777) == 0)
+        outputs_dir(dir); /* removed again if the run fails or is interrupted */
+    else if (errno != EEXIST)
         die("cannot create the directory '%s': %s", dir, strerror(errno));
     /* the thesis' set: H_0..3, J_0..3^1, J_0..3^20, u and T in [0, 10],
      * theta over [0, pi]; resolution planned for 1e-3 relative error */

@@ -4,6 +4,7 @@
 #include <string.h>
 #include "cli.h"
 #include "commands.h"
+#include "outputs.h"
 
 static void help(void)
 {
@@ -21,9 +22,8 @@ static void help(void)
          "file that is missing, unreadable or malformed.");
 }
 
-int main(int argc, char **argv)
+static int run(int argc, char **argv)
 {
-    cli_prog = "nbt-gen";
     if (argc < 2 || !strcmp(argv[1], "--quiet") || !strcmp(argv[1], "-q"))
         return cmd_default(argc, argv);
     const char *c = argv[1];
@@ -46,4 +46,15 @@ int main(int argc, char **argv)
     if (!strcmp(c, "kernel"))
         return cmd_kernel(argc - 1, argv + 1);
     die_usage("unknown command '%s': airlight, surface, scene, eval, info, kernel (see 'nbt-gen --help')", c);
+}
+
+int main(int argc, char **argv)
+{
+    cli_prog = "nbt-gen";
+    /* an interrupted or failed run leaves none of its files (outputs.h) */
+    outputs_install();
+    int rc = run(argc, argv);
+    if (rc == 0)
+        outputs_commit();
+    return rc;
 }

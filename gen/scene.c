@@ -34,10 +34,14 @@ typedef struct {
     char phase[256];
 } seen_t;
 
+static const char *const scene_keys[] = {"kappa_t", "kappa_s", "distance", "g", "basis", "phase",
+                                         "airlight", "diffuse", "phong", "tol", "half", "orders_max"};
+#define NKEYS (sizeof scene_keys / sizeof scene_keys[0])
+
 static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, char *err, size_t n)
 {
     char buf[1024], opt[160];
-    int line = 0;
+    int line = 0, first[NKEYS] = {0}; /* the line that set each key */
     while (fgets(buf, sizeof buf, f)) {
         line++;
         char *h = strchr(buf, '#');
@@ -54,6 +58,16 @@ static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, ch
         *eq = '\0';
         char *key = trim(l), *val = trim(eq + 1);
         snprintf(opt, sizeof opt, "%s:%d: %s", path, line, key);
+        /* a second value would silently replace the first: refuse it */
+        for (size_t i = 0; i < NKEYS; i++)
+            if (!strcmp(key, scene_keys[i])) {
+                if (first[i]) {
+                    snprintf(err, n, "%s:%d: %s is given twice (first at line %d): give each key once", path, line,
+                             key, first[i]);
+                    return -1;
+                }
+                first[i] = line;
+            }
         if (!strcmp(key, "kappa_t")) {
             if (msg_range(err, n, opt, val, 0, 1e3, &s->kappa_t[0], &s->kappa_t[1]))
                 return -1;
