@@ -123,6 +123,17 @@ int main(void)
     put1("airlight.table", La);
     nbt_tableset_free(&ts);
     nbt_plan_free(pl);
+    /* a planned J^1 table (orders 0..3, 17 x 9) and surface radiance from it (diffuse only) */
+    nbt_plan_request rj = {NBT_TABLE_J, 1, 4, NULL, 4.0, 0.0, {17, 9}, 0};
+    if (nbt_plan_tables(&rj, 1, 1, &pl, NULL, 0) != NBT_OK || nbt_plan_execute(pl, 0, &ts, NULL, 0) != NBT_OK)
+        die("plan J");
+    nbt_surface_geom sd = {0.1, 0.25, 2.0, 3.0, 0.4, 1.1, 0.6, 0.0, 1};
+    const nbt_table *tj[1] = {ts.t[0]};
+    if (nbt_surface_table(tj, 1, NULL, 0, b, 4, &sd, &La) != NBT_OK)
+        die("surface_table");
+    put1("surface.table", La);
+    nbt_tableset_free(&ts);
+    nbt_plan_free(pl);
 
     /* the photon counter: 4096 photons, seed 3, two planes, 3 bins */
     const double zp[2] = {0.5, 1.5};

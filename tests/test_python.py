@@ -133,6 +133,30 @@ ok(np.allclose(nv, d[0, 5, 3], rtol=1e-6, atol=0), "lookup at a node is the stor
 ax0, ax1 = t.axis(0), t.axis(1)
 ok(ax0["map"] == "log1p_cbrt" and ax1["map"] == "cos", "planned mappings %r %r" % (ax0["map"], ax1["map"]))
 
+tj, _ = nbt.plan_table("J", 4.0, nterms=4, n=1, size=(17, 9), nthreads=1).execute(0)
+same("surface.table", nbt.airlight.surface_table(tj, [], b[:4], 0.1, 0.25, 2.0, 3.0, 0.4, 1.1, 0.6, 0.0, 1))
+# EXR round trip: the same floats and axes back
+import os
+import tempfile
+with tempfile.TemporaryDirectory() as td:
+    t.write_exr(os.path.join(td, "H.exr"))
+    t2 = nbt.Table.read_exr(os.path.join(td, "H.exr"))
+    ok(np.array_equal(t2.data, d) and t2.axis(0) == t.axis(0) and t2.orders == t.orders, "EXR round trip")
+    raises("read a missing EXR", "nope.exr", nbt.Table.read_exr, os.path.join(td, "nope.exr"))
+# a scene plan with a fixed phase: the built H_p table against the exact H_p (nbt_h_phase) at
+# off-node points, within the table's own recorded interpolation error (plus the quadrature's)
+ph = nbt.Phase("hg:g=0.3")
+sp = nbt.plan_scene(0.2, 10.0, phase=ph, diffuse=False, tol=2e-2, nthreads=1)
+ok(len(sp) == 1 and sp.set(0)["kind"] == "H", "scene plan: one H set, got %d" % len(sp))
+th, rel = sp.execute(0)
+worst = 0.0
+for u, v in ((0.37, -0.9), (1.3, 0.2), (0.05, 1.1)):
+    exact = nbt.airlight.h_phase(ph, u, v)[0]
+    worst = max(worst, abs(th[0].lookup(u, v)[0] - exact) / th[0].max_err[0])
+print("H_p lookup: worst %.3g of max_err, rel_err %.3g" % (worst, rel))
+ok(rel <= 2e-2 and worst <= 1.0 + 1e-6, "H_p lookup within max_err: worst %.3g of the bound, rel_err %.3g"
+   % (worst, rel))
+
 # ---- the photon counter ----
 r = nbt.mc.run(1.0, 0.9, hg, [0.5, 1.5], r_bins=3, r_max_scale=0.8, photons=4096, seed=3, threads=1)
 same("mc.psi", r["psi"])
