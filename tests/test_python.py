@@ -191,6 +191,16 @@ kk = kf.eval(3.3)
 same("kernel.T", kk["T"])
 same("kernel.mass", kk["mass"])
 same("kernel.scale", kk["scale"])
+# an RGB kernel: channel c is what the grey kernel of channel c's medium gives in channel c
+sig = (0.3, 0.45, 0.6)
+krgb = nbt.Kernel.rgb(*[nbt.Kernel.phase("first", s_, 0.8, hg, "inside") for s_ in sig])
+ok(krgb.channels == 3, "an RGB kernel has 3 channels")
+Srgb, _ = nbt.screen.layered(rgb, D, 0.02, krgb, max_layers=4, nthreads=1)
+for c_, s_ in enumerate(sig):
+    Sg, Tg = nbt.screen.layered(rgb, D, 0.02, nbt.Kernel.phase("first", s_, 0.8, hg, "inside"), max_layers=4,
+                                nthreads=1)
+    err_ = np.max(np.abs(Srgb[..., c_] - Sg[..., c_])) / np.max(Sg[..., c_])
+    ok(err_ <= 1e-12, "RGB kernel channel %d against its grey kernel: %g" % (c_, err_))
 # layered and brute are the same operator (round-off apart)
 Sb, Tb = nbt.screen.brute(rgb, D, 0.02, kf, nthreads=1)
 ok(np.max(np.abs(Sb - S)) <= 1e-12 * np.max(S), "brute vs layered: %g" % np.max(np.abs(Sb - S)))

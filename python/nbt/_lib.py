@@ -69,14 +69,18 @@ def _load():
 
 lib, library_path = _load()
 
-# ---- the error handler: the last reason libnbt gave, per thread ----
+# ---- the error handler: the last reason libnbt gave (per thread, and the latest of any) ----
 _last = threading.local()
 _HANDLER = ctypes.CFUNCTYPE(None, ctypes.c_char_p, c_int)
 
 
+_any = {"msg": None}  # the latest from any thread: libnbt may report from a worker thread
+
+
 def _on_error(reason, status):
-    _last.msg = reason.decode("utf-8", "replace") if reason else None
-    _last.status = status
+    msg = reason.decode("utf-8", "replace") if reason else None
+    _last.msg = msg
+    _any["msg"] = msg
 
 
 _handler = _HANDLER(_on_error)  # kept alive for the library's lifetime
@@ -89,10 +93,12 @@ lib.nbt_strerror.argtypes = [c_int]
 
 def clear_error():
     _last.msg = None
+    _any["msg"] = None
 
 
 def last_error():
-    return getattr(_last, "msg", None)
+    """libnbt's latest reason: this thread's, else any thread's (None after a successful call's reset)."""
+    return getattr(_last, "msg", None) or _any["msg"]
 
 
 def raise_error(status, fallback=None, err_buf=None):

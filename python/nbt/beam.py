@@ -65,14 +65,15 @@ def _broadcast_call(fn, *arrays):
 
 
 def moments(medium, z, model="ishimaru"):
-    """(M0, M2) of the scattered light on the plane at depth z (arrays broadcast)."""
+    """(M0, M2) of the scattered light on the plane at depth z (a number or an array)."""
     mi = _model(model, MOMENT_MODELS)
-
-    def one(zz, which):
-        M0, M2, err = c_double(), c_double(), c_double()
-        call(_moments, ctypes.byref(medium.struct), mi, zz, ctypes.byref(M0), ctypes.byref(M2), ctypes.byref(err))
-        return M0.value if which == 0 else M2.value
-    return _broadcast_call(lambda zz: one(zz, 0), z), _broadcast_call(lambda zz: one(zz, 1), z)
+    zz = np.asarray(z, dtype=np.float64)
+    M0, M2 = np.empty(zz.shape), np.empty(zz.shape)
+    a, b = c_double(), c_double()
+    for i, v in np.ndenumerate(zz):
+        call(_moments, ctypes.byref(medium.struct), mi, float(v), ctypes.byref(a), ctypes.byref(b), None)
+        M0[i], M2[i] = a.value, b.value
+    return (float(M0), float(M2)) if zz.ndim == 0 else (M0, M2)
 
 
 def kernel_params(M0, M2):
