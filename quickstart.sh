@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 mode=${1:-run}
 case $mode in run|check) ;; *) echo "usage: ./quickstart.sh [check]" >&2; exit 2 ;; esac
 
-PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libfftw3-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libopenvdb-dev libboost-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools libopenmpi-dev openmpi-bin clang libclang-rt-14-dev"
+PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libfftw3-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libopenvdb-dev libboost-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools spirv-cross glslc python3-numpy libopenmpi-dev openmpi-bin clang libclang-rt-14-dev"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

@@ -10,11 +10,18 @@
 // nbt_lookup3q is its quadratic-in-g variant (interp2 = 2): three bilinear
 // fetches at the centres of the slices nearest to x2.
 const float NBT_PI = 3.14159265358979;
+#ifdef NBT_VULKAN
+// HLSL has no atanh, so SPIRV-Cross cannot translate it: the Vulkan variant
+// (the source of the generated HLSL and MSL) uses its log form
+float nbt_atanh(float x) { return 0.5 * log((1.0 + x) / (1.0 - x)); }
+#else
+#define nbt_atanh atanh
+#endif
 
 float nbt_axis_unit(float x, vec4 a, int map)
 {
     if (map == 5)
-        return clamp((atanh(clamp(x, a.x, a.y)) - atanh(a.x)) / (atanh(a.y) - atanh(a.x)), 0.0, 1.0);
+        return clamp((nbt_atanh(clamp(x, a.x, a.y)) - nbt_atanh(a.x)) / (nbt_atanh(a.y) - nbt_atanh(a.x)), 0.0, 1.0);
     float r = clamp((x - a.x) / (a.y - a.x), 0.0, 1.0);
     if (map == 1)
         return sqrt(r);
