@@ -272,6 +272,42 @@ static void test_model(void)
     nbt_phase_free(pn);
 }
 
+/* ---- between nodes the log mass is cubic in -ln(1 - albedo) and ln(tau): exact for cubic data ---- */
+static double cubic_logm(double a, double tau)
+{
+    double x = -log1p(-a), y = log(tau);
+    return -1.0 + 0.3 * x - 0.05 * x * x + 0.004 * x * x * x + 0.5 * y - 0.08 * y * y + 0.01 * y * y * y;
+}
+
+static void test_model_cubic(void)
+{
+    const double g[] = {0.9}, alb[] = {0.5, 0.8, 0.95, 0.99, 0.999}, tau[] = {0.25, 1.0, 4.0, 16.0};
+    nbt_screen_model *m = nbt_screen_model_alloc(NULL, 1, g, 5, alb, 4, tau);
+    for (int geo = 0; geo < 2; geo++)
+        for (size_t ia = 0; ia < 5; ia++)
+            for (size_t it = 0; it < 4; it++) {
+                nbt_screen_shape s;
+                memset(&s, 0, sizeof s);
+                s.erfc[12] = exp(cubic_logm(alb[ia], tau[it]));
+                nbt_screen_model_set(m, (nbt_screen_geometry)geo, 0, ia, it, &s);
+            }
+    nbt_phase *p = nbt_phase_hg(0.9);
+    /* asymmetric points: an inner interval (cubic on four nodes) and an end interval (quadratic on three) */
+    const double pts[][2] = {{0.9, 2.5}, {0.97, 0.4}, {0.6, 9.0}, {0.995, 11.0}};
+    for (size_t j = 0; j < sizeof pts / sizeof pts[0]; j++) {
+        nbt_screen_shape o;
+        nbt_screen_model_eval(m, p, NBT_SCREEN_INSIDE, pts[j][0], pts[j][1], &o, NULL);
+        double x = -log1p(-pts[j][0]), y = log(pts[j][1]);
+        int inner_a = x > -log1p(-0.8) && x < -log1p(-0.99), inner_t = y > 0 && y < log(4.0);
+        /* cubic data: exact where four nodes serve both axes; a quadratic at an end interval misses the
+         * cubic term by up to 0.004 |(x - x0)(x - x1)(x - x2)| ~ 1e-3 in the log */
+        t_rel(nbt_screen_shape_mass(&o, 0, INFINITY), exp(cubic_logm(pts[j][0], pts[j][1])),
+              inner_a && inner_t ? 1e-12 : 2e-2, "model: log mass cubic at albedo %g, tau %g", pts[j][0], pts[j][1]);
+    }
+    nbt_phase_free(p);
+    nbt_screen_model_free(m);
+}
+
 /* ---- the shipped model covers HG 0..0.95; the fitted kernel adds it to the exact first order ---- */
 static void test_fitted(void)
 {
@@ -316,6 +352,7 @@ int main(void)
     test_far_weights();
     test_rgb();
     test_model();
+    test_model_cubic();
     test_fitted();
     return t_done();
 }
