@@ -1,5 +1,6 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
- * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), and a constant density grid
+ * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), the means of a
+ * written file's layer (mkexr IN.exr mean LAYER), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
  * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
  * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
@@ -21,6 +22,26 @@
 int main(int argc, char **argv)
 {
     char err[256];
+    if (argc == 4 && !strcmp(argv[2], "mean")) { /* the mean of every FLOAT channel named LAYER.* over the data window */
+        nbt_image *im = NULL;
+        if (nbt_image_read_exr(argv[1], &im, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "%s\n", err);
+            return 1;
+        }
+        size_t n = strlen(argv[3]), found = 0;
+        for (size_t j = 0; j < im->nchannels; j++) {
+            const nbt_image_channel *c = &im->channels[j];
+            if (c->type != NBT_PIXEL_FLOAT || !c->data || strncmp(c->name, argv[3], n) || c->name[n] != '.')
+                continue;
+            double sum = 0;
+            for (size_t i = 0; i < im->w * im->h; i++)
+                sum += ((const float *)c->data)[i];
+            printf("%s %.9g\n", c->name, sum / (double)(im->w * im->h));
+            found++;
+        }
+        nbt_image_free(im);
+        return found ? 0 : 1;
+    }
     if (argc == 4 && !strcmp(argv[2], "grid")) {
         double o[3] = {-19.5, -19.5, -39.5};
         nbt_grid *g = nbt_grid_alloc(40, 40, 41, o, 1.0);
