@@ -844,7 +844,7 @@ static double *crop(const double *a, size_t n, const nbt_image *im, const frame 
     return c;
 }
 
-static void compare(const opts *o, const nbt_image *im, const frame *fr, const float *D, double dtheta,
+static void compare(const nbt_image *im, const frame *fr, const float *D, double dtheta,
                     const nbt_screen_kernel *k, const double *S, const double *T3, const nbt_image *ref)
 {
     size_t nf = fr->w * fr->h;
@@ -920,7 +920,6 @@ static void compare(const opts *o, const nbt_image *im, const frame *fr, const f
     }
     printf("\n");
     free(near);
-    (void)o;
     free(Sf);
     free(Sr);
     free(rgb);
@@ -997,6 +996,7 @@ int main(int argc, char **argv)
     in.pix = pix;
     char qhow[160];
     double gpu_ms = -1;
+    unsigned long spp_done = 0;
     /* beyond the data window the CPU operators see the border continued as its mirror image (colour and planar
      * depth): a wall that runs out of the frame keeps sending light, and a lamp cut by the edge is seen once
      * more, not smeared into a streak as repeating the edge pixels would */
@@ -1065,8 +1065,7 @@ int main(int argc, char **argv)
         Sse = calloc(np * 3, sizeof *Sse);
         if (!Sp || !sp || !Sse)
             die("out of memory");
-        unsigned long done = 0;
-        if ((st = nbt_screen_path(&wd, &pm, &po, Sp, sp, &done)) != NBT_OK)
+        if ((st = nbt_screen_path(&wd, &pm, &po, Sp, sp, &spp_done)) != NBT_OK)
             die("--method path failed: %s", nbt_strerror(st));
         double noise = nbt_screen_binned_noise(fr.w, fr.h, Sp, sp, 4);
         for (size_t y = 0; y < fr.h; y++)
@@ -1076,7 +1075,7 @@ int main(int argc, char **argv)
                     S[i] = Sp[(y * fr.w + x) * 3 + (size_t)c];
                     Sse[i] = sp[(y * fr.w + x) * 3 + (size_t)c];
                 }
-        snprintf(qhow, sizeof qhow, "path tracing (%lu samples per pixel, 4x4-binned noise %.3g%%)", done,
+        snprintf(qhow, sizeof qhow, "path tracing (%lu samples per pixel, 4x4-binned noise %.3g%%)", spp_done,
                  100 * noise);
         how = qhow;
         free(Sp);
@@ -1167,7 +1166,7 @@ int main(int argc, char **argv)
                 100 * g15, 100 * g50);
     }
     if (ref)
-        compare(&o, im, &fr, D, dtheta, k, S, T3, ref);
+        compare(im, &fr, D, dtheta, k, S, T3, ref);
 
     /* the frame: direct plus scattered, with S, T and the off-screen fraction as layers */
     nbt_image *out = nbt_image_alloc(im->w, im->h, 1);
@@ -1193,7 +1192,7 @@ int main(int argc, char **argv)
     }
     char sb[32], sspp[32], sseed[32];
     snprintf(sb, sizeof sb, "%.17g", o.med.B);
-    snprintf(sspp, sizeof sspp, "%ld", o.spp);
+    snprintf(sspp, sizeof sspp, "%lu", spp_done);
     snprintf(sseed, sizeof sseed, "%llu", o.seed);
     const char *attrs[32];
     size_t na = 0;
