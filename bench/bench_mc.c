@@ -23,6 +23,7 @@
 #include <string.h>
 #include <time.h>
 #include <nbt/nbt.h>
+#include "../libnbt/rng.h" /* the lean loops draw from libnbt's generator, seeded per photon as libnbt/mc.c does */
 #ifdef HAVE_GL
 #include <nbt/gl_mc.h>
 #include "../examples/egl_headless.h"
@@ -45,40 +46,10 @@ static double cpu(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* the lean loops' RNG: xoshiro256+ seeded per photon as in libnbt/mc.c */
-typedef struct {
-    uint64_t s[4];
-} lrng;
-static uint64_t lsplit(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-static void lseed(lrng *r, uint64_t seed, uint64_t photon)
-{
-    uint64_t x = seed ^ (photon * 0xd1b54a32d192ed03u);
-    lsplit(&x);
-    for (int i = 0; i < 4; i++)
-        r->s[i] = lsplit(&x);
-}
-static inline double lu(lrng *r)
-{
-    uint64_t *s = r->s, res = s[0] + s[3], t = s[1] << 17;
-    s[2] ^= s[0];
-    s[3] ^= s[1];
-    s[1] ^= s[2];
-    s[0] ^= s[3];
-    s[2] ^= t;
-    s[3] = (s[3] << 45) | (s[3] >> 19);
-    return (double)(res >> 11) * 0x1.0p-53;
-}
-
 /* new direction after scattering by polar cosine mu, azimuth from the stream */
-static inline void lturn(lrng *r, double mu, double *ux, double *uy, double *uz)
+static inline void lturn(nbt__rng *r, double mu, double *ux, double *uy, double *uz)
 {
-    double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * lu(r), cp = cos(phi), sp = sin(phi);
+    double st = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * nbt__rng_u(r), cp = cos(phi), sp = sin(phi);
     if (fabs(*uz) > 0.99999) {
         *ux = st * cp;
         *uy = st * sp;
@@ -100,11 +71,11 @@ static void lean_slab(uint64_t n, double albedo, double g, double d, double *R, 
     uint64_t nr = 0, nt = 0;
     double g2 = g * g, h = 0.5 / g;
     for (uint64_t ph = 0; ph < n; ph++) {
-        lrng r;
-        lseed(&r, 1, ph);
+        nbt__rng r;
+        nbt__rng_seed(&r, 1, ph);
         double z = 0, ux = 0, uy = 0, uz = 1;
         for (;;) {
-            double zn = z - log1p(-lu(&r)) * uz;
+            double zn = z - log1p(-nbt__rng_u(&r)) * uz;
             if (zn < 0) {
                 nr++;
                 break;
@@ -114,9 +85,9 @@ static void lean_slab(uint64_t n, double albedo, double g, double d, double *R, 
                 break;
             }
             z = zn;
-            if (lu(&r) >= albedo)
+            if (nbt__rng_u(&r) >= albedo)
                 break;
-            double f = (1 - g2) / (1 - g + 2 * g * lu(&r)), mu = (1 + g2 - f * f) * h;
+            double f = (1 - g2) / (1 - g + 2 * g * nbt__rng_u(&r)), mu = (1 + g2 - f * f) * h;
             lturn(&r, mu, &ux, &uy, &uz);
         }
     }
@@ -130,12 +101,12 @@ static double lean_planes(uint64_t n, double albedo, double B, int np, int nb, d
 {
     double *acc = calloc((size_t)np * (nb + 2), sizeof(double));
     for (uint64_t ph = 0; ph < n; ph++) {
-        lrng r;
-        lseed(&r, 1, ph);
+        nbt__rng r;
+        nbt__rng_seed(&r, 1, ph);
         double x = 0, y = 0, z = 0, ux = 0, uy = 0, uz = 1;
         int scattered = 0;
         for (;;) {
-            double d = -log1p(-lu(&r)), zn = z + d * uz;
+            double d = -log1p(-nbt__rng_u(&r)), zn = z + d * uz;
             if (scattered && uz > 0) { /* planes j + 1 in (z, min(zn, zcut)] */
                 double ze = zn < zcut ? zn : zcut, iu = 1.0 / uz;
                 for (int j = (int)floor(z); j < np && j + 1 <= ze; j++) {
@@ -152,12 +123,12 @@ static double lean_planes(uint64_t n, double albedo, double B, int np, int nb, d
             x += d * ux;
             y += d * uy;
             z = zn;
-            if (lu(&r) >= albedo)
+            if (nbt__rng_u(&r) >= albedo)
                 break;
             scattered = 1;
             double th;
             do
-                th = sqrt(-4.0 * B * log1p(-lu(&r)));
+                th = sqrt(-4.0 * B * log1p(-nbt__rng_u(&r)));
             while (th >= M_PI);
             lturn(&r, cos(th), &ux, &uy, &uz);
         }
