@@ -461,6 +461,13 @@ static frame frame_of(const opts *o, const nbt_image *im)
     return f;
 }
 
+/* distance along the ray per unit planar depth at pixel (x, y) (may lie outside the data window) */
+static double ray_factor(const frame *fr, double dtheta, long x, long y)
+{
+    double u = ((double)x + 0.5 - fr->cx) * dtheta, v = ((double)y + 0.5 - fr->cy) * dtheta;
+    return sqrt(1.0 + u * u + v * v);
+}
+
 /* the render as the operators need it: distances along the ray, from the optical axis at (cx, cy) */
 static float *ray_distances(const opts *o, const nbt_image *im, const frame *fr, double dtheta)
 {
@@ -475,11 +482,10 @@ static float *ray_distances(const opts *o, const nbt_image *im, const frame *fr,
             if (isnan(Z) || Z < 0)
                 die_usage("%s: depth Z at pixel (%zu, %zu) is %g: expected >= 0 (sky: >= 1e10 or inf)", o->in, x, y,
                           Z);
-            double u = ((double)x + 0.5 - fr->cx) * dtheta, v = ((double)y + 0.5 - fr->cy) * dtheta;
             if (Z >= NBT_SCREEN_SKY)
                 D[i] = INFINITY;
             else
-                D[i] = (float)(o->ray_depth ? Z : Z * sqrt(1.0 + u * u + v * v));
+                D[i] = (float)(o->ray_depth ? Z : Z * ray_factor(fr, dtheta, (long)x, (long)y));
         }
     /* radiance: finite, and negative only by a pixel filter's ringing (a small fraction of the brightest) */
     double big = 0;
@@ -1024,14 +1030,14 @@ int main(int argc, char **argv)
                 long sx = (long)x - (long)P, sy = (long)y - (long)P;
                 size_t cx = mirror(sx, im->w), cy = mirror(sy, im->h);
                 size_t j = cy * im->w + cx, i = y * W + x;
+                int beyond = sx < 0 || sy < 0 || sx >= (long)im->w || sy >= (long)im->h;
                 memcpy(xrgb + 3 * i, im->rgb + 3 * j, 3 * sizeof *xrgb);
                 double lum = (double)xrgb[3 * i] + xrgb[3 * i + 1] + xrgb[3 * i + 2];
-                if ((cx != (size_t)sx || cy != (size_t)sy) && lum > cap)
+                if (beyond && lum > cap)
                     for (int c = 0; c < 3; c++)
                         xrgb[3 * i + c] = (float)(xrgb[3 * i + c] * cap / lum);
-                double Z = im->z[j], u = ((double)sx + 0.5 - fr.cx) * dtheta, v = ((double)sy + 0.5 - fr.cy) * dtheta;
-                xD[i] = (cx == (size_t)sx && cy == (size_t)sy) || !isfinite(D[j]) || o.ray_depth || D[j] == 0
-                            ? D[j] : (float)(Z * sqrt(1.0 + u * u + v * v));
+                xD[i] = !beyond || !isfinite(D[j]) || o.ray_depth || D[j] == 0
+                            ? D[j] : (float)(im->z[j] * ray_factor(&fr, dtheta, sx, sy));
             }
         in = (nbt_screen_input){W, H, xrgb, xD, dtheta, NULL};
         Sop = xS;
