@@ -306,6 +306,9 @@ static nbt_status check_request(const nbt_plan_request *r, char *err, size_t err
  * measured rates on the rule's mappings are 1.7 (J^1, its theta) .. 2; H's
  * cost grows with the node count, J's mostly with the rows (G and M). */
 #define P_CONSERVATIVE 1.75
+/* a predicted error this many times tol at the largest size is a planning-time
+ * refusal: the rate from two proxies is not better known than that */
+#define TOL_MISS_MARGIN 4.0
 static double cost_exponent(const nbt_plan_request *r)
 {
     return r->kind == NBT_TABLE_H ? 2.0 : 1.1;
@@ -353,7 +356,7 @@ static size_t ladder_size(double e33, double p, double tol)
  * taken. Both builds are kept for execution at those sizes (cache: 2 x
  * NBT_PLAN_MAX_PACKS slots). */
 static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jcache *gc, nbt_plan_set *ps,
-                           nbt_table **cache)
+                           nbt_table **cache, double *need_n)
 {
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
@@ -394,8 +397,18 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jc
                 a = fmin(fmax(log(secs[1] / secs[0]) / log(65.0 / 33.0), 1.0), 2.0);
         }
     }
-    if (r->tol > 0)
+    if (r->tol > 0) {
+        /* refused now rather than after growing through the ladder (minutes):
+         * the largest size misses tol by more than the rate's uncertainty
+         * (a factor TOL_MISS_MARGIN) */
+        double e_last = e[0] * pow(32.0 / (double)(SIZES[NSIZES - 1] - 1), p);
+        if (e_last > TOL_MISS_MARGIN * r->tol) {
+            ps->pred_err = e_last;
+            *need_n = 1.0 + 32.0 * pow(e[0] / r->tol, 1.0 / p);
+            return NBT_ETOL;
+        }
         N0 = N1 = ladder_size(e[0], p, r->tol);
+    }
     ps->axis[0] = make_axis(r, 0, N0);
     ps->axis[1] = make_axis(r, 1, N1);
     double Nm = sqrt((double)(N0 - 1) * (double)(N1 - 1));
@@ -437,8 +450,24 @@ nbt_status nbt_plan_tables(const nbt_plan_request *req, size_t nreq, unsigned nt
     nbt_status st = plan_alloc(nreq, nthreads, &p);
     if (st != NBT_OK)
         return failf(err, errlen, st, "plan: out of memory");
-    for (size_t i = 0; i < nreq && st == NBT_OK; i++, p->count++)
-        st = plan_set(&req[i], nthreads, p->gc, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS);
+    size_t i = 0;
+    double need_n = 0;
+    for (; i < nreq && st == NBT_OK; i++, p->count++)
+        st = plan_set(&req[i], nthreads, p->gc, &p->sets[i], p->cache + 2 * i * NBT_PLAN_MAX_PACKS, &need_n);
+    if (st == NBT_ETOL) {
+        const nbt_plan_request *r = &req[i - 1];
+        double e_last = p->sets[i - 1].pred_err;
+        char what[64];
+        if (r->phase)
+            snprintf(what, sizeof what, "a fixed phase");
+        else
+            snprintf(what, sizeof what, "%zu Legendre orders", r->nterms);
+        nbt_plan_free(p);
+        return failf(err, errlen, st, "tol %g is out of reach for the %s table with %s: its 33x33 proxy predicts "
+                     "about %.3gx%.3g nodes, and an error of %.2g at the largest size, %zux%zu: ask for a larger "
+                     "tolerance, fewer orders or a smaller range", r->tol, r->kind == NBT_TABLE_H ? "H" : "J", what,
+                     need_n, need_n, e_last, SIZES[NSIZES - 1], SIZES[NSIZES - 1]);
+    }
     if (st != NBT_OK) {
         nbt_plan_free(p);
         return failf(err, errlen, st, "plan: the proxy builds failed: %s", nbt_strerror(st));
@@ -547,7 +576,8 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
     const nbt_plan_set *ps = &p->sets[i];
     const nbt_plan_request *r = &ps->req;
     nbt_axis a0 = ps->axis[0], a1 = ps->axis[1];
-    double t0 = now_s();
+    double t0 = now_s(), prev_err = 0;
+    size_t prev_n = 0;
     for (;;) {
         nbt_status st = NBT_OK;
         nbt_table *const *cache = NULL;
@@ -573,7 +603,25 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
         out->rel_err = set_error(out->t, out->count);
         if (r->tol <= 0 || out->rel_err <= r->tol)
             break;
-        size_t next = nbt__ladder_next(SIZES, NSIZES, a0.n > a1.n ? a0.n : a1.n);
+        size_t n = a0.n > a1.n ? a0.n : a1.n, next = nbt__ladder_next(SIZES, NSIZES, n);
+        if (prev_n > 0 && next != 0) {
+            /* two sizes missed: the measured rate says how large the set
+             * must grow; stop now where that is beyond the ladder, rather
+             * than after building every size up to it */
+            double rate = log(prev_err / out->rel_err) / log((double)(n - 1) / (double)(prev_n - 1));
+            double need = rate > 0.1 ? 1.0 + (double)(n - 1) * pow(out->rel_err / r->tol, 1.0 / rate) : INFINITY;
+            if (need > TOL_MISS_MARGIN * (double)SIZES[NSIZES - 1]) {
+                double worst = out->rel_err;
+                nbt_tableset_free(out);
+                return failf(err, errlen, NBT_ETOL, "tol %g is out of reach for this %s table: its error fell from %.2g "
+                             "at %zux%zu to %.2g at %zux%zu (rate %.2f), which needs about %.3g nodes per axis, more "
+                             "than the largest size, 2049: ask for a larger tolerance, fewer orders or a smaller "
+                             "range", r->tol, r->kind == NBT_TABLE_H ? "H" : "J", prev_err, prev_n, prev_n, worst, n, n,
+                             rate, need);
+            }
+        }
+        prev_n = n;
+        prev_err = out->rel_err;
         if (next == 0) {
             double worst = out->rel_err;
             nbt_tableset_free(out);

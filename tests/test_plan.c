@@ -353,8 +353,51 @@ static void test_plan_scene(void)
     nbt_phase_free(hg);
 }
 
+/* A fixed phase whose table does not converge at tol: the Gaussian lobe
+ * B = 0.3 at 1e-3 (H over u in [0, 10]) measured 3.1e-3 at 193^2, 2.9e-3 at
+ * 257^2 and still 1.3e-3 at the largest size, 2049^2 (growing there took
+ * 36 s). Execution stops after two sizes, naming the measured rate and the
+ * size it would need, instead of growing through the ladder; a tol it does
+ * reach (3e-3 at 193^2 to 257^2) still builds. */
+static void test_plan_out_of_reach(void)
+{
+    nbt_phase *ph = nbt_phase_gauss(0.3);
+    nbt_plan_request r = {NBT_TABLE_H, 1, 1, ph, 10.0, 1e-3, {0, 0}, 0};
+    nbt_plan *p = NULL;
+    char err[512] = "";
+    nbt_status st = nbt_plan_tables(&r, 1, 0, &p, err, sizeof err);
+    t_true(st == NBT_OK && p, "gauss:B=0.3 at 1e-3: planned (%s)", st ? err : "ok");
+    if (!p) {
+        nbt_phase_free(ph);
+        return;
+    }
+    nbt_tableset ts;
+    st = nbt_plan_execute(p, 0, &ts, err, sizeof err);
+    size_t n1 = 0, n2 = 0;
+    const char *at = strstr(err, " at ");
+    if (at)
+        sscanf(at, " at %zux", &n1);
+    if (at && (at = strstr(at + 1, " at ")))
+        sscanf(at, " at %zux", &n2);
+    t_true(st == NBT_ETOL && strstr(err, "out of reach") && strstr(err, "nodes per axis") && n1 > 0 && n2 > n1 &&
+               n2 < 2049,
+           "gauss:B=0.3 at 1e-3: ETOL after two sizes below 2049 (%zu, %zu), naming the need: %s", n1, n2, err);
+    nbt_plan_free(p);
+    r.tol = 4e-3;
+    st = nbt_plan_tables(&r, 1, 0, &p, err, sizeof err);
+    if (st == NBT_OK)
+        st = nbt_plan_execute(p, 0, &ts, err, sizeof err);
+    t_true(st == NBT_OK && ts.rel_err <= 4e-3, "gauss:B=0.3 at 4e-3 builds (%s, %.3g)", st ? err : "ok",
+           st ? 0.0 : ts.rel_err);
+    if (st == NBT_OK)
+        nbt_tableset_free(&ts);
+    nbt_plan_free(p);
+    nbt_phase_free(ph);
+}
+
 int main(void)
 {
+    test_plan_out_of_reach();
     test_scene_check();
     test_legendre();
     test_plan_tables();
