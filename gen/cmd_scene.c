@@ -17,7 +17,7 @@
 /* The scene's sets as g-sliced tables (basis slices): H, J^1, J^n at the
  * scene's tol, written to DIR/H_hg_slices.exr, J1_hg_slices.exr, ... All
  * built before any is written. */
-static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, int quiet)
+static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, int quiet, int allow_miss)
 {
     nbt_gslice_request rq[2 + NBT_SCENE_MAX_PHONG];
     size_t n = 0;
@@ -43,6 +43,18 @@ static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, i
                       nbt_table_kind_name(rq[i].kind), rq[i].kind == NBT_TABLE_J ? "^n" : "", t[i]->axis[0].n,
                       t[i]->axis[1].n, t[i]->axis[2].n, secs);
     }
+    /* every set checked before anything is written */
+    int miss = 0;
+    for (size_t i = 0; i < n; i++) {
+        char name[64];
+        snprintf(name, sizeof name, "scene: set %zu/%zu", i + 1, n);
+        miss |= gslice_tol_check(t[i], name, s->tol, allow_miss);
+    }
+    if (miss) {
+        for (size_t i = 0; i < n; i++)
+            nbt_table_free(t[i]);
+        return 1;
+    }
     if (mkdir(dir, 0777) == 0)
         outputs_dir(dir); /* removed again if the run fails or is interrupted */
     else if (errno != EEXIST)
@@ -54,7 +66,7 @@ static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, i
             snprintf(stem, sizeof stem, "%s/H_hg_slices", dir);
         else
             snprintf(stem, sizeof stem, "%s/J%d_hg_slices", dir, rq[i].n);
-        nbt_tableset ts = {{t[i]}, 1, t[i]->max_abs[0], t[i]->max_err[0] / t[i]->max_abs[0], 0};
+        nbt_tableset ts = {{t[i]}, 1, t[i]->max_abs[0], gslice_lookup_err(t[i]), 0};
         if (rc == 0)
             rc = tableset_write(&ts, stem, 1);
         nbt_table_free(t[i]);
@@ -69,25 +81,30 @@ int cmd_scene(int argc, char **argv)
     static const struct option opts[] = {{"output", required_argument, 0, 'o'},
                                          {"threads", required_argument, 0, 'j'},
                                          {"quiet", no_argument, 0, 'q'},
+                                         {"allow-tol-miss", no_argument, 0, 'A'},
                                          {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     const char *dir = "nbt-tables";
     unsigned threads = 0;
-    int c, quiet = 0;
+    int c, quiet = 0, allow_miss = 0;
     optind = 1;
     while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
         if (c == 'o')
             dir = optarg;
         else if (c == 'q')
             quiet = 1;
+        else if (c == 'A')
+            allow_miss = 1;
         else if (c == 'j')
             threads = (unsigned)opt_long("--threads", optarg, 0, 64);
         else if (c == 'h') {
-            puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet]\n"
+            puts("Usage: nbt-gen scene FILE [-o DIR] [--threads T] [--quiet] [--allow-tol-miss]\n"
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"
                  "each with the smallest size and Legendre order count meeting its tol; with a g\n"
                  "range, Legendre packs or g-sliced tables by the scene's basis key (default auto:\n"
-                 "the smaller predicted build time, printed with the reason).\n"
+                 "the smaller predicted build time, printed with the reason). A g-sliced table\n"
+                 "whose recorded lookup error misses tol is an error (exit 1, nothing written)\n"
+                 "unless --allow-tol-miss.\n"
                  "Progress on stderr: each set's start with its predicted time, its end with the\n"
                  "actual time, one warning line when the plan predicts more than 60 s; --quiet: none.");
             return 0;
@@ -109,7 +126,7 @@ int cmd_scene(int argc, char **argv)
             die("%s: %s", argv[optind], err);
         printf("# basis %s\n", ch.reason);
         if (ch.basis == NBT_BASIS_SLICES)
-            return scene_slices(&s, dir, threads, quiet);
+            return scene_slices(&s, dir, threads, quiet, allow_miss);
     }
     nbt_plan *plan = NULL;
     progress prog;

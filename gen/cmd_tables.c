@@ -79,6 +79,36 @@ static void print_tail_map(const nbt_table *t)
            100.0 * (double)k2 / (double)n);
 }
 
+double gslice_lookup_err(const nbt_table *t)
+{
+    return t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? t->max_err[0] : t->max_err[0] / t->max_abs[0];
+}
+
+/* The fraction of a tail-form table's nodes whose error map is <= e. */
+static double tail_coverage(const nbt_table *t, double e)
+{
+    size_t n = nbt_table_size(t) / t->nch, k = 0;
+    for (size_t i = 0; i < n; i++)
+        k += t->data[i * t->nch + 1] <= e;
+    return (double)k / (double)n;
+}
+
+int gslice_tol_check(const nbt_table *t, const char *name, double tol, int allow)
+{
+    double e = gslice_lookup_err(t);
+    if (!(tol > 0) || e <= tol)
+        return 0;
+    char cover[160] = "";
+    if (t->form == NBT_FORM_TAIL)
+        snprintf(cover, sizeof cover, " (its error map is <= tol at %.1f%% of the nodes; libnbt's airlight route "
+                 "integrates along the ray where it is not)", 100.0 * tail_coverage(t, tol));
+    fprintf(stderr, "nbt-gen: %s: %s: the g-sliced %s table's recorded lookup error is %.2e, above tol %.2e%s%s\n",
+            name, allow ? "warning" : "error", nbt_table_kind_name(t->kind), e, tol, cover,
+            allow ? "; written anyway (--allow-tol-miss)" : ": nothing written; pass --allow-tol-miss to write it anyway,"
+                                                           " or ask for a larger tol or a smaller g range");
+    return !allow;
+}
+
 /* One output file: table t of a set as EXR (png == 0) or as its PNG preview. */
 typedef struct {
     const nbt_table *t;
@@ -245,7 +275,8 @@ static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threa
 static void tables_help(const char *cmd)
 {
     printf("Usage: nbt-gen %s [-o FILE.exr] [--size WxH | --tol EPS] [--kmax K | --g LO:HI | --phase SPEC]\n"
-           "       %*s [--basis legendre|slices|auto] [--max X] [--half] [--threads T] [--no-preview] [--quiet]%s\n\n"
+           "       %*s [--basis legendre|slices|auto] [--max X] [--half] [--threads T] [--no-preview] [--quiet]%s\n"
+           "       %*s [--allow-tol-miss]\n\n"
            "Tabulates %s on a node-aligned grid and writes OpenEXR (+ PNG preview).\n"
            "  -o FILE.exr    output (default ./%s.exr; more than 4 orders: FILE_k0-3.exr, ...)\n"
            "  --size WxH     nodes per axis (2..4096); mappings by the planner's rule: log1p_cbrt (u/T),\n"
@@ -259,7 +290,9 @@ static void tables_help(const char *cmd)
            "                 target is tol/2 over the error amplification sum (2k+1)|g|^k\n"
            "  --basis B      with --g: legendre (the orders above), slices (one 3-D table of HG\n"
            "                 slices on an atanh g axis, quadratic in g: nbt/gslice.h) or auto (default:\n"
-           "                 the smaller predicted build time; prints why); slices need --tol\n"
+           "                 the smaller predicted build time; prints why); slices need --tol, and a\n"
+           "                 g-sliced table whose recorded lookup error misses tol is an error (exit 1,\n"
+           "                 nothing written) unless --allow-tol-miss\n"
            "  --phase SPEC   fixed phase instead: iso, rayleigh, hg:g=G, gauss:B=B, table:FILE\n"
            "  --max X        upper end of %s (default 10), 0 < X <= 1e6\n"
            "%s"
@@ -269,7 +302,7 @@ static void tables_help(const char *cmd)
            "  --quiet        no progress lines on stderr (by default: the plan's predicted time, each set's\n"
            "                 start with its predicted time and its end with the actual time, and\n"
            "                 one warning line when the plan predicts more than 60 s)\n",
-           cmd, (int)strlen(cmd), "", strcmp(cmd, "surface") ? "" : " [--n N]",
+           cmd, (int)strlen(cmd), "", strcmp(cmd, "surface") ? "" : " [--n N]", (int)strlen(cmd), "",
            strcmp(cmd, "surface") ? "H_k(u, v), u in [0, X], v in [-pi/2, pi/2]"
                                   : "J_k^n(T, theta), T in [0, X], theta in [0, pi]",
            strcmp(cmd, "surface") ? "H" : "J<n>", strcmp(cmd, "surface") ? "u" : "T",
@@ -290,7 +323,7 @@ static void parse_size(const char *arg, size_t *w, size_t *h)
  * write the g-sliced table. Returns the exit status, or -1 when the
  * Legendre tables were chosen (the caller builds them). */
 static int slices_or_legendre(const nbt_plan_request *s, double g_lo, double g_hi, nbt_basis basis, unsigned threads,
-                              const char *out, int preview, int quiet)
+                              const char *out, int preview, int quiet, int allow_miss)
 {
     nbt_gslice_request r = {s->kind, s->n, s->xmax, {g_lo, g_hi}, s->tol, {0, 0, 0}, s->half};
     if (!(g_lo < g_hi)) {
@@ -325,10 +358,10 @@ static int slices_or_legendre(const nbt_plan_request *s, double g_lo, double g_h
         snprintf(stem, sizeof stem, "H_hg_slices");
     else
         snprintf(stem, sizeof stem, "J%d_hg_slices", s->n);
-    /* the tail form records its error relative to the value already */
-    double rel = t->form == NBT_FORM_TAIL ? t->max_err[0] : t->max_err[0] / t->max_abs[0];
-    nbt_tableset ts = {{t}, 1, t->max_abs[0], rel, now_seconds() - t0};
-    int rc = tableset_write(&ts, stem, preview);
+    nbt_tableset ts = {{t}, 1, t->max_abs[0], gslice_lookup_err(t), now_seconds() - t0};
+    int rc = gslice_tol_check(t, stem, s->tol, allow_miss);
+    if (rc == 0)
+        rc = tableset_write(&ts, stem, preview);
     if (rc == 0)
         printf("# g-sliced: %zu slices, g %s [%g, %g], %.1f MB as %s, built in %.2f s (planning %.2f s)\n",
                t->axis[2].n, nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
@@ -349,7 +382,7 @@ int cmd_tables(int argc, char **argv)
     unsigned threads = 0;
     const char *out = NULL, *phase_spec = NULL, *basis_arg = NULL;
     nbt_basis basis = NBT_BASIS_AUTO;
-    int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1, quiet = 0;
+    int have_size = 0, have_tol = 0, have_k = 0, have_g = 0, preview = 1, quiet = 0, allow_miss = 0;
     double g_lo = 0, g_hi = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"size", required_argument, 0, 's'},
@@ -358,7 +391,7 @@ int cmd_tables(int argc, char **argv)
         {"g", required_argument, 0, 'g'},      {"basis", required_argument, 0, 'b'},
         {"max", required_argument, 0, 'm'},    {"half", no_argument, 0, 'H'},
         {"threads", required_argument, 0, 'j'}, {"no-preview", no_argument, 0, 'P'},
-        {"quiet", no_argument, 0, 'q'},
+        {"quiet", no_argument, 0, 'q'},         {"allow-tol-miss", no_argument, 0, 'A'},
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     int c;
     optind = 1;
@@ -385,6 +418,7 @@ int cmd_tables(int argc, char **argv)
         case 'j': threads = (unsigned)opt_long("--threads", optarg, 0, 64); break;
         case 'P': preview = 0; break;
         case 'q': quiet = 1; break;
+        case 'A': allow_miss = 1; break;
         case 'h': tables_help(cmd); return 0;
         default: die_usage("see 'nbt-gen %s --help'", cmd);
         }
@@ -422,7 +456,7 @@ int cmd_tables(int argc, char **argv)
     else
         check_writable_dir(cmd, ".");
     if (have_g && basis != NBT_BASIS_LEGENDRE) {
-        int rc = slices_or_legendre(&s, g_lo, g_hi, basis, threads, out, preview, quiet);
+        int rc = slices_or_legendre(&s, g_lo, g_hi, basis, threads, out, preview, quiet, allow_miss);
         if (rc >= 0) {
             nbt_phase_free(ph);
             return rc;

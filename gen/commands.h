@@ -24,6 +24,14 @@ int tableset_write(const nbt_tableset *ts, const char *path_stem, int preview);
  * all of them; the files are written in parallel, the lines printed in order. */
 int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview);
 
+/* A g-sliced table's recorded error as a pure lookup sees it: relative to
+ * the value for the tail and log_et forms, else to the largest value. */
+double gslice_lookup_err(const nbt_table *t);
+/* 0 when t's recorded lookup error meets tol; else one message naming both
+ * (and, for the tail form, what the error map covers) on stderr and 1,
+ * or with allow a warning on stderr and 0. */
+int gslice_tol_check(const nbt_table *t, const char *name, double tol, int allow);
+
 double now_seconds(void);
 
 /* Progress of planned builds (gen/progress.h): plan_announce notes the plan's

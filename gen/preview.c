@@ -296,8 +296,10 @@ int preview_write_png(const nbt_table *t, const char *path)
     static const char *what[4] = {"airlight H_k(u,v)", "surface J_k^n(T,theta)", "photon counts psi(r/z,z)",
                                   "narrow-beam kernel"};
     char cap[256], err[96];
-    if (have_err)
-        snprintf(err, sizeof err, "max interp err %.2e (%.2e of max)", e, m > 0 ? e / m : 0.0);
+    if (have_err && (t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET)) /* recorded relative to the value */
+        snprintf(err, sizeof err, "max interp err %.2e (rel %.2e)", e, e);
+    else if (have_err)
+        snprintf(err, sizeof err, "max interp err %.2e (rel %.2e)", e, m > 0 ? e / m : 0.0);
     else
         snprintf(err, sizeof err, "data, no interpolation error recorded");
     char nn[16] = "";

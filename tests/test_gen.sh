@@ -327,10 +327,18 @@ nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 # orders_max and the limit, and writes nothing; orders_max = 512 builds
 # ceil(N/4) packs; the default basis (auto) builds one g-sliced table instead
 printf 'kappa_t = 0.1\ndistance = 10\ng = 0:0.8\ndiffuse = no\ntol = 1e-2\n' >"$tmp/g8.scene"
-"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8s" --quiet >"$tmp/out" 2>&1 &&
+# its H table's recorded lookup error (the tail form's corner) misses tol: an error naming both, nothing
+# written; with --allow-tol-miss a warning, and the summary states the error the message named
+"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8s" --quiet >"$tmp/out" 2>"$tmp/err"; rc=$?
+miss=$(sed -n 's/.*recorded lookup error is \([0-9.e+-]*\), above tol 1.00e-02.*/\1/p' "$tmp/err")
+[ $rc -eq 1 ] && [ -n "$miss" ] && grep -q "allow-tol-miss" "$tmp/err" && [ ! -e "$tmp/g8s" ] && ok ||
+  bad "scene slices missing tol: exit 1, nothing written: rc $rc, $(cat "$tmp/err"), $(ls "$tmp/g8s" 2>&1)"
+"$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8s" --quiet --allow-tol-miss >"$tmp/out" 2>"$tmp/err" &&
   grep -q "^# basis slices: |g| up to 0.8 needs [0-9]* Legendre orders at tol 0.01 (at most 16)" "$tmp/out" &&
+  grep -q "warning: the g-sliced H table's recorded lookup error is $miss" "$tmp/err" &&
+  grep -q "^g8s/H_hg_slices.exr .*(rel $miss)\|H_hg_slices.exr .*(rel $miss)" "$tmp/out" &&
   [ "$(ls "$tmp/g8s")" = "H_hg_slices.exr
-H_hg_slices.png" ] && ok || bad "scene beyond 16 orders, basis auto: $(cat "$tmp/out"), $(ls "$tmp/g8s" 2>&1 | tr '\n' ' ')"
+H_hg_slices.png" ] && ok || bad "scene beyond 16 orders, basis auto, --allow-tol-miss: $(cat "$tmp/out" "$tmp/err"), $(ls "$tmp/g8s" 2>&1 | tr '\n' ' ')"
 printf 'basis = legendre\n' >>"$tmp/g8.scene"
 "$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8" >/dev/null 2>"$tmp/err"; rc=$?
 [ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "orders_max = 16" "$tmp/err" && grep -q "at most 16" "$tmp/err" &&
@@ -380,7 +388,11 @@ if [ -n "${top_builddir:-}" ] && [ -f "$top_builddir/Makefile" ]; then
 fi
 
 # g-sliced tables (nbt/gslice.h): build, describe, look up against the independent H_p, evaluate from the file
-"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet >"$tmp/gs.out" 2>&1 &&
+"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet >"$tmp/out" 2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "gs: error: .* above tol 2.00e-02" "$tmp/err" &&
+  [ ! -e "$tmp/gs.exr" ] && [ ! -e "$tmp/gs.png" ] && ok ||
+  bad "a g-sliced table missing tol: exit 1, one line, nothing written: rc $rc, $(cat "$tmp/err"), $(ls "$tmp"/gs.* 2>&1)"
+"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet --allow-tol-miss >"$tmp/gs.out" 2>&1 &&
   [ -s "$tmp/gs.exr" ] && [ -s "$tmp/gs.png" ] && grep -q "^# basis slices: requested" "$tmp/gs.out" && ok ||
   bad "airlight --basis slices: $(cat "$tmp/gs.out")"
 "$NBT_GEN" info "$tmp/gs.exr" --at 0.7,0.3,0.21 >"$tmp/gs.info"
