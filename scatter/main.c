@@ -670,6 +670,26 @@ static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_k
 }
 #endif
 
+/* What the method computes, for the status line: the GL gathers naive and
+ * elek read at the receiver's width (elek: Elek et al.'s rule, operator B's
+ * kernels); naive leaves sky receivers at 0 (no width to read at). */
+static const char *method_goal(const opts *o)
+{
+    if (o->method == 3)
+        return "the scene's world";
+    if (o->method == 1)
+        return "operator B";
+    if (o->method == 0)
+        return "operator A";
+    if (!strcmp(o->method_name, "elek"))
+        return "approximating operator B: a gather at the sources' blurred width";
+    if (!strcmp(o->method_name, "naive"))
+        return "a gather at each receiver's own width; sky receives nothing";
+    if (!strcmp(o->method_name, "shinya-literal"))
+        return "Shinya et al.'s Alg. 1-4 as printed";
+    return "approximating operator A";
+}
+
 static const char *kernel_label(const opts *o)
 {
 #ifdef HAVE_GL
@@ -1148,9 +1168,7 @@ int main(int argc, char **argv)
         for (size_t i = 0; i < np * 3; i++) /* per-pixel kernels and the GL methods give their own T */
             T3[i] = T[i / 3];
     double t1 = now();
-    fprintf(stderr, "nbt-scatter: %s (%s, %s kernel) by %s, %zux%zu%s: %.3f s\n", o.method_name,
-            o.method == 3 ? "the scene's world" : o.method == 1 ? "operator B" : o.method == 0 ? "operator A"
-                                                                                : "approximating operator A",
+    fprintf(stderr, "nbt-scatter: %s (%s, %s kernel) by %s, %zux%zu%s: %.3f s\n", o.method_name, method_goal(&o),
             o.method == 3 ? "no" : kernel_label(&o), how, im->w, im->h, overscan ? " (overscan)" : "", t1 - t0);
 
     /* light from outside the data window: how much of the frame's kernels falls there */

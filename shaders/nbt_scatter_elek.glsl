@@ -4,6 +4,8 @@
 //   Wt = Wb^[l0](x)      the isotropic blur of W read at level l0 (eq. 11:
 //                        blurred in spread space; Wb / v, v the validity)
 //   S  = I^[l(Wt)](x)    eq. 12 without I' (the caller adds T c)
+// A sky receiver (no width of its own) takes l0 = K: Wt is then the
+// validity-weighted width of the sources around it.
 // Every read is "linear-bicubic" (Sec. 3.5): the two levels around l, each
 // by the cubic B-spline as 4 bilinear fetches (Sigg and Hadwiger), mixed
 // linearly.
@@ -48,7 +50,11 @@ void main()
     if (!nbt_sc_inside(x, nbt_sc_size))
         return;
     float W = texelFetch(nbt_sc_p, x, 0).z;
-    vec2 wb = nbt_sc_read(nbt_sc_wbt, x, nbt_sc_level(W)).xy;
+    // a sky receiver's own width is infinite (its beam never ends): it looks
+    // up the blurred width at the coarsest level, so it gathers at the width
+    // of the sources around it instead of staying black
+    bool sky = texelFetch(nbt_sc_c, x, 0).w >= NBT_SC_SKY;
+    vec2 wb = nbt_sc_read(nbt_sc_wbt, x, sky ? float(nbt_sc_K) : nbt_sc_level(W)).xy;
     float Wt = wb.y > 0.0 ? wb.x / wb.y : W;
     vec3 s = nbt_sc_read(nbt_sc_pyr, x, nbt_sc_level(Wt)).rgb;
     imageStore(nbt_sc_out, x, vec4(s, 1.0));

@@ -1,6 +1,6 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
  * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), the means of a
- * written file's layer (mkexr IN.exr mean LAYER), and a constant density grid
+ * written file's layer (mkexr IN.exr mean LAYER [X0 Y0 X1 Y1]), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
  * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
  * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
@@ -22,7 +22,9 @@
 int main(int argc, char **argv)
 {
     char err[256];
-    if (argc == 4 && !strcmp(argv[2], "mean")) { /* the mean of every FLOAT channel named LAYER.* over the data window */
+    if ((argc == 4 || argc == 8) && !strcmp(argv[2], "mean")) {
+        /* the mean of every FLOAT channel named LAYER.* over the data window,
+         * or over its pixels X0 <= x < X1, Y0 <= y < Y1 (from the top left) */
         nbt_image *im = NULL;
         if (nbt_image_read_exr(argv[1], &im, err, sizeof err) != NBT_OK) {
             fprintf(stderr, "%s\n", err);
@@ -33,10 +35,22 @@ int main(int argc, char **argv)
             const nbt_image_channel *c = &im->channels[j];
             if (c->type != NBT_PIXEL_FLOAT || !c->data || strncmp(c->name, argv[3], n) || c->name[n] != '.')
                 continue;
+            size_t x0 = 0, y0 = 0, x1 = im->w, y1 = im->h;
+            if (argc == 8) {
+                x0 = (size_t)atol(argv[4]), y0 = (size_t)atol(argv[5]), x1 = (size_t)atol(argv[6]),
+                y1 = (size_t)atol(argv[7]);
+                if (!(x0 < x1 && x1 <= im->w && y0 < y1 && y1 <= im->h)) {
+                    fprintf(stderr, "mkexr: region %s %s %s %s is not inside the %zux%zu image\n", argv[4], argv[5],
+                            argv[6], argv[7], im->w, im->h);
+                    nbt_image_free(im);
+                    return 1;
+                }
+            }
             double sum = 0;
-            for (size_t i = 0; i < im->w * im->h; i++)
-                sum += ((const float *)c->data)[i];
-            printf("%s %.9g\n", c->name, sum / (double)(im->w * im->h));
+            for (size_t y = y0; y < y1; y++)
+                for (size_t x = x0; x < x1; x++)
+                    sum += ((const float *)c->data)[y * im->w + x];
+            printf("%s %.9g\n", c->name, sum / (double)((x1 - x0) * (y1 - y0)));
             found++;
         }
         nbt_image_free(im);

@@ -63,6 +63,18 @@ if "$S" --help | grep -q "On GL"; then
       2>/dev/null)
     awk -v a="$2" 'BEGIN { exit !(a > 0.01 && a < 2) }' && ok || bad "GL $m runs and differs from operator A: $*"
   done
+  # sky receivers (rows 0-6 of layers: Z = 1e10): A and B let them receive from nearer pixels; elek gathers
+  # at the blurred width of the sources around them (within its 12-34% of B elsewhere: a factor 1.5 here),
+  # naive has no width to read at and leaves them at 0 (documented)
+  "$S" "$tmp/layers.exr" -o "$tmp/refb.exr" $M --depth ray --method ref-b --no-png --extend 0 2>/dev/null
+  sky() { "$MK" "$1" mean S 0 0 64 7 | awk '{ s += $2 } END { print s }'; }
+  gl "$S" "$tmp/layers.exr" -o "$tmp/gl-elek.exr" $M --depth ray --method elek --no-png 2>"$tmp/log"
+  awk -v a="$(sky "$tmp/gl-elek.exr")" -v b="$(sky "$tmp/refb.exr")" 'BEGIN { exit !(b > 0 && a > b / 1.5 && a < 1.5 * b) }' \
+    && ok || bad "GL elek: the sky band receives as in operator B: $(sky "$tmp/gl-elek.exr") vs $(sky "$tmp/refb.exr")"
+  grep -q "approximating operator B" "$tmp/log" && ok || bad "elek's status line names operator B: $(cat "$tmp/log")"
+  gl "$S" "$tmp/layers.exr" -o "$tmp/gl-naive.exr" $M --depth ray --method naive --no-png 2>"$tmp/log"
+  [ "$(sky "$tmp/gl-naive.exr")" = 0 ] && grep -q "sky receives nothing" "$tmp/log" && ok ||
+    bad "GL naive leaves the sky at 0 and says so: $(sky "$tmp/gl-naive.exr") $(cat "$tmp/log")"
   expect_usage "GL with lineint" "--kernel lineint" "$S" "$tmp/layers.exr" -o "$tmp/out.exr" $M --method naive --kernel lineint
 else
   expect_usage "no GL in this build" "this build has no GL" "$S" "$tmp/layers.exr" -o "$tmp/out.exr" $M --method shinya

@@ -65,8 +65,9 @@ char *nbt_gl_shader_source_target(const nbt_gl_config *c, int target, const char
 /* Weights for packs x 4 channels: w[k] = (2k+1) b[k] for k < nterms, 0 beyond. */
 void nbt_gl_weights(const double *b, size_t nterms, int packs, float *w);
 
-/* One axis' uniforms: vec4(lo, hi, c, n) and its mapping code (0 linear,
- * 1 sqrt, 2 log1p, 3 cos, 4 log1p_cbrt). */
+/* One axis' uniforms: vec4(lo, hi, c, n) and its mapping code, the
+ * nbt_axis_map value (0 linear, 1 sqrt, 2 log1p, 3 cos, 4 log1p_cbrt,
+ * 5 atanh, 6 asinh). */
 void nbt_gl_axis(const nbt_axis *a, float v[4], int *map);
 /* The table's axis uniforms: vec4(lo, hi, c, n) and mapping codes (axes 0, 1;
  * a g-sliced table's axis 2 by nbt_gl_axis(&t->axis[2], ...)). */
