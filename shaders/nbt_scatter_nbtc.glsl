@@ -18,8 +18,9 @@ int nbt_sc_slab(float D)
     return s;
 }
 
-// log2 beta_px clamped to the fit's range
+// log2 beta_px, held below the fit's range (the weights are; above it they
+// scale as 1/beta and their slope follows)
 float nbt_sc_lbeta(float b)
 {
-    return clamp(log2(max(b, exp2(float(NBT_SC_NBT_LO)))), float(NBT_SC_NBT_LO), float(NBT_SC_NBT_HI));
+    return log2(max(b, exp2(float(NBT_SC_NBT_LO))));
 }

@@ -345,7 +345,8 @@ static nbt_status emul_elek(const nbt_gls_input *in, double *S)
     for (size_t y = 0; y < in->h && st == NBT_OK; y++)
         for (size_t x = 0; x < in->w; x++) {
             double W = sigma_of(in, y * in->w + x), wb[2], v[3];
-            read_levels(L, 1, x, y, level_of(W, NBT_GLS_ELEK_C), wb, 2);
+            int sky = key(in->D[y * in->w + x]) >= SKY_KEY; /* no width of its own: the coarsest blur */
+            read_levels(L, 1, x, y, sky ? (double)NBT_GLS_K : level_of(W, NBT_GLS_ELEK_C), wb, 2);
             double Wt = wb[1] > 0 ? wb[0] / wb[1] : W;
             read_levels(L, 0, x, y, level_of(Wt, NBT_GLS_ELEK_C), v, 3);
             for (int c = 0; c < 3; c++)
@@ -407,8 +408,7 @@ static int nbt_slab(float D, const nbt_gls_nbt_plan *pl)
 
 static double nbt_lbeta(double b)
 {
-    double lb = log2(fmax(b, exp2(NBT_GLS_NBT_LO)));
-    return lb < NBT_GLS_NBT_LO ? NBT_GLS_NBT_LO : lb > NBT_GLS_NBT_HI ? NBT_GLS_NBT_HI : lb;
+    return log2(fmax(b, exp2(NBT_GLS_NBT_LO)));
 }
 
 nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)

@@ -53,7 +53,9 @@
  *       fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
  *       beta = 1 .. 30 px, tests/test_gl_scatter.c) and the second order in
  *       delta log2 beta. Weights are fitted (NNLS) for beta_px in
- *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held at the ends beyond.
+ *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held below and scaled by
+ *       1/beta above (light a kernel sends beyond the pyramid's reach, as
+ *       beyond the screen, is lost, as in operator A).
  * The pyramid methods use sigma_px when given, otherwise the Gaussian of the
  * same second moment as the erfc kernel, sigma = beta_px / sqrt 3. Pyramids
  * have NBT_GLS_K + 1 levels over the image padded with zeros to a multiple
@@ -105,7 +107,7 @@ typedef struct {
  * atom gives to the pixel at that offset (nbt_screen_atom_pixel). */
 #define NBT_GLS_LUT_LO (-5)
 #define NBT_GLS_LUT_PER 32
-#define NBT_GLS_LUT_N (15 * NBT_GLS_LUT_PER + 1) /* up to beta = 1024 px */
+#define NBT_GLS_LUT_N (18 * NBT_GLS_LUT_PER + 1) /* up to beta = 8192 px; scaled by 1/beta beyond */
 
 /* Fills lut[NBT_GLS_LUT_N * 8]. */
 void nbt_gls_near_table(float *lut);
@@ -116,17 +118,19 @@ void nbt_gls_near_table(float *lut);
 #define NBT_GLS_NBT_NB 12
 #define NBT_GLS_NBT_BLUR 0.16
 #define NBT_GLS_NBT_LO (-1)
-#define NBT_GLS_NBT_HI 7
+#define NBT_GLS_NBT_HI 13 /* 8192 px: the fit window (r <= 256 px) is deep in the 1/r regime */
 #define NBT_GLS_NBT_PER 4
 #define NBT_GLS_NBT_N ((NBT_GLS_NBT_HI - NBT_GLS_NBT_LO) * NBT_GLS_NBT_PER + 1)
 #define NBT_GLS_NBT_SLABS 4    /* default depth slabs */
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.1 s; thread-safe): tab[i * NB + b]. */
+ * 0.2 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
- * beyond the ends) and their slope da[NB] in lb (the segment's; 0 beyond). */
+ * below the table, scaled by 2^(HI - lb) above it: a kernel far wider than
+ * the pyramid's reach is G(0)/(sqrt(2 pi) beta r) there, so it only scales)
+ * and their slope da[NB] in lb (the segment's; 0 below, -ln 2 a above). */
 void nbt_gls_nbt_weights(double lb, double *a, double *da);
 /* The 1-D phase-averaged level kernel of basis b at offset d (|d| < 512),
  * the 2-D one being the product of two. */
