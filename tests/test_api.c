@@ -1,0 +1,124 @@
+/* tests/test_api.c: public functions no other test calls directly, each at
+ * asymmetric arguments against an independent closed form: the camera ray
+ * of a pixel (non-square image, non-unit and non-orthogonal fwd/up, every
+ * corner), the box of a density grid (unequal sizes, an off-centre origin),
+ * the two-term HG phase (values at both signs of mu, odd moments, the mean
+ * cosine), the direct beam through a layered medium, status messages and
+ * the version. */
+#include <config.h>
+#include <math.h>
+#include <string.h>
+#include <nbt/nbt.h>
+#include <nbt/grid.h>
+#include "testutil.h"
+
+/* The documented camera: the image plane at unit distance along fwd,
+ * pixel pitch dtheta, centred; x to the right (fwd x up), row 0 at the top
+ * (towards up). Here fwd = -2 z (not unit) and up = 3 y + 0.5 z (not
+ * orthogonal to fwd): right = +x, the true up = +y, so the ray of pixel
+ * (x, y) is (u, -v, -1) normalised, u, v the pixel centre's offsets. */
+static void test_camera_ray(void)
+{
+    const nbt_camera cam = {{1, 2, 3}, {0, 0, -2}, {0, 3, 0.5}};
+    const size_t w = 7, h = 4;
+    const double dth = 0.1;
+    const size_t px[5][2] = {{0, 0}, {6, 0}, {0, 3}, {6, 3}, {2, 1}};
+    double worst = 0;
+    for (int k = 0; k < 5; k++) {
+        size_t x = px[k][0], y = px[k][1];
+        double u = ((double)x + 0.5 - 3.5) * dth, v = ((double)y + 0.5 - 2.0) * dth;
+        double n = sqrt(1 + u * u + v * v), want[3] = {u / n, -v / n, -1 / n}, d[3];
+        nbt_camera_ray(&cam, w, h, dth, x, y, d);
+        for (int i = 0; i < 3; i++)
+            worst = fmax(worst, fabs(d[i] - want[i]));
+        /* the planar depth Z along fwd is Z / cos of the angle to the axis: */
+        double Z = 4.5, D = nbt_screen_ray_distance(Z, w, h, dth, x, y);
+        t_rel(D, Z / -d[2], 1e-14, "pixel (%zu, %zu): ray distance Z / cos = %.15g", x, y, Z / -d[2]);
+    }
+    t_true(worst < 1e-15, "camera rays of the corners of a 7x4 image match (u, -v, -1)/n: worst %.2g", worst);
+    /* the top-left ray looks left and up; the bottom-right one right and down */
+    double a[3], b[3];
+    nbt_camera_ray(&cam, w, h, dth, 0, 0, a);
+    nbt_camera_ray(&cam, w, h, dth, w - 1, h - 1, b);
+    t_true(a[0] < 0 && a[1] > 0 && b[0] > 0 && b[1] < 0, "row 0 is towards up, column 0 to the left");
+}
+
+/* lo = origin - voxel/2, hi = lo + n voxel, per axis */
+static void test_grid_box(void)
+{
+    const double o[3] = {1.0, -2.0, 0.5};
+    nbt_grid *g = nbt_grid_alloc(3, 5, 2, o, 0.25);
+    t_true(g != NULL, "grid 3x5x2");
+    if (!g)
+        return;
+    double lo[3], hi[3];
+    nbt_grid_box(g, lo, hi);
+    const double wlo[3] = {0.875, -2.125, 0.375}, whi[3] = {1.625, -0.875, 0.875};
+    int ok = 1;
+    for (int i = 0; i < 3; i++)
+        ok &= fabs(lo[i] - wlo[i]) < 1e-15 && fabs(hi[i] - whi[i]) < 1e-15;
+    t_true(ok, "grid box [%g %g %g] .. [%g %g %g]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    nbt_grid_free(g);
+}
+
+static double hg(double g, double mu)
+{
+    return (1 - g * g) / (4 * M_PI * pow(1 + g * g - 2 * g * mu, 1.5));
+}
+
+/* w HG(g1) + (1 - w) HG(g2): values, b_k = w g1^k + (1 - w) g2^k */
+static void test_hg2(void)
+{
+    const double g1 = 0.8, g2 = -0.3, w = 0.7;
+    nbt_phase *p = nbt_phase_hg2(g1, g2, w);
+    t_true(p && nbt_phase_get_kind(p) == NBT_PHASE_HG2, "hg2 kind");
+    if (!p)
+        return;
+    const double mus[5] = {-1, -0.5, 0.1, 0.5, 0.99};
+    for (int i = 0; i < 5; i++)
+        t_rel(nbt_phase_eval(p, mus[i]), w * hg(g1, mus[i]) + (1 - w) * hg(g2, mus[i]), 1e-13, "hg2 at mu = %g",
+              mus[i]);
+    double b[8];
+    t_true(nbt_phase_moments(p, 7, b) == NBT_OK, "hg2 moments");
+    for (int k = 0; k <= 7; k += 1)
+        t_rel(b[k], w * pow(g1, k) + (1 - w) * pow(g2, k), 1e-12, "hg2 b_%d", k);
+    t_rel(nbt_phase_mean_cosine(p), w * g1 + (1 - w) * g2, 1e-12, "hg2 mean cosine");
+    nbt_phase_free(p);
+    t_true(nbt_phase_hg2(1.0, 0, 0.5) == NULL && nbt_phase_hg2(0.5, 0, 1.5) == NULL, "hg2: g = 1 or w > 1 refused");
+}
+
+/* exp(-sigma_t zeta(z)), zeta through two layers of unequal density */
+static void test_beam_direct(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(0.3, 0.9, 0.01);
+    t_rel(nbt_beam_direct(&m, 2.5), exp(-0.75), 1e-14, "direct beam, homogeneous");
+    const double z[2] = {0, 1.5}, rho[2] = {0.4, 2.0};
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    t_rel(nbt_beam_direct(&m, 1.0), exp(-0.3 * 0.4), 1e-14, "direct beam in the first layer");
+    t_rel(nbt_beam_direct(&m, 2.5), exp(-0.3 * (0.4 * 1.5 + 2.0 * 1.0)), 1e-14, "direct beam past the interface");
+}
+
+static void test_messages(void)
+{
+    const nbt_status all[7] = {NBT_OK, NBT_EDOM, NBT_ENOMEM, NBT_ETOL, NBT_EIO, NBT_EFORMAT, NBT_EINVAL};
+    int ok = 1;
+    for (int i = 0; i < 7; i++) {
+        const char *s = nbt_strerror(all[i]);
+        ok &= s && *s;
+        for (int j = 0; j < i; j++)
+            ok &= strcmp(s, nbt_strerror(all[j])) != 0;
+    }
+    t_true(ok, "nbt_strerror: a distinct message per status");
+    t_true(nbt_strerror((nbt_status)99) != NULL, "nbt_strerror of an unknown status");
+    t_true(!strcmp(nbt_version(), PACKAGE_VERSION), "nbt_version %s = %s", nbt_version(), PACKAGE_VERSION);
+}
+
+int main(void)
+{
+    test_camera_ray();
+    test_grid_box();
+    test_hg2();
+    test_beam_direct();
+    test_messages();
+    return t_done();
+}
