@@ -1,6 +1,7 @@
 /* tests/mkexr.c: writes small broken renders for nbt-scatter's bad-input
  * tests (mkexr OUT.exr noz|nan|negative|inf|nanrgb|negrgb|border), the means of a
- * written file's layer (mkexr IN.exr mean LAYER [X0 Y0 X1 Y1]), and a constant density grid
+ * written file's layer (mkexr IN.exr mean LAYER [X0 Y0 X1 Y1]), the frame against its
+ * layers (mkexr OUT.exr composite IN.exr: max |RGB - (T IN + S)| / max |RGB|), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
  * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
  * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
@@ -55,6 +56,45 @@ int main(int argc, char **argv)
         }
         nbt_image_free(im);
         return found ? 0 : 1;
+    }
+    if (argc == 4 && !strcmp(argv[2], "composite")) {
+        /* nbt-scatter's frame OUT against its own layers and the input IN:
+         * the largest |R - (T.R IN.R + S.R)| (and G, B) over max |R| */
+        nbt_image *out = NULL, *in = NULL;
+        if (nbt_image_read_exr(argv[1], &out, err, sizeof err) != NBT_OK ||
+            nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "%s\n", err);
+            return 1;
+        }
+        const float *S[3] = {0}, *T[3] = {0};
+        static const char *const RGB[3] = {"R", "G", "B"};
+        for (size_t j = 0; j < out->nchannels; j++)
+            for (int c = 0; c < 3; c++) {
+                const nbt_image_channel *ch = &out->channels[j];
+                if (ch->type != NBT_PIXEL_FLOAT || !ch->data)
+                    continue;
+                if (!strncmp(ch->name, "S.", 2) && !strcmp(ch->name + 2, RGB[c]))
+                    S[c] = ch->data;
+                if (!strncmp(ch->name, "T.", 2) && !strcmp(ch->name + 2, RGB[c]))
+                    T[c] = ch->data;
+            }
+        int rc = 1;
+        if (in->w != out->w || in->h != out->h || !S[0] || !S[1] || !S[2] || !T[0] || !T[1] || !T[2])
+            fprintf(stderr, "mkexr: %s has no float S and T layers of %s's size\n", argv[1], argv[3]);
+        else {
+            double d = 0, m = 0;
+            for (size_t i = 0; i < out->w * out->h; i++)
+                for (int c = 0; c < 3; c++) {
+                    double want = (double)T[c][i] * in->rgb[3 * i + c] + S[c][i];
+                    d = fmax(d, fabs(out->rgb[3 * i + c] - want));
+                    m = fmax(m, fabs(out->rgb[3 * i + c]));
+                }
+            printf("composite %.3g\n", m > 0 ? d / m : d);
+            rc = 0;
+        }
+        nbt_image_free(out);
+        nbt_image_free(in);
+        return rc;
     }
     if (argc == 4 && !strcmp(argv[2], "grid")) {
         double o[3] = {-19.5, -19.5, -39.5};

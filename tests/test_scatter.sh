@@ -31,6 +31,10 @@ awk -v a="$2" 'BEGIN { exit !(a > 0.02) }' && ok || bad "ref-b differs from ref-
 # planar depth (Blender's Z): a continuous ray distance, brute force; a preview is written
 "$S" "$tmp/step.exr" -o "$tmp/step-out.exr" $M 2>"$tmp/log" && [ -s "$tmp/step-out.png" ] && ok || bad "step, planar depth"
 grep -q "brute force" "$tmp/log" && ok || bad "planar depth: brute force"
+# the frame is the direct part plus the scattered one, channel by channel: RGB = T.RGB input + S.RGB
+# (float round-off; an index or channel slip shows at the step's edge and in the tinted halves)
+set -- $("$MK" "$tmp/step-out.exr" composite "$tmp/step.exr")
+[ "$1" = composite ] && awk -v d="$2" 'BEGIN { exit !(d < 1e-6) }' && ok || bad "frame = T input + S: $*"
 # a clear medium (albedo 0, tiny sigma_t) leaves the image as it was, scaled by T
 "$S" "$tmp/plane.exr" -o "$tmp/clear.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 --depth ray --no-png \
   --method ref-a 2>/dev/null
