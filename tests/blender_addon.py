@@ -5,7 +5,7 @@
 # field of view against Blender's own camera frame), checks what it refuses,
 # then builds a 48x32 scene with a world Principled Volume, renders it with
 # Cycles three ways (Render with nbt Fog with overscan, Apply to the render
-# result, the post-render handler) and prints for each run the add-on's
+# result, the post-render handler), applies it to an EXR file, and prints for each run the add-on's
 # record and the parameters computed here, for the shell script to run the
 # nbt-scatter CLI by hand and compare. Every line the shell reads starts with
 # "NBT "; a failed check prints "FAIL: ..." and the script exits 1.
@@ -270,6 +270,7 @@ sc.view_layers[0].use_pass_z = True
 vol_link.is_muted = True
 bpy.ops.render.render()
 bpy.ops.nbt.apply_fog(source='RENDER')
+b_render = json.loads(s.last_run)['input']
 report("B", json.loads(s.last_run), None)
 
 # C: the post-render handler, on frame 3, into the compositor
@@ -284,6 +285,21 @@ check(rec['output'] == os.path.join(TMP, "c", "fog_0003.exr"), "C: output name %
 node = sc.node_tree.nodes.get("nbt fog") if sc.node_tree else None
 check(node is not None and node.image is not None and bpy.path.abspath(node.image.filepath) == rec['output'],
       "C: the compositor's 'nbt fog' Image node shows the result")
+
+# D: Apply to an EXR file (B's render); a file of another size is refused
+s.auto_apply = False
+s.output = os.path.join(TMP, "d", "fog_####.exr")
+bpy.ops.nbt.apply_fog(source='FILE', filepath=b_render)
+rec = json.loads(s.last_run)
+check(rec['input'] == b_render, "D: input %s" % rec['input'])
+report("D", rec, None)
+r.resolution_x = 40
+try:
+    bpy.ops.nbt.apply_fog(source='FILE', filepath=b_render)
+    check(False, "a 48x32 EXR for a 40x32 frame: accepted")
+except RuntimeError as e:
+    check("48x32" in str(e) and "40x32" in str(e), "a 48x32 EXR for a 40x32 frame: %s" % e)
+r.resolution_x = W
 
 print("NBT checks %d failed %d" % (checks, len(fails)))
 sys.exit(1 if fails else 0)

@@ -3,7 +3,8 @@
 # by make as blender/nbt_fog.zip) installed from its zip in Blender headless
 # (tests/blender_addon.py builds the scene, renders it three ways and checks
 # the camera and medium the add-on reads against doc/blender.md's formulas
-# and Blender's own camera frame). Here, for each of the three runs: the
+# and Blender's own camera frame). Here, for each of the four runs (three
+# renders, one EXR file given to Apply): the
 # nbt-scatter CLI run by hand on the add-on's input EXR with the parameters
 # the test computed itself gives the add-on's output to float round-off; the
 # output is fogged (S > 0, T < 1); the render's floor depth matches the field
@@ -40,7 +41,7 @@ mean_of() {
   oiiotool "$1" --ch "$2" --printstats 2>&1 | sed -n 's/.*Stats Avg: *//p' | awk '{ print $1 }'
 }
 
-for run in A B C; do
+for run in A B C D; do
   rec=$(sed -n "s/^NBT $run record //p" "$tmp/blog")
   ind=$(sed -n "s/^NBT $run indep //p" "$tmp/blog")
   [ -n "$rec" ] && [ -n "$ind" ] || { bad "$run: no record in the Blender log"; continue; }

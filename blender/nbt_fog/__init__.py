@@ -116,6 +116,7 @@ class NBT_OT_apply_fog(bpy.types.Operator):
                 if not self.filepath:
                     raise NbtFogError("no EXR file given (source FILE needs filepath)")
                 src = bpy.path.abspath(self.filepath)
+                run.check_file_size(src, cam)
             else:
                 if not any(vl.use_pass_z for vl in scene.view_layers if vl.use):
                     raise NbtFogError("the view layer has no Z pass: enable View Layer > Passes > Z and render "

@@ -3,6 +3,7 @@
 import json
 import os
 import shutil
+import struct
 import subprocess
 import tempfile
 
@@ -96,6 +97,39 @@ def save_render_result(scene, path):
         raise NbtFogError("the render result could not be written to %s (render first): %s" % (path, e))
     finally:
         s.file_format, s.color_depth, s.exr_codec = saved
+
+
+def exr_display_size(path):
+    """(width, height) of an OpenEXR file's display window, from its (first) header: after the magic
+    number and version, attributes "name\\0type\\0" int32 size, value, up to an empty name; displayWindow
+    is a box2i (xmin, ymin, xmax, ymax). (Blender cannot tell a multilayer EXR's size before it is shown.)"""
+    try:
+        with open(path, 'rb') as f:
+            data = f.read(1 << 20)
+    except OSError as e:
+        raise NbtFogError("EXR file '%s' cannot be read: %s" % (path, e.strerror))
+    if data[:4] != b'\x76\x2f\x31\x01':
+        raise NbtFogError("'%s' is not an OpenEXR file" % path)
+    pos = 8
+    while pos < len(data) and data[pos] != 0:
+        end = data.find(b'\0', pos)
+        tend = data.find(b'\0', end + 1)
+        if end < 0 or tend < 0 or tend + 5 > len(data):
+            break
+        name, size = data[pos:end], struct.unpack_from('<i', data, tend + 1)[0]
+        if name == b'displayWindow' and size == 16 and tend + 5 + 16 <= len(data):
+            x0, y0, x1, y1 = struct.unpack_from('<4i', data, tend + 5)
+            return x1 - x0 + 1, y1 - y0 + 1
+        pos = tend + 5 + size
+    raise NbtFogError("EXR file '%s' has no display window in its header" % path)
+
+
+def check_file_size(path, cam):
+    """An EXR file given to Apply must be a render of this scene's frame (the field of view is the frame's)."""
+    w, h = exr_display_size(path)
+    if (w, h) != (cam['width'], cam['height']):
+        raise NbtFogError("EXR file '%s' is %dx%d, the scene's frame %dx%d: give a render made with this scene's "
+                          "camera and resolution" % (path, w, h, cam['width'], cam['height']))
 
 
 def scene_parameters(scene):
