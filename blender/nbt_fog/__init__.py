@@ -153,6 +153,8 @@ class NBT_OT_render_fog(bpy.types.Operator):
                     bpy.ops.render.render()
                     run.save_render_result(scene, src)
                     window = ov.display_window
+            except RuntimeError as e:  # the render itself failed (Blender's message)
+                raise NbtFogError("the render failed: %s" % e)
             finally:
                 _busy = False
             record = run.apply(scene, src, out, settings, binary, display_window=window, cam=cam, med=med)
