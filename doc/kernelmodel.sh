@@ -4,6 +4,7 @@
 # space") and measure it on photon counts it was not fitted to.
 #
 #   doc/kernelmodel.sh DIR              (run from the build tree; DIR keeps the runs)
+#   sh PREFIX/share/nbt/scripts/kernelmodel.sh DIR   (installed: the nbt-fit on PATH)
 #
 # 1. training runs: sigma_t = 1, Gaussian phase dtheta in {10,20,30,45,60} deg
 #    (B = dtheta^2/4), albedo in {0.1,0.3,0.5,0.7,0.9,0.95,0.99}, both
@@ -27,8 +28,13 @@
 # evaluated with, e.g. its B_mix) and fits a model whose B terms drop out.
 # PHOTONS (default 2e6), THREADS (default 1). Runs already in DIR are reused.
 set -eu
-NBT_FIT=${NBT_FIT:-./nbt-fit}
-DIR=${1:?usage: doc/kernelmodel.sh DIR}
+# the build tree's nbt-fit when run from there, else the installed one
+if [ -z "${NBT_FIT:-}" ]; then if [ -x ./nbt-fit ]; then NBT_FIT=./nbt-fit; else NBT_FIT=nbt-fit; fi; fi
+DIR=${1:?usage: kernelmodel.sh DIR}
+if [ "${UPDATE:-0}" = 1 ] && [ ! -f libnbt/beam_fit_data.h ]; then
+    echo "kernelmodel.sh: UPDATE=1 rewrites libnbt/beam_fit_data.h: run it from the top of nbt's source tree" >&2
+    exit 2
+fi
 PHOTONS=${PHOTONS:-2e6}
 THREADS=${THREADS:-1}
 PHASE=${PHASE:-}

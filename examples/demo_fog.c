@@ -8,8 +8,12 @@
  * Columns five and six are g = 0.9 and 0.95 drawn from one set of g-sliced
  * tables (HG g on a third axis, sampler3D) at the run-time uniform nbt_g.
  * Usage: nbt-demo [OUT.png] [--width W]   (default nbt-demo.png, 320 per panel; unknown
- * options are refused, the output is opened before the work and renamed into place) */
+ * options are refused, the output is opened before the work and renamed into place)
+ * Installed with egl_headless.c/h, font5x7.h and a Makefile in PREFIX/share/nbt/examples:
+ *   make -f PREFIX/share/nbt/examples/Makefile demo_fog   (pkg-config nbt-gl egl opengl libpng) */
+#ifdef HAVE_CONFIG_H
 #include <config.h>
+#endif
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
@@ -26,7 +30,7 @@
 #include <nbt/nbt.h>
 #include <nbt/gl.h>
 #include "egl_headless.h"
-#include "../gen/font5x7.h"
+#include "font5x7.h"
 
 static const char *SCENE =
     "uniform vec2 res;\n"

@@ -1,6 +1,8 @@
-/* examples/egl_headless.c: EGL surfaceless + desktop GL 4.5 core (the recipe
- * in DESIGN.md: Mesa llvmpipe works this way on a machine without a GPU). */
+/* examples/egl_headless.c: EGL surfaceless + desktop GL 4.5 core (Mesa's
+ * llvmpipe works this way on a machine without a GPU). */
+#ifdef HAVE_CONFIG_H
 #include <config.h>
+#endif
 #include <stdio.h>
 #include <string.h>
 #define GL_GLEXT_PROTOTYPES 1

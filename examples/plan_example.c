@@ -9,7 +9,8 @@
  *
  * Usage: plan_example [DIR]   (with DIR: writes DIR/H_k0-3.exr, ...)
  * Exit 0 when every set meets its target, 1 otherwise. Build against an
- * installed libnbt with: cc plan_example.c $(pkg-config --cflags --libs nbt) */
+ * installed libnbt with: cc plan_example.c $(pkg-config --cflags --libs nbt)
+ * (or make -f PREFIX/share/nbt/examples/Makefile plan_example) */
 #include <stdio.h>
 #include <string.h>
 #include <nbt/nbt.h>

@@ -176,6 +176,24 @@ static void capture(exr_const_context_t c, exr_result_t code, const char *msg)
     buf[i] = '\0';
 }
 
+/* The writer's handler: the core library calls the error handler of a write
+ * context with the context's lock held, and exr_get_user_data takes that lock
+ * (it waited forever on "name too long"), so write_any hands the handler its
+ * buffer through this per-thread pointer, set only while it runs. */
+static _Thread_local char *capture_write_buf;
+
+static void capture_write(exr_const_context_t c, exr_result_t code, const char *msg)
+{
+    char *buf = capture_write_buf;
+    (void)c, (void)code;
+    if (!msg || !buf || buf[0])
+        return;
+    size_t i = 0;
+    for (; msg[i] && i + 1 < LIBMSG_LEN; i++)
+        buf[i] = (msg[i] == '\n' || msg[i] == '\r') ? ' ' : msg[i];
+    buf[i] = '\0';
+}
+
 static const char *lib_detail(const char *libmsg, exr_result_t rv)
 {
     return libmsg[0] ? libmsg : exr_get_default_error_message(rv);
@@ -1055,8 +1073,8 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
 
     char libmsg[LIBMSG_LEN] = "";
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = capture;
-    init.user_data = libmsg;
+    init.error_handler_fn = capture_write;
+    capture_write_buf = libmsg;
     exr_context_t ctx = NULL;
     int part = 0;
     const nbt_image_attrs *ka = legacy || o->drop_attrs ? NULL : im->attrs;
@@ -1074,7 +1092,18 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
     exr_attr_box2i_t edw, edisp;
     edw.min.x = win.min_x, edw.min.y = win.min_y, edw.max.x = win.max_x, edw.max.y = win.max_y;
     edisp.min.x = disp.min_x, edisp.min.y = disp.min_y, edisp.max.x = disp.max_x, edisp.max.y = disp.max_y;
+    /* names over 31 characters (Blender's cycles.ViewLayer.synchronization_time)
+     * need the file's long-names flag, as OpenEXR's C++ library sets it */
+    int longnames = 0;
+    for (size_t c = 0; c < nch; c++)
+        longnames |= strlen(ch[c].name) > 31;
+    for (size_t i = 0; i < o->nattrs; i++)
+        longnames |= strlen(o->attrs[2 * i]) > 31;
+    for (size_t i = 0; ka && i < ka->n; i++)
+        longnames |= strlen(ka->a[i].name) > 31;
     exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv == EXR_ERR_SUCCESS && longnames)
+        rv = exr_set_longname_support(ctx, 1);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
@@ -1145,6 +1174,7 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
     if (started)
         exr_encoding_destroy(ctx, &enc);
     exr_result_t fr = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
+    capture_write_buf = NULL;
     if (bad_attr < o->nattrs) {
         unlink(tmp);
         st = fail(NBT_EINVAL, path, err, errlen, "attribute \"%s\" cannot be set (%s)", o->attrs[2 * bad_attr],

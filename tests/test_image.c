@@ -1124,6 +1124,48 @@ static void test_blender_names(void)
     nbt_image_free(im);
 }
 
+/* Names over 31 characters, as Blender's Cycles writes them
+ * (cycles.ViewLayer.synchronization_time): written with the file's long-names
+ * flag, read back and written again; a name over 255 characters is refused
+ * with the library's reason. (The writer used to wait forever on the second:
+ * the library reports the error holding the lock its user-data getter takes.) */
+static void test_long_names(void)
+{
+    nbt_image *im = nbt_image_alloc(3, 2, 1), *back = NULL, *again = NULL;
+    const char *path = in_dir("long.exr"), *path2 = in_dir("long2.exr");
+    char err[512] = "", name300[301];
+    if (!im)
+        return;
+    for (size_t i = 0; i < 6; i++)
+        im->rgb[3 * i] = im->rgb[3 * i + 1] = im->rgb[3 * i + 2] = (float)i, im->z[i] = 2.5f;
+    const char *attrs[] = {"cycles.ViewLayer.synchronization_time", "00:00.31"};
+    nbt_exr_write_opts wo;
+    memset(&wo, 0, sizeof wo);
+    wo.attrs = attrs;
+    wo.nattrs = 1;
+    nbt_status s = nbt_image_write_exr_ex(im, path, &wo, err, sizeof err);
+    t_true(s == NBT_OK, "long names: a 37-character attribute name is written (%s)", err);
+    s = nbt_image_read_exr(path, &back, err, sizeof err);
+    const char *v = s == NBT_OK ? nbt_image_attr_string(back, "cycles.ViewLayer.synchronization_time") : NULL;
+    t_true(v && !strcmp(v, "00:00.31"), "long names: read back (%s)", err);
+    memset(&wo, 0, sizeof wo); /* kept, not the caller's: written again from what was read */
+    s = back ? nbt_image_write_exr_ex(back, path2, &wo, err, sizeof err) : NBT_EINVAL;
+    v = s == NBT_OK && nbt_image_read_exr(path2, &again, err, sizeof err) == NBT_OK
+            ? nbt_image_attr_string(again, "cycles.ViewLayer.synchronization_time") : NULL;
+    t_true(v && !strcmp(v, "00:00.31"), "long names: a kept long name is written again (%s)", err);
+    memset(name300, 'a', 300);
+    name300[300] = '\0';
+    const char *too_long[] = {name300, "x"};
+    wo.attrs = too_long;
+    wo.nattrs = 1;
+    int before = count_entries(dir);
+    s = nbt_image_write_exr_ex(im, path, &wo, err, sizeof err);
+    t_true(s == NBT_EINVAL && strstr(err, "cannot be set (Provided name") && count_entries(dir) == before,
+           "long names: a 300-character name is refused with the library's reason, nothing left (%s)", err);
+    nbt_image_free(im), nbt_image_free(back), nbt_image_free(again);
+    unlink(path), unlink(path2);
+}
+
 /* A subsampled channel beside RGB: listed with its sampling, not kept, not written. */
 static void test_subsampled_kept(void)
 {
@@ -1172,6 +1214,7 @@ int main(void)
     test_overscan();
     test_blender_names();
     test_subsampled_kept();
+    test_long_names();
     test_errors();
     int left = count_entries(dir);
     t_true(left == 0, "temporary directory empty at the end (%d entries)", left);

@@ -6,7 +6,7 @@
  * function is a sum of small-angle Gaussians p(s) = sum_i w_i
  * exp(-|s|^2/4B_i)/(4 pi B_i) (dtheta^2 = 4B_i); the diffusion coefficient
  * is A = rho sigma_s <theta^2>/4 = rho sigma_s B_mix, B_mix = sum w_i B_i
- * (eq. 10; eq. 17's sigma_t is a typo, see DESIGN.md). G(x) = erfc(x/sqrt2)/2. */
+ * (eq. 10; eq. 17's sigma_t is a typo, see beam.md's Conventions). G(x) = erfc(x/sqrt2)/2. */
 #ifndef NBT_BEAM_H
 #define NBT_BEAM_H
 
@@ -122,7 +122,7 @@ typedef struct {
  * (tau, albedo, B clamped to f's range; f may be NULL: no clamp):
  * 1, x, w, v, x^2, xw, xv, w^2, wv, v^2, x^3, x^2w, x^2v, xw^2, xwv, xv^2. */
 void nbt_beam_fit_terms(const nbt_beam_fit *f, double tau, double albedo, double B, double *t);
-/* The model shipped with libnbt (fitted by doc/kernelmodel.sh). */
+/* The model shipped with libnbt (fitted by kernelmodel.sh, installed in PREFIX/share/nbt/scripts). */
 const nbt_beam_fit *nbt_beam_fit_default(void);
 /* p = (a, b, M, s, h) of Psi_hat at tau > 0, albedo in [0, 1], B > 0
  * (NBT_EDOM outside, or for a geometry the model does not hold). */
