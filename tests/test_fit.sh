@@ -45,19 +45,40 @@ M="--albedo 0.7 --sigma-t 1.3 --B 0.0685 --photons 20000 --z-planes 1:4:4 --r-bi
   bad "CSV header and 4 x 7 rows"
 cmp -s "$tmp/a.csv" "$tmp/b.csv" && cmp -s "$tmp/m1" "$tmp/m2" && ok || bad "output differs between 1 and 2 threads"
 [ "$(grep -c '^M ' "$tmp/m1")" -eq 4 ] && ok || bad "one moment line per plane"
-# progress: with one thread every batch is an update; NBT_PROGRESS_SECONDS=0 prints each one as
-# a line of its own (stderr is a file here, not a terminal): 63 with an ETA, then 100%; percent
-# rising; no carriage returns. --quiet: nothing on stderr. Output identical either way.
+# progress: photons are counted every 256 as they finish (not only at the end of each of the 64
+# batches); NBT_PROGRESS_SECONDS=0 prints every update as a line of its own (stderr is a file here,
+# not a terminal): with one thread, 20000 photons give 78 counts of 256 and 64 batch ends: more than
+# 64 lines with an ETA, then one 100% line, the last; percent never falling; no carriage returns.
+# --quiet: nothing on stderr. Output identical either way.
 NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 1 -o "$tmp/p.csv" >"$tmp/mp" 2>"$tmp/perr" && ok || bad "mc with progress"
-[ "$(grep -c '^nbt-fit: mc: .*% done, .* elapsed, ETA ' "$tmp/perr")" -eq 63 ] &&
-  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/perr")" -eq 1 ] && ok || bad "mc progress: 63 ETA lines and 100%: $(cat "$tmp/perr")"
-sed -n 's/^nbt-fit: mc: *\([0-9]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 < p { exit 1 } { p = $1 } END { exit NR != 64 }' &&
+[ "$(grep -c '^nbt-fit: mc: .*% done, .* elapsed, ETA ' "$tmp/perr")" -gt 64 ] &&
+  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/perr")" -eq 1 ] && grep '% done' "$tmp/perr" | tail -1 | grep -q '100% done' &&
+  ok || bad "mc progress: ETA lines within batches, one 100% at the end: $(cat "$tmp/perr")"
+sed -n 's/^nbt-fit: mc: *\([0-9.e-]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 + 0 < p { exit 1 } { p = $1 + 0 } END { exit NR < 65 }' &&
   ok || bad "mc progress: percent not rising"
+# two threads: the same, whichever thread ends last (the calling thread reports while it waits)
+NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 2 -o "$tmp/p2.csv" >/dev/null 2>"$tmp/p2err" &&
+  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/p2err")" -eq 1 ] && grep '% done' "$tmp/p2err" | tail -1 | grep -q '100% done' &&
+  cmp -s "$tmp/p2.csv" "$tmp/a.csv" && ok || bad "mc progress, 2 threads: $(cat "$tmp/p2err")"
+# a run of 10^12 photons (one batch alone is 1.6e10 photons, hours): progress and the long-run warning
+# arrive while the first batches run (at ~2 s and ~0.5 s; waited for up to 60 s, not timed); SIGTERM
+# then ends it with no output file and no temporary left behind
+mkdir "$tmp/big"
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 1e12 --threads 2 -o "$tmp/big/psi.exr" >/dev/null 2>"$tmp/bigerr" &
+pid=$!
+i=0
+while [ $i -lt 300 ] && ! grep -q '% done, .* elapsed, ETA ' "$tmp/bigerr"; do sleep 0.2; i=$((i + 1)); done
+kill -TERM $pid; wait $pid; rc=$?
+grep -q '^nbt-fit: mc: warning: this run will take about .* h .* (projected from .*% done in ' "$tmp/bigerr" &&
+  grep -q '^nbt-fit: mc: [0-9.e-]*% done, .* elapsed, ETA [0-9]* h ' "$tmp/bigerr" && [ $rc -eq 143 ] && ok ||
+  bad "mc 1e12 photons: a progress line and the warning within a batch (rc $rc): $(cat "$tmp/bigerr")"
+[ -z "$(ls -A "$tmp/big")" ] && ok || bad "mc killed by SIGTERM left files: $(ls -A "$tmp/big")"
+rmdir "$tmp/big"
 tr -d '\n' <"$tmp/perr" | grep -q "$(printf '\r')" && bad "mc progress: carriage return off a terminal" || ok
 # no warning at the default 60 s; exactly one (before any progress line) when the limit is tiny
 grep -q "warning" "$tmp/perr" && bad "mc: a long-run warning for a short run" || ok
 NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_FIT" mc $M --threads 1 -o "$tmp/w.csv" >/dev/null 2>"$tmp/werr"
-[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (estimated from the first ' "$tmp/werr")" -eq 1 ] &&
+[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (projected from ' "$tmp/werr")" -eq 1 ] &&
   head -1 "$tmp/werr" | grep -q warning && ok || bad "mc long-run warning: $(cat "$tmp/werr")"
 "$NBT_FIT" mc $M --threads 1 --quiet -o "$tmp/q.csv" >"$tmp/mq" 2>"$tmp/qerr" && [ ! -s "$tmp/qerr" ] && ok ||
   bad "mc --quiet: stderr $(cat "$tmp/qerr")"
