@@ -174,15 +174,15 @@ static void judge_checks(void)
     }
     /* the misfit limit against Monte Carlo: with standard errors from 64 batch means each squared
      * residual of a fitting shape is t(63)^2; sums of dof of them exceed fit_chi2_limit(dof) with
-     * probability FIT_MISFIT_P = 1e-3 up to the moment-matching approximation (measured 1.1-1.3e-3 for
+     * probability FIT_MISFIT_P = 1e-3 up to the moment-matching approximation (measured 0.8-1.3e-3 for
      * dof 2-48), accepted within [0.7, 1.5] x 1e-3; the plain chi^2(dof) 0.1% point, which forgets that
      * the errors are estimates, is exceeded 2.0e-3 (dof 10) and 2.5e-3 (dof 48) of the time. Draws:
-     * 2e5 and 1e5 (expected 200-260 and 100-130 exceedances: Poisson error 6-10%). */
+     * 2e5 each (expected about 200-260 exceedances: Poisson error 6-7%). */
     {
         gsl_rng *g = gsl_rng_alloc(gsl_rng_mt19937);
         gsl_rng_set(g, 2385);
         static const int dofs[2] = {10, 48};
-        static const long ndraw[2] = {200000, 100000};
+        static const long ndraw[2] = {200000, 200000};
         for (int q = 0; q < 2; q++) {
             double lim = fit_chi2_limit(dofs[q]);
             long hit = 0;
