@@ -27,7 +27,7 @@ static void help(void)
          "output), averaged over each annulus as counted, weighted by the standard errors (or, with\n"
          "--weight rms, by the RMS metric's weights 2 pi r), starting\n"
          "from the moment solution (eq. 25/26). FIT.csv (default stdout): z,alpha,beta,alpha_stderr,\n"
-         "beta_stderr,rms_before,rms_after,status, one block per input (erfc2, a narrow plus a broad kernel,\n"
+         "beta_stderr,rms_before,rms_after,chi2_dof,status, one block per input (erfc2, a narrow plus a broad kernel,\n"
          "adds alpha2,beta2; erfc+gauss, plus a diffuse 2-D Gaussian M exp(-r^2/2s^2)/(2 pi s^2), adds\n"
          "M,s; with their errors). rms: sqrt(sum (model - mc)^2 / sum mc^2)\n"
          "of 2 pi r Psi over the plane; 'RMS FILE moment X fitted Y' lines on stderr cover all planes.\n"
@@ -35,11 +35,15 @@ static void help(void)
          "--correction OUT.txt: fit log(beta/beta_moment) and log(alpha/alpha_moment) as polynomials in\n"
          "x = ln(sigma_t z) (and albedo a, b = ln B where the inputs differ in them) to all inputs;\n"
          "--apply CORR.txt: report the RMS of a correction on inputs it was not fitted to.\n"
-         "status (also on stderr, one line per flagged fit): noconv (did not converge), bound (a parameter\n"
-         "on a bound; widths are bounded by 100 x the plane's largest radius), illcond (J^T J singular or\n"
-         "ill-conditioned, or a standard error that cannot be computed), worse (RMS above the moment\n"
-         "kernel's), else ok; the first that applies, in this order. Flagged fits print nan standard\n"
-         "errors. --strict: any flagged fit is an error (exit 2, nothing written).");
+         "chi2_dof: sum ((fit - mc)/stderr)^2 / (bins - parameters), whatever the weighting.\n"
+         "status (also on stderr, one line per fit that is not ok): noconv (did not converge), bound (a\n"
+         "parameter on a bound; widths are bounded by 100 x the plane's largest radius), illcond (J^T J\n"
+         "singular or ill-conditioned, or a standard error that cannot be computed), worse (RMS above the\n"
+         "moment kernel's), misfit (a sound fit, but the shape does not fit within the counting noise:\n"
+         "chi2_dof above the point a shape that fits exceeds with probability 0.001), else ok; the first\n"
+         "that applies, in this order. Standard errors are the spread a run with another seed would give\n"
+         "(misfits included); the other flagged fits print nan. --strict: any flagged fit but a misfit is\n"
+         "an error (exit 2, nothing written). Flags and misfits alike exit 0 otherwise.");
 }
 
 typedef struct {
@@ -68,6 +72,103 @@ static int plane_res(const double *p, double *r, double *jac, void *vp)
                 jac[(size_t)np * k + (size_t)q] = g[q] / se;
     }
     return 0;
+}
+
+/* sum ((shape - mc)/se)^2 over plane j: the counts' standard errors, the floor where a bin counted nothing */
+static double plane_chi2(const psi_data *d, size_t j, int ncomp, const double *p, double floor_se)
+{
+    double c = 0;
+    for (size_t k = 0; k < d->nbins; k++) {
+        size_t i = j * d->nbins + k;
+        c += psi_chi2_term(d, i, floor_se, shape_annulus(ncomp, p, d->lo[i], d->hi[i], NULL));
+    }
+    return c;
+}
+
+/* The inverse of the n x n matrix a (n <= 4, row-major) into ai by Gauss-Jordan with partial
+ * pivoting; 1 when a pivot is not above 1e-14 of the largest entry (singular for this purpose). */
+static int invert(int n, const double *a, double *ai)
+{
+    double m[4][8], big = 0;
+    for (int i = 0; i < n; i++)
+        for (int c = 0; c < 2 * n; c++) {
+            m[i][c] = c < n ? a[i * n + c] : (c - n == i);
+            if (c < n)
+                big = fmax(big, fabs(a[i * n + c]));
+        }
+    for (int c = 0; c < n; c++) {
+        int piv = c;
+        for (int i = c + 1; i < n; i++)
+            if (fabs(m[i][c]) > fabs(m[piv][c]))
+                piv = i;
+        if (!(fabs(m[piv][c]) > 1e-14 * big))
+            return 1;
+        for (int q = 0; q < 2 * n; q++) {
+            double t = m[c][q];
+            m[c][q] = m[piv][q];
+            m[piv][q] = t;
+        }
+        double f = 1 / m[c][c];
+        for (int q = 0; q < 2 * n; q++)
+            m[c][q] *= f;
+        for (int i = 0; i < n; i++)
+            if (i != c) {
+                double g = m[i][c];
+                for (int q = 0; q < 2 * n; q++)
+                    m[i][q] -= g * m[c][q];
+            }
+    }
+    for (int i = 0; i < n; i++)
+        for (int c = 0; c < n; c++)
+            ai[i * n + c] = m[i][n + c];
+    return 0;
+}
+
+/* Standard errors of a plane's fitted parameters as the spread a new photon-counting run (another
+ * seed) would give them: the fit minimises sum w_k^2 (m_k(p) - y_k)^2, so to first order
+ * dp = H^-1 sum_k w_k^2 g_k (dy_k + (m_k - y_k) dw_k^2 / w_k^2)  (g = dm/dp, H = sum w_k^2 g g^T):
+ * Cov = H^-1 [sum_k w_k^4 g_k g_k^T (se_k^2 + kappa (m_k - y_k)^2)] H^-1 (a sandwich).
+ * The first term is the counts' own noise. The second enters with --weight stderr, whose weights
+ * 1/se_k^2 are themselves estimates from 64 batches (relative variance kappa = 2/63): where the
+ * shape misfits, the residuals m - y are many standard errors and the weights' noise moves the
+ * solution. (Against the spread over 12 seeds at albedo 0.9, chi^2/dof 80-350, this gave 0.9-1.4
+ * times the spread; (J^T J)^-1 scaled by chi^2/dof 2.6-4.5x too much, unscaled 2.4-6x too little:
+ * doc/fit.md.) se[] NaN when H is singular. */
+static void plane_stderr(const psi_data *d, size_t j, int ncomp, const double *p, double floor_se, int rmsw,
+                         double rms_scale, double *se)
+{
+    int np = shape_params(ncomp);
+    const double kappa = 2.0 / (FIT_BATCHES - 1);
+    double H[16] = {0}, Bm[16] = {0}, Hi[16], T[16];
+    for (size_t k = 0; k < d->nbins; k++) {
+        size_t i = j * d->nbins + k;
+        double sig = d->se[i] > 0 ? d->se[i] : floor_se, g[4];
+        double w = rmsw ? M_PI * (d->lo[i] + d->hi[i]) * rms_scale : 1 / sig, w2 = w * w;
+        double r = shape_annulus(ncomp, p, d->lo[i], d->hi[i], g) - d->psi[i];
+        double v = w2 * w2 * (sig * sig + (rmsw ? 0 : kappa * r * r));
+        for (int a = 0; a < np; a++)
+            for (int b = 0; b < np; b++) {
+                H[a * np + b] += w2 * g[a] * g[b];
+                Bm[a * np + b] += v * g[a] * g[b];
+            }
+    }
+    if (invert(np, H, Hi)) {
+        for (int a = 0; a < np; a++)
+            se[a] = NAN;
+        return;
+    }
+    for (int a = 0; a < np; a++) /* T = Hi Bm */
+        for (int b = 0; b < np; b++) {
+            T[a * np + b] = 0;
+            for (int c = 0; c < np; c++)
+                T[a * np + b] += Hi[a * np + c] * Bm[c * np + b];
+        }
+    for (int a = 0; a < np; a++) { /* diag(T Hi) */
+        double v = 0;
+        for (int c = 0; c < np; c++)
+            v += T[a * np + c] * Hi[c * np + a];
+        se[a] = v > 0 ? sqrt(v) : NAN;
+    }
 }
 
 /* the moment kernel of the medium at z */
@@ -273,24 +374,22 @@ int cmd_kernel(int argc, char **argv)
     static const char *const names[4][4] = {{0}, {"alpha", "beta"}, {"alpha", "beta", "alpha2", "beta2"},
                                             {"alpha", "beta", "M", "s"}};
     if (ncomp == 1)
-        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,status\n");
+        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,chi2_dof,status\n");
     else if (ncomp == 2)
         fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,alpha2,beta2,alpha2_stderr,beta2_stderr,rms_before,"
-                            "rms_after,status\n");
+                            "rms_after,chi2_dof,status\n");
     else
-        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,M,s,M_stderr,s_stderr,rms_before,rms_after,status\n");
+        fit_text_add(&rows, "z,alpha,beta,alpha_stderr,beta_stderr,M,s,M_stderr,s_stderr,rms_before,rms_after,chi2_dof,"
+                            "status\n");
     int rc = 0;
     for (size_t q = 0; q < nruns && rc == 0; q++) {
         psi_data *d = &runs[q];
         double nb_all = 0, na_all = 0, den_all = 0;
-        int nflag = 0;
+        int nflag = 0, nmis = 0;
         for (size_t j = 0; j < d->nplanes; j++) {
-            double floor_se = INFINITY, rmax = 0;
-            for (size_t k = 0; k < d->nbins; k++) {
-                if (d->se[j * d->nbins + k] > 0)
-                    floor_se = fmin(floor_se, d->se[j * d->nbins + k]);
+            double floor_se = psi_floor_se(d, j), rmax = 0;
+            for (size_t k = 0; k < d->nbins; k++)
                 rmax = fmax(rmax, d->hi[j * d->nbins + k]);
-            }
             if (isinf(floor_se))
                 die_usage("%s: plane z = %g has no photons counted (all-zero histogram): cannot fit", d->name, d->z[j]);
             /* widths beyond 100 times the plane's largest radius look like beta = infinity (Psi ~ 1/r) on
@@ -346,13 +445,17 @@ int cmd_kernel(int argc, char **argv)
             }
             memcpy(p, best, sizeof best);
             s = bs;
-            /* standard errors: (J^T J)^-1, scaled by chi^2/dof when the model does not fit within the noise;
-             * the RMS metric's weights carry no noise level, so there the scatter about the fit sets it */
-            double dof = (double)d->nbins - np, chi2 = 2 * s.final_cost;
-            double sc = dof <= 0 ? NAN : rmsw ? chi2 / dof : fmax(1.0, chi2 / dof);
+            /* chi^2 against the counts' standard errors at the solution, whatever the weighting and loss
+             * the fit used: does the shape fit within the counting noise? */
+            double dof = (double)d->nbins - np, chi2 = plane_chi2(d, j, ncomp, p, floor_se);
+            /* standard errors: the spread over photon-counting runs (plane_stderr); with a robust loss,
+             * which the sandwich does not model, Ceres' (J^T J)^-1 scaled by chi^2/dof where above 1 */
             double se_[4];
-            for (int e = 0; e < np; e++)
-                se_[e] = s.covariance_ok ? sqrt(s.covariance[e * np + e] * sc) : NAN;
+            if (fo.loss == NBT_FIT_LOSS_NONE && s.covariance_ok)
+                plane_stderr(d, j, ncomp, p, floor_se, rmsw, pc.rms_scale, se_);
+            else
+                for (int e = 0; e < np; e++)
+                    se_[e] = s.covariance_ok && dof > 0 ? sqrt(s.covariance[e * np + e] * fmax(1.0, chi2 / dof)) : NAN;
             double n0 = 0, d0 = 0, n1 = 0, d1 = 0;
             kernel_rms_parts(d, j, a0, b0, &n0, &d0);
             shape_rms_parts(d, j, ncomp, p, &n1, &d1);
@@ -360,26 +463,30 @@ int cmd_kernel(int argc, char **argv)
             char why[512], where[400];
             fit_status st = fit_judge(&s, np, names[ncomp], p, lo, hi, se_, NULL, rms0, rms1, "the moment kernel", why,
                                       sizeof why);
+            st = fit_misfit(st, chi2, dof, rms1, why, sizeof why);
             snprintf(where, sizeof where, "%s: plane z = %g", d->name, d->z[j]);
             fit_report_fit(&rep, where, st, why);
-            if (st != FIT_OK) { /* not a precise value: no standard errors */
+            if (st == FIT_MISFIT)
+                nmis++;
+            else if (st != FIT_OK) { /* not a precise value: no standard errors */
                 nflag++;
                 for (int e = 0; e < np; e++)
                     se_[e] = NAN;
             }
             if (ncomp == 1)
-                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%s\n", d->z[j], p[0], p[1], se_[0], se_[1],
-                             sqrt(n0 / d0), rms1, fit_status_word(st));
+                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%.4g,%s\n", d->z[j], p[0], p[1], se_[0],
+                             se_[1], sqrt(n0 / d0), rms1, chi2 / dof, fit_status_word(st));
             else
-                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%s\n", d->z[j], p[0],
-                             p[1], se_[0], se_[1], p[2], p[3], se_[2], se_[3], sqrt(n0 / d0), rms1, fit_status_word(st));
+                fit_text_add(&rows, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6g,%.6g,%.4g,%s\n", d->z[j],
+                             p[0], p[1], se_[0], se_[1], p[2], p[3], se_[2], se_[3], sqrt(n0 / d0), rms1, chi2 / dof,
+                             fit_status_word(st));
             nb_all += n0;
             na_all += n1;
             den_all += d0;
         }
         if (rc == 0)
-            fit_report_note(&rep, "RMS %s moment %.4f fitted %.4f (%d of %zu planes flagged)\n", d->name,
-                            sqrt(nb_all / den_all), sqrt(na_all / den_all), nflag, d->nplanes);
+            fit_report_note(&rep, "RMS %s moment %.4f fitted %.4f (%d of %zu planes flagged, %d misfit)\n", d->name,
+                            sqrt(nb_all / den_all), sqrt(na_all / den_all), nflag, d->nplanes, nmis);
     }
     double corr_b[NBT_KERNEL_CORR_TERMS], corr_a[NBT_KERNEL_CORR_TERMS];
     corr_ctx c = {runs, nruns, {1, 1, 1, 0, 0, 0, 0}, NULL};
@@ -435,6 +542,20 @@ int cmd_kernel(int argc, char **argv)
                 snprintf(why, sizeof why, "its cost %.6g is above the moment kernel's %.6g", s.final_cost, s.initial_cost);
                 st = FIT_WORSE;
             }
+            /* within the counting noise of every bin of every run? */
+            double chi2 = 0;
+            for (size_t q = 0; q < nruns; q++) {
+                const psi_data *d = &runs[q];
+                for (size_t j = 0; j < d->nplanes; j++) {
+                    double a, b, fl = psi_floor_se(d, j);
+                    corrected(d, d->z[j], corr_b, corr_a, &a, &b);
+                    for (size_t k = 0; k < d->nbins; k++) {
+                        size_t i = j * d->nbins + k;
+                        chi2 += psi_chi2_term(d, i, fl, kernel_annulus(a, b, d->lo[i], d->hi[i], NULL, NULL));
+                    }
+                }
+            }
+            st = fit_misfit(st, chi2, (double)nres - np, NAN, why, sizeof why);
             fit_report_fit(&rep, "correction", st, why);
             snprintf(corr_status, sizeof corr_status, "%s%s%s", fit_status_word(st), st == FIT_OK ? "" : ": ", why);
         }

@@ -31,8 +31,9 @@ static void help(void)
          "0 but for the constants), which keeps the fit well-posed. The medium and geometry come from\n"
          "an EXR's metadata (nbt-fit mc -o X.exr) or --albedo/--sigma-t/--B and --infinite (the source\n"
          "inside the medium) for CSV files.\n"
-         "stderr gets 'RMS FILE model X moment Y' per run and the fit's status (see nbt-fit kernel --help);\n"
-         "--strict: a flagged fit is an error (exit 2, nothing written).\n"
+         "stderr gets 'RMS FILE model X moment Y' per run and the fit's status (see nbt-fit kernel --help;\n"
+         "misfit: chi^2/dof over all bins of all runs against the counts' standard errors is above its\n"
+         "0.1% point); --strict: a flagged fit but a misfit is an error (exit 2, nothing written).\n"
          "--apply: for each run, 'geometry dtheta albedo mc_se model moment' (relative RMS of 2 pi r Psi;\n"
          "mc_se the counts' own noise on that scale; dtheta = 2 sqrt(B) in degrees) on stdout.\n"
          "--apply --density FILE: the runs were counted in that layered density (nbt-fit mc --density);\n"
@@ -142,9 +143,10 @@ typedef struct {
     const double *z, *rho;
 } layers;
 
-static double run_rms_in(const psi_data *d, const nbt_beam_fit *f, int geo, const layers *ly, double *noise)
+static double run_rms_in(const psi_data *d, const nbt_beam_fit *f, int geo, const layers *ly, double *noise,
+                         double *chi2)
 {
-    double num = 0, den = 0, se2 = 0, st = d->sigma_t;
+    double num = 0, den = 0, se2 = 0, c2 = 0, st = d->sigma_t;
     nbt_beam_medium m = nbt_beam_homogeneous(d->sigma_t, d->albedo, d->B);
     if (ly) {
         m.nlayers = ly->n;
@@ -174,16 +176,21 @@ static double run_rms_in(const psi_data *d, const nbt_beam_fit *f, int geo, cons
             num += w * w * (v - d->psi[i]) * (v - d->psi[i]);
             den += w * w * d->psi[i] * d->psi[i];
             se2 += w * w * d->se[i] * d->se[i];
+            if (chi2)
+                c2 += psi_chi2_term(d, i, psi_floor_se(d, j), v);
         }
     }
     if (noise)
         *noise = sqrt(se2 / den);
+    if (chi2)
+        *chi2 = c2;
     return sqrt(num / den);
 }
 
-static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double *noise)
+/* *chi2 (may be NULL): sum ((model - mc)/se)^2 over the run's bins (the plane's floor where se is 0) */
+static double run_rms(const psi_data *d, const nbt_beam_fit *f, int geo, double *noise, double *chi2)
 {
-    return run_rms_in(d, f, geo, NULL, noise);
+    return run_rms_in(d, f, geo, NULL, noise, chi2);
 }
 
 /* terms of monomial k: powers of (x, w, v) */
@@ -276,9 +283,10 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
     /* judged: converged, well-conditioned (the ridge keeps J^T J regular), no run worse than the moment kernel */
     nbt_beam_fit f;
     model_fill(&f, geo, c.c);
-    double before = NAN, after = NAN, worst = -INFINITY;
+    double before = NAN, after = NAN, worst = -INFINITY, chi2 = 0;
     for (size_t q = 0; q < nruns; q++) {
-        double r0 = run_rms(&runs[q], NULL, geo, NULL), r1 = run_rms(&runs[q], &f, geo, NULL);
+        double c2, r0 = run_rms(&runs[q], NULL, geo, NULL, NULL), r1 = run_rms(&runs[q], &f, geo, NULL, &c2);
+        chi2 += c2;
         fit_report_note(rep, "RMS %s model %.4f moment %.4f\n", runs[q].name, r1, r0);
         if (r1 - r0 > worst) {
             worst = r1 - r0;
@@ -292,10 +300,12 @@ static int fit_geometry(psi_data *runs, size_t nruns, int geo, double ridge, dou
         names[e] = "a coefficient";
     fit_status st = fit_judge(&s, np, names, NULL, NULL, NULL, NULL, NULL, before, after, "the moment kernel", why,
                               sizeof why);
+    /* within the counting noise? (the ridge's residuals are not data) */
+    st = fit_misfit(st, chi2, (double)nres - np, NAN, why, sizeof why);
     snprintf(where, sizeof where, "model (%s)", geo_word[geo]);
     fit_report_fit(rep, where, st, why);
-    fit_text_add(flog, "# %s: %zu runs, %d coefficients, rcond %.3g, fit status %s\n", geo_word[geo], nruns, np,
-                 s.rcond, fit_status_word(st));
+    fit_text_add(flog, "# %s: %zu runs, %d coefficients, rcond %.3g, chi^2/dof %.4g, fit status %s\n", geo_word[geo],
+                 nruns, np, s.rcond, chi2 / ((double)nres - np), fit_status_word(st));
     memcpy(c_out, c.c, sizeof c.c);
     free(c.scale);
     return 0;
@@ -373,8 +383,8 @@ int cmd_model(int argc, char **argv)
                density ? density : "");
         for (size_t q = 0; q < nruns; q++) {
             const psi_data *d = &runs[q];
-            double se, r1 = run_rms_in(d, &applied, d->infinite, density ? &ly : NULL, &se),
-                       r0 = run_rms_in(d, NULL, 0, density ? &ly : NULL, NULL);
+            double se, r1 = run_rms_in(d, &applied, d->infinite, density ? &ly : NULL, &se, NULL),
+                       r0 = run_rms_in(d, NULL, 0, density ? &ly : NULL, NULL, NULL);
             printf("%-8s %6.1f %6.3f %7.4f %8.4f %8.4f  %s\n", geo_word[d->infinite], 2 * sqrt(d->B) * 180 / M_PI,
                    d->albedo, se, r1, r0, d->name);
         }

@@ -23,7 +23,7 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt] [--against MC.exr] [--strict]\n\n"
+    puts("Usage: nbt-fit phase --target SPEC --terms K [-o SOG.txt] [--against MC.exr] [--tol EPS] [--strict]\n\n"
          "Fits w_1..w_K >= 0 (sum 1) and B_1..B_K > 0 of p = sum w_i p_G(B_i), p_G the Gaussian\n"
          "phase function of Shinya et al. eq. 13 on the sphere (as nbt's photon counter samples it),\n"
          "to the target (iso, rayleigh, hg:g=G, gauss:B=B, table:FILE, sog:FILE), 1e-6 <= B <= 1e3,\n"
@@ -37,8 +37,11 @@ static void help(void)
          "the RMS before and after is printed and the scaled lobes are written.\n"
          "Each fit is judged (status on its line, and in SOG.txt; a line on stderr when not ok): noconv\n"
          "(did not converge), bound (a weight or width on its bound), illcond (J^T J singular or\n"
-         "ill-conditioned: redundant lobes), worse (error above its start's), else ok; the first that\n"
-         "applies, in this order. --strict: any flagged fit is an error (exit 2, nothing written).");
+         "ill-conditioned: redundant lobes), worse (error above its start's), misfit (a sound fit whose\n"
+         "error is above --tol EPS, default 0.01: a target without noise has no chi^2, so the tolerance\n"
+         "stands in for it; --against: the moment kernel outside the counts' noise, chi^2/dof above its\n"
+         "0.1% point), else ok; the first that applies, in this order. --strict: any flagged fit but a\n"
+         "misfit is an error (exit 2, nothing written); a misfit is reported and exits 0.");
 }
 
 typedef struct {
@@ -121,6 +124,28 @@ static double against_rms(const against_ctx *c, double factor, double *num_out)
     return sqrt(num / den);
 }
 
+/* sum ((Psi - mc)/se)^2 over the counts for widths scaled by factor */
+static double against_chi2(const against_ctx *c, double factor)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(c->d->sigma_t, c->d->albedo, 1.0);
+    m.nlobes = (size_t)c->K;
+    for (int i = 0; i < c->K; i++) {
+        m.w[i] = c->w[i];
+        m.B[i] = factor * c->B[i];
+    }
+    double chi2 = 0;
+    for (size_t j = 0; j < c->d->nplanes; j++) {
+        double M0, M2, a, b, fl = psi_floor_se(c->d, j);
+        nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, c->d->z[j], &M0, &M2, NULL);
+        nbt_beam_kernel_params(M0, M2, &a, &b);
+        for (size_t k = 0; k < c->d->nbins; k++) {
+            size_t i = j * c->d->nbins + k;
+            chi2 += psi_chi2_term(c->d, i, fl, a > 0 && b > 0 ? kernel_annulus(a, b, c->d->lo[i], c->d->hi[i], NULL, NULL) : 0);
+        }
+    }
+    return chi2;
+}
+
 static int against_res(const double *p, double *r, double *jac, void *vp)
 {
     (void)jac;
@@ -177,6 +202,9 @@ static int refit_against(const char *path, psi_data *dp, int K, double *w, doubl
         f = exp(bestf);
         after = bestr;
     }
+    /* the moment kernel with these lobes against the counts' noise (one parameter fitted) */
+    double dof = (double)(dp->nplanes * dp->nbins) - 1;
+    st = fit_misfit(st, against_chi2(&c, f), dof, after, why, sizeof why);
     char where[600];
     snprintf(where, sizeof where, "phase --against %s", path);
     fit_report_fit(rep, where, st, why);
@@ -192,10 +220,11 @@ int cmd_phase(int argc, char **argv)
 {
     static const struct option opts[] = {{"target", required_argument, 0, 't'}, {"terms", required_argument, 0, 'k'},
                                          {"output", required_argument, 0, 'o'}, {"against", required_argument, 0, 'a'},
-                                         {"strict", no_argument, 0, 'T'},       {"help", no_argument, 0, 'h'},
-                                         {0, 0, 0, 0}};
+                                         {"strict", no_argument, 0, 'T'},       {"tol", required_argument, 0, 'e'},
+                                         {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
     const char *target = NULL, *out = NULL, *against = NULL;
     int K = 0, o, strict = 0;
+    double tol = 0.01;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
         switch (o) {
@@ -204,6 +233,7 @@ int cmd_phase(int argc, char **argv)
         case 'o': out = optarg; break;
         case 'a': against = optarg; break;
         case 'T': strict = 1; break;
+        case 'e': tol = opt_double("--tol", optarg, 0, 1, 1, 1); break;
         case 'h': help(); return 0;
         default: die_usage("see 'nbt-fit phase --help'");
         }
@@ -325,6 +355,11 @@ int cmd_phase(int argc, char **argv)
         double before = k == 1 ? bstart : prev_err;
         snprintf(sname, sizeof sname, k == 1 ? "its start" : "the %d-lobe fit", k - 1);
         fit_status st = fit_judge(&bs, np, names, best, lo, hi, se, se_max, before, berr, sname, why, sizeof why);
+        if (st == FIT_OK && berr > tol) {
+            snprintf(why, sizeof why, "relative L2 error %.3g is above --tol %g: the lobes do not follow the target "
+                     "(it has no noise, so the tolerance stands in for a chi^2 test)", berr, tol);
+            st = FIT_MISFIT;
+        }
         prev_err = berr;
         snprintf(where, sizeof where, "phase K = %d", k);
         fit_report_fit(&rep, where, st, why);

@@ -1,5 +1,6 @@
 /* fit/fit_status.c: status words, the judgement of a fit, held-back output. */
 #include <config.h>
+#include <gsl/gsl_cdf.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -12,6 +13,7 @@ const char *fit_status_word(fit_status s)
 {
     switch (s) {
     case FIT_OK: return "ok";
+    case FIT_MISFIT: return "misfit";
     case FIT_WORSE: return "worse";
     case FIT_ILLCOND: return "illcond";
     case FIT_BOUND: return "bound";
@@ -61,6 +63,29 @@ fit_status fit_judge(const nbt_fit_summary *s, int np, const char *const *names,
     }
     why[0] = 0;
     return FIT_OK;
+}
+
+double fit_chi2_limit(double dof)
+{
+    if (!(dof >= 1))
+        return NAN;
+    /* one squared residual ~ F(1, d): mean d/(d - 2), variance 2 d^2 (d - 1)/((d - 2)^2 (d - 4)) */
+    const double d = FIT_BATCHES - 1, m = d / (d - 2), v = 2 * d * d * (d - 1) / ((d - 2) * (d - 2) * (d - 4));
+    const double c = v / (2 * m), nu = m / c; /* c chi^2(nu) has mean c nu = m and variance 2 c^2 nu = v */
+    return c * gsl_cdf_chisq_Qinv(FIT_MISFIT_P, nu * dof);
+}
+
+fit_status fit_misfit(fit_status st, double chi2, double dof, double rms, char *why, size_t whylen)
+{
+    double lim = fit_chi2_limit(dof);
+    if (st != FIT_OK || !(chi2 > lim)) /* NaN limit or chi^2: not judged */
+        return st;
+    int n = snprintf(why, whylen, "chi^2/dof = %.3g (dof %.0f) is above %.3g, which a shape that fits exceeds with "
+                     "probability %g: the shape does not fit within the counting noise", chi2 / dof, dof, lim / dof,
+                     FIT_MISFIT_P);
+    if (isfinite(rms) && n > 0 && (size_t)n < whylen)
+        snprintf(why + n, whylen - (size_t)n, " (RMS %.4g)", rms);
+    return FIT_MISFIT;
 }
 
 static void text_vadd(fit_text *t, const char *fmt, va_list ap)
@@ -114,7 +139,9 @@ void fit_report_fit(fit_report *r, const char *where, fit_status st, const char 
     r->nfits++;
     if (st == FIT_OK)
         return;
-    if (r->nflagged++ == 0)
+    if (st == FIT_MISFIT)
+        r->nmisfit++;
+    else if (r->nflagged++ == 0)
         snprintf(r->first, sizeof r->first, "%s: %s: %s", where, fit_status_word(st), why);
     fit_text_add(&r->log, "%s: %s: %s: %s\n", cli_prog, where, fit_status_word(st), why);
 }

@@ -180,3 +180,18 @@ int psi_data_read_medium(const char *path, psi_data *d, double albedo, double si
     }
     return 0;
 }
+
+double psi_floor_se(const psi_data *d, size_t j)
+{
+    double f = INFINITY;
+    for (size_t k = 0; k < d->nbins; k++)
+        if (d->se[j * d->nbins + k] > 0)
+            f = fmin(f, d->se[j * d->nbins + k]);
+    return f;
+}
+
+double psi_chi2_term(const psi_data *d, size_t i, double floor, double m)
+{
+    double se = d->se[i] > 0 ? d->se[i] : floor, r = (m - d->psi[i]) / se;
+    return r * r;
+}

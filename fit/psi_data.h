@@ -22,5 +22,10 @@ int psi_data_read(const char *path, psi_data *d, char *err, size_t errlen);
 int psi_data_read_medium(const char *path, psi_data *d, double albedo, double sigma_t, double B, char *err,
                          size_t errlen);
 void psi_data_free(psi_data *d);
+/* The smallest positive standard error of plane j (+inf when the plane counted nothing): the
+ * error the fits give a bin that counted nothing (its own standard error is 0). */
+double psi_floor_se(const psi_data *d, size_t j);
+/* ((m - psi)/se)^2 for bin i of plane j, with psi_floor_se(d, j) = floor where se is 0. */
+double psi_chi2_term(const psi_data *d, size_t i, double floor, double m);
 
 #endif

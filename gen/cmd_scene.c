@@ -68,7 +68,7 @@ static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, i
             snprintf(stem, sizeof stem, "%s/J%d_hg_slices", dir, rq[i].n);
         nbt_tableset ts = {{t[i]}, 1, t[i]->max_abs[0], gslice_lookup_err(t[i]), 0};
         if (rc == 0)
-            rc = tableset_write(&ts, stem, 1);
+            rc = tableset_write(&ts, stem, 1, &prog);
         nbt_table_free(t[i]);
     }
     if (rc == 0 && !quiet)
@@ -159,7 +159,7 @@ int cmd_scene(int argc, char **argv)
         char stem[1024], name[128];
         nbt_plan_stem(&ps->req, name, sizeof name);
         snprintf(stem, sizeof stem, "%s/%s", dir, name);
-        rc = tableset_write(&ts, stem, 1);
+        rc = tableset_write(&ts, stem, 1, &prog);
         nbt_tableset_free(&ts);
     }
     if (rc == 0 && !quiet)

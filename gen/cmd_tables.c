@@ -23,15 +23,19 @@ double now_seconds(void)
     return progress_clock();
 }
 
+static double tables_write_seconds(double bytes, size_t nfiles, const progress *p);
+static double plan_bytes(const nbt_plan *plan, size_t *nfiles);
+
 double plan_announce(const nbt_plan *plan, progress *p)
 {
     double total = 0;
-    size_t n = nbt_plan_count(plan);
+    size_t n = nbt_plan_count(plan), nfiles;
     for (size_t i = 0; i < n; i++)
         total += nbt_plan_get(plan, i)->pred_seconds;
-    progress_note(p, "planned %zu table set(s) in %.2g s, predicted build time %.2g s", n, now_seconds() - p->t0,
-                  total);
-    progress_warn_long(p, total, "the planner's prediction");
+    double bytes = plan_bytes(plan, &nfiles), wr = tables_write_seconds(bytes, nfiles, p);
+    progress_note(p, "planned %zu table set(s) in %.2g s, predicted build time %.2g s, writing %.0f MB %.2g s", n,
+                  now_seconds() - p->t0, total, 1e-6 * bytes, wr);
+    progress_warn_long(p, total + wr, "the planner's prediction, writing included");
     return total;
 }
 
@@ -115,13 +119,21 @@ typedef struct {
     char *path;
     int png, ok, skip; /* skip: a preview not asked for */
     outputs_file *reg; /* removed on a signal or a later failure (outputs.h) */
+    double weight;     /* its share of the writing: the table's bytes (EXR), a tenth of them (preview) */
+    atomic_uint_fast32_t ppm; /* written so far, parts per million (the progress lines) */
 } out_job;
 
 typedef struct {
     out_job *job;
     size_t n;
     atomic_size_t next;
+    atomic_size_t running; /* writer threads still busy */
 } out_queue;
+
+static void on_chunk(double f, void *vj)
+{
+    atomic_store(&((out_job *)vj)->ppm, (uint_fast32_t)(1e6 * f));
+}
 
 static void *out_worker(void *vq)
 {
@@ -130,32 +142,101 @@ static void *out_worker(void *vq)
         out_job *j = &q->job[i];
         if (j->skip || outputs_begin(j->reg))
             continue;
-        j->ok = j->png ? preview_write_png(j->t, j->path) == 0 : nbt_table_write_exr(j->t, j->path, NBT_EXR_ZIP) == NBT_OK;
+        j->ok = j->png ? preview_write_png(j->t, j->path) == 0
+                       : nbt_table_write_exr_progress(j->t, j->path, NBT_EXR_ZIP, on_chunk, j) == NBT_OK;
+        atomic_store(&j->ppm, 1000000);
         outputs_end(j->reg, j->ok);
     }
+    atomic_fetch_sub(&q->running, 1);
     return NULL;
 }
 
-/* The files are independent (each written via a temporary file and renamed),
- * so they are written by up to one thread per CPU: the previews' sampling
- * and deflate were a third of the default scene's run time on one core. */
-static void out_run(out_job *job, size_t n)
+/* Up to one writer per CPU (the previews' sampling and deflate were a third of the default scene's
+ * run time on one core), the same number that tables_write_seconds assumes */
+static size_t out_threads(size_t nfiles)
 {
-    out_queue q = {job, n, 0};
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     size_t nt = ncpu < 1 ? 1 : (size_t)ncpu;
-    if (nt > n)
-        nt = n;
-    if (nt > 16)
-        nt = 16;
+    if (nt > nfiles)
+        nt = nfiles;
+    return nt > 16 ? 16 : nt < 1 ? 1 : nt;
+}
+
+/* The files are independent (each written via a temporary file and renamed),
+ * so they are written in parallel. With w (not NULL) the calling thread
+ * only watches: the share written, every 0.25 s (or half w's interval, at
+ * least 1 ms), as w's progress lines. */
+static void out_run(out_job *job, size_t n, progress *w)
+{
+    out_queue q = {job, n, 0, 0};
+    size_t nt = out_threads(n);
     pthread_t th[16];
     size_t started = 0;
-    for (; started + 1 < nt; started++)
-        if (pthread_create(&th[started], NULL, out_worker, &q) != 0)
+    for (; started + (w ? 0 : 1) < nt; started++) {
+        atomic_fetch_add(&q.running, 1);
+        if (pthread_create(&th[started], NULL, out_worker, &q) != 0) {
+            atomic_fetch_sub(&q.running, 1);
             break;
-    out_worker(&q);
+        }
+    }
+    if (!w || started == 0) {
+        atomic_fetch_add(&q.running, 1);
+        out_worker(&q);
+    } else {
+        double total = 0;
+        for (size_t i = 0; i < n; i++)
+            total += job[i].skip ? 0 : job[i].weight;
+        /* every 0.25 s, or faster where lines are wanted more often (NBT_PROGRESS_SECONDS) */
+        double per = fmax(0.001, fmin(0.25, 0.5 * w->interval));
+        struct timespec ts = {0, (long)(1e9 * per)};
+        while (atomic_load(&q.running) > 0) {
+            double done = 0;
+            for (size_t i = 0; i < n; i++)
+                done += job[i].skip ? 0 : job[i].weight * 1e-6 * (double)atomic_load(&job[i].ppm);
+            if (total > 0 && done < total)
+                progress_fraction(w, done / total);
+            nanosleep(&ts, NULL);
+        }
+    }
     for (size_t i = 0; i < started; i++)
         pthread_join(th[i], NULL);
+}
+
+/* The deflate of nbt's float tables (ZIP, as nbt_table_write_exr writes them) ran at 32-40 MB of
+ * raw table data per CPU second (16.8 MB packs of H and J, 1025^2 x 4 channels). */
+#define WRITE_MB_PER_CPU_SECOND 35.0
+
+/* CPU time of the calling thread */
+static double thread_cpu_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Predicted wall time of writing `bytes` of tables as nfiles EXR files: their deflate's CPU time
+ * shared by the writers, times how much slower than its CPU time the calling thread has run so far
+ * (it plans and builds alongside the other threads, so this is the machine's other load; p's start
+ * is about the thread's) */
+static double tables_write_seconds(double bytes, size_t nfiles, const progress *p)
+{
+    double cpu = thread_cpu_seconds(), wall = progress_clock() - p->t0;
+    double slow = cpu > 0.01 && wall > 0 ? fmax(1.0, wall / cpu) : 1.0;
+    return bytes / (1e6 * WRITE_MB_PER_CPU_SECOND) / (double)out_threads(nfiles) * slow;
+}
+
+/* the raw bytes of a plan's tables and their number of EXR files */
+static double plan_bytes(const nbt_plan *plan, size_t *nfiles)
+{
+    double b = 0;
+    *nfiles = 0;
+    for (size_t i = 0; i < nbt_plan_count(plan); i++) {
+        const nbt_plan_set *ps = nbt_plan_get(plan, i);
+        double ch = ps->req.phase ? 1.0 : (double)ps->req.nterms;
+        b += (double)ps->axis[0].n * (double)ps->axis[1].n * ch * (ps->req.half ? 2.0 : 4.0);
+        *nfiles += ps->npacks;
+    }
+    return b;
 }
 
 static void print_table_line(const nbt_tableset *ts, const nbt_table *t, const char *path)
@@ -176,7 +257,7 @@ static void print_table_line(const nbt_tableset *ts, const nbt_table *t, const c
         print_tail_map(t);
 }
 
-int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview)
+int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview, progress *p)
 {
     size_t n = 0;
     for (size_t s = 0; s < nsets; s++)
@@ -189,7 +270,8 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
             size_t len = strlen(stems[s]) + 32;
             for (int png = 0; png < 2; png++) {
                 char *path = malloc(len);
-                job[i + (size_t)png] = (out_job){t, path, png, 0, png && !preview, NULL};
+                job[i + (size_t)png] = (out_job){t, path, png, 0, png && !preview, NULL, 0, 0};
+                job[i + (size_t)png].weight = (double)nbt_table_size(t) * (t->half ? 2.0 : 4.0) * (png ? 0.1 : 1.0);
                 if (!path) {
                     rc = 1;
                     break;
@@ -207,17 +289,43 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
     if (rc != 0)
         fprintf(stderr, "nbt-gen: out of memory writing the tables\n");
     else {
-        out_run(job, n);
+        /* progress: the EXR files' raw bytes, predicted and measured time */
+        double bytes = 0, t0 = now_seconds(), pred = 0;
+        size_t nexr = 0, nfiles = 0;
+        for (size_t i = 0; i < n; i++) {
+            nfiles += !job[i].skip;
+            if (!job[i].png) {
+                bytes += job[i].weight;
+                nexr++;
+            }
+        }
+        char label[96];
+        progress w;
+        if (p) {
+            pred = tables_write_seconds(bytes, nexr, p);
+            progress_note(p, "writing %zu file(s), %.1f MB of tables, predicted %.2g s", nfiles, 1e-6 * bytes, pred);
+            snprintf(label, sizeof label, "%s: writing", p->what);
+            progress_init(&w, label, p->quiet);
+            w.warned = p->warned; /* one long-run warning per run */
+        }
+        out_run(job, n, p ? &w : NULL);
+        if (p) {
+            progress_end(&w);
+            p->warned |= w.warned;
+        }
         for (size_t i = 0; i < n; i++)
             if (!job[i].skip && !job[i].ok) {
                 fprintf(stderr, "nbt-gen: cannot write '%s'\n", job[i].path);
                 rc = 1;
                 break;
             }
-        if (rc != 0) /* all or nothing */
+        if (rc != 0) { /* all or nothing */
             for (size_t i = 0; i < n; i++)
                 if (job[i].ok)
                     unlink(job[i].path);
+        } else if (p)
+            progress_note(p, "wrote %zu file(s) in %.2f s (predicted %.2g s), %.1f s elapsed", nfiles,
+                          now_seconds() - t0, pred, now_seconds() - p->t0);
     }
     if (rc == 0)
         for (size_t s = 0, i = 0; s < nsets; s++)
@@ -229,9 +337,9 @@ int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *ste
     return rc;
 }
 
-int tableset_write(const nbt_tableset *ts, const char *stem, int preview)
+int tableset_write(const nbt_tableset *ts, const char *stem, int preview, progress *p)
 {
-    return tablesets_write(ts, 1, &stem, preview);
+    return tablesets_write(ts, 1, &stem, preview, p);
 }
 
 void print_legendre(const nbt_plan_legendre *l, double gmax)
@@ -263,7 +371,7 @@ static int plan_build_write(const nbt_plan_request *rq, size_t n, unsigned threa
             rc = 1;
             break;
         }
-        rc = tableset_write(&ts, stems[i], preview);
+        rc = tableset_write(&ts, stems[i], preview, prog);
         nbt_tableset_free(&ts);
     }
     nbt_plan_free(plan);
@@ -361,7 +469,7 @@ static int slices_or_legendre(const nbt_plan_request *s, double g_lo, double g_h
     nbt_tableset ts = {{t}, 1, t->max_abs[0], gslice_lookup_err(t), now_seconds() - t0};
     int rc = gslice_tol_check(t, stem, s->tol, allow_miss);
     if (rc == 0)
-        rc = tableset_write(&ts, stem, preview);
+        rc = tableset_write(&ts, stem, preview, &prog);
     if (rc == 0)
         printf("# g-sliced: %zu slices, g %s [%g, %g], %.1f MB as %s, built in %.2f s (planning %.2f s)\n",
                t->axis[2].n, nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,
@@ -536,7 +644,7 @@ int cmd_default(int argc, char **argv)
         die("%s", err);
     }
     double tb = now_seconds() - t0;
-    int rc = tablesets_write(ts, 3, stemp, 1);
+    int rc = tablesets_write(ts, 3, stemp, 1, &prog);
     for (int i = 0; i < 3; i++)
         nbt_tableset_free(&ts[i]);
     if (rc == 0 && !quiet)

@@ -15,14 +15,18 @@ int eval_from_tables(int surface, const void *geo, const char *const *files, siz
                      const char *phase_arg);
 int cmd_kernel(int argc, char **argv);
 
+#include "progress.h"
 /* Write each table of a built set as EXR (+ PNG preview unless !preview)
  * named "<stem>.exr" for one pack or "<stem>_k<a>-<b>.exr"; print a summary
  * line per table to stdout. All or nothing: on failure the files written by
- * this call are removed. Returns 0 or 1. */
-int tableset_write(const nbt_tableset *ts, const char *path_stem, int preview);
+ * this call are removed. With p (may be NULL): a line with the files, their
+ * bytes and the predicted time, progress lines while they are written
+ * ("WHAT: writing: N% done, ..., ETA ..."), a line with the time taken.
+ * Returns 0 or 1. */
+int tableset_write(const nbt_tableset *ts, const char *path_stem, int preview, progress *p);
 /* The same for nsets sets at once (stems[i] for ts[i]), all or nothing over
  * all of them; the files are written in parallel, the lines printed in order. */
-int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview);
+int tablesets_write(const nbt_tableset *ts, size_t nsets, const char *const *stems, int preview, progress *p);
 
 /* A g-sliced table's recorded error as a pure lookup sees it: relative to
  * the value for the tail and log_et forms, else to the largest value. */
@@ -35,7 +39,8 @@ int gslice_tol_check(const nbt_table *t, const char *name, double tol, int allow
 double now_seconds(void);
 
 /* Progress of planned builds (gen/progress.h): plan_announce notes the plan's
- * predicted build time (warning when long) and returns it; build_set builds
+ * predicted build time and the predicted time to write its tables (one
+ * warning when the two exceed 60 s) and returns the build time; build_set builds
  * set i with a line at its start (size, predicted time, ETA of the sets
  * left, *pred_left, which it then lowers) and one at its end (actual time). */
 #include "progress.h"

@@ -1,5 +1,6 @@
 /* gen/progress.c: progress lines on stderr (see progress.h). */
 #include <config.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,7 +21,7 @@ void progress_init(progress *p, const char *what, int quiet)
     p->t0 = p->last = progress_clock();
     p->quiet = quiet;
     p->tty = stderr_is_tty();
-    p->open = p->warned = 0;
+    p->open = p->warned = p->finished = 0;
     p->interval = 2.0;
     const char *e = getenv("NBT_PROGRESS_SECONDS");
     double v;
@@ -79,17 +80,21 @@ void progress_warn_long(progress *p, double predicted, const char *basis)
     char d[32];
     duration(predicted, d, sizeof d);
     p->warned = 1;
+    double last = p->last; /* not a progress line: the next one comes as it would have */
     progress_note(p, "warning: this run will take about %s (%s)", d, basis);
+    p->last = last;
 }
 
 void progress_fraction(progress *p, double f)
 {
-    if (p->quiet || !(f > 0))
+    if (p->quiet || !(f > 0) || p->finished)
         return;
     double now = progress_clock(), el = now - p->t0, total = el / f;
-    if (!p->warned) {
-        char basis[64];
-        snprintf(basis, sizeof basis, "estimated from the first %.0f%%", 100 * f);
+    /* the projection el/f, once it rests on enough of the run (half a second, or 5% of it: start-up
+     * costs are then a small part), at every update until it first exceeds long_s */
+    if (!p->warned && (el >= 0.5 || f >= 0.05)) {
+        char basis[96];
+        snprintf(basis, sizeof basis, "projected from %.3g%% done in %.1f s", 100 * f, el);
         progress_warn_long(p, total, basis);
     }
     if (f < 1 && now - p->last < (p->tty ? 0.2 : p->interval))
@@ -97,12 +102,14 @@ void progress_fraction(progress *p, double f)
     char a[32], b[32], buf[128];
     duration(el, a, sizeof a);
     duration(total - el, b, sizeof b);
-    if (f < 1)
-        snprintf(buf, sizeof buf, "%3.0f%% done, %s elapsed, ETA %s", 100 * f, a, b);
+    if (f < 1) /* truncated, so that 100% means done; below 1% with two digits */
+        snprintf(buf, sizeof buf, f < 0.01 ? "%.2g%% done, %s elapsed, ETA %s" : "%3.0f%% done, %s elapsed, ETA %s",
+                 f < 0.01 ? 100 * f : floor(100 * f), a, b);
     else
         snprintf(buf, sizeof buf, "100%% done, %s", a);
     emit(p, f < 1, buf);
     p->last = now;
+    p->finished = f >= 1;
 }
 
 void progress_end(progress *p)

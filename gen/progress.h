@@ -20,6 +20,7 @@ typedef struct {
     int quiet, tty;
     int open;           /* a terminal line is shown and not yet ended */
     int warned;         /* the long-run warning was given */
+    int finished;       /* the 100% line was printed: later updates print nothing */
 } progress;
 
 double progress_clock(void);
@@ -27,8 +28,9 @@ void progress_init(progress *p, const char *what, int quiet);
 /* One line now (not rate-limited): starts and ends of stages. */
 void progress_note(progress *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Fraction f in [0, 1] of the work done: percent, elapsed time and ETA
- * (elapsed (1 - f)/f), rate-limited; the first update with f > 0 also
- * checks the predicted total against long_s. */
+ * (elapsed (1 - f)/f), rate-limited; every update from half a second or 5%
+ * on also checks the projected total (elapsed/f) against long_s, until the
+ * warning has been given. */
 void progress_fraction(progress *p, double f);
 /* The early warning, once, when predicted > long_s; basis says
  * where the prediction comes from. */

@@ -155,6 +155,11 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
  * online CPUs). Stops early and returns the first non-OK status. */
 typedef nbt_status (*nbt__task)(size_t i, unsigned thread, void *ctx);
 nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx);
+/* The same; the calling thread, once no item is left to start, calls watch(wctx) every period
+ * seconds until the other threads have finished theirs (progress reports while the last items
+ * run elsewhere). */
+nbt_status nbt__parallel_for_watch(size_t n, unsigned nthreads, nbt__task fn, void *ctx, void (*watch)(void *),
+                                   void *wctx, double period);
 unsigned nbt__nthreads(unsigned requested, size_t n);
 
 /* G rows of J builds, shared between builds (libnbt/jcache.c): a row is

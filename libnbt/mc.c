@@ -28,10 +28,28 @@ typedef struct {
     size_t stride;      /* doubles per batch: nplanes*(r_bins + 2) + 3 */
     double *acc;        /* NBATCH * stride */
     size_t b0, nbatch;  /* this part runs batches [b0, b0 + nbatch) */
-    atomic_uint done;
     atomic_int *over;   /* rho_fn exceeded rho_max somewhere (a flag outside the
                          * context, which the photon loop sees as const) */
+    /* progress: photons of this part finished by all threads, counted in chunks of
+     * MC_CHUNK as they go (not only as batches end: one batch of 10^12 photons is
+     * hours), and reported from the calling thread (see mc_report) */
+    atomic_uint_fast64_t *pdone;
+    uint64_t ptotal;
 } mc_ctx;
+
+#define MC_CHUNK 256
+
+/* the progress callback with the fraction of this part's photons done (calling thread only) */
+static void mc_report(const mc_ctx *c)
+{
+    if (c->cfg->progress)
+        c->cfg->progress((double)atomic_load(c->pdone) / (double)c->ptotal, c->cfg->progress_data);
+}
+
+static void mc_watch(void *vp)
+{
+    mc_report(vp);
+}
 
 /* Tally forward crossings of planes in (z0, z1] along a move; *jp is the
  * first plane above z0 and comes back as the first plane above z1. */
@@ -89,10 +107,14 @@ static inline double sample_mu(const mc_ctx *c, nbt__rng *rs)
 /* Photons [p0, p1) into the batch slice a; R, T sums and the event count
  * come back in out[3]. Always inlined with planes and weighted as
  * constants (see run_batch), so that each case compiles without the
- * branches, and without the x, y tracking, it does not need. */
+ * branches, and without the x, y tracking, it does not need. Every
+ * MC_CHUNK photons the part's count of photons done grows; the calling
+ * thread (reporter) then also reports progress. */
 static inline __attribute__((always_inline)) void photons(const mc_ctx *c, double *a, uint64_t p0, uint64_t p1,
-                                                          const int planes, const int weighted, double out[3])
+                                                          const int planes, const int weighted, int reporter,
+                                                          double out[3])
 {
+    unsigned since = 0; /* photons since the count last grew */
     const nbt_mc_config *cf = c->cfg;
     uint64_t events = 0;
     double srefl = 0, strans = 0; /* summed here, not in the shared array (no false sharing) */
@@ -243,7 +265,14 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
                 uz = nz * n;
             }
         }
+        if (++since == MC_CHUNK) {
+            atomic_fetch_add_explicit(c->pdone, MC_CHUNK, memory_order_relaxed);
+            since = 0;
+            if (reporter)
+                mc_report(c);
+        }
     }
+    atomic_fetch_add_explicit(c->pdone, since, memory_order_relaxed);
     out[0] = srefl;
     out[1] = strans;
     out[2] = (double)events;
@@ -258,16 +287,16 @@ static nbt_status run_batch(size_t i, unsigned thread, void *vp)
     uint64_t p0 = cf->photons * batch / NBATCH, p1 = cf->photons * (batch + 1) / NBATCH;
     size_t tail = c->stride - 3; /* R, T, events */
     const int planes = cf->nplanes > 0, weighted = cf->estimator == NBT_MC_WEIGHTED;
+    const int rep = thread == 0 && cf->progress;
     if (planes)
-        weighted ? photons(c, a, p0, p1, 1, 1, out) : photons(c, a, p0, p1, 1, 0, out);
+        weighted ? photons(c, a, p0, p1, 1, 1, rep, out) : photons(c, a, p0, p1, 1, 0, rep, out);
     else
-        weighted ? photons(c, a, p0, p1, 0, 1, out) : photons(c, a, p0, p1, 0, 0, out);
+        weighted ? photons(c, a, p0, p1, 0, 1, rep, out) : photons(c, a, p0, p1, 0, 0, rep, out);
     a[tail] = out[0];
     a[tail + 1] = out[1];
     a[tail + 2] = out[2];
-    unsigned d = atomic_fetch_add(&c->done, 1) + 1;
-    if (thread == 0 && cf->progress)
-        cf->progress((double)d / (double)c->nbatch, cf->progress_data);
+    if (rep)
+        mc_report(c);
     return NBT_OK;
 }
 
@@ -369,10 +398,13 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
     if (b0 == b1)
         return NBT_OK; /* a part with no photons adds nothing */
     mc_ctx c = {.cfg = cf, .acc = tally, .b0 = b0, .nbatch = b1 - b0};
-    atomic_init(&c.done, 0);
     atomic_int over;
     atomic_init(&over, 0);
     c.over = &over;
+    atomic_uint_fast64_t pdone;
+    atomic_init(&pdone, 0);
+    c.pdone = &pdone;
+    c.ptotal = cf->photons * b1 / NBATCH - cf->photons * b0 / NBATCH;
     size_t nl = cf->slab > 0 || cf->rho_fn ? 1 : (cf->nlayers ? cf->nlayers : 1);
     c.nlay = nl;
     c.slab = cf->slab > 0;
@@ -420,7 +452,10 @@ nbt_status nbt_mc_run_part(const nbt_mc_config *cf, size_t b0, size_t b1, double
     /* a batch's slice starts from zero and is filled by one thread in photon
      * order: the same bits whoever runs it */
     memset(tally + b0 * c.stride, 0, (b1 - b0) * c.stride * sizeof(double));
-    st = nbt__parallel_for(c.nbatch, cf->threads, run_batch, &c);
+    /* progress as photons finish, also while the last batches run on other threads */
+    st = nbt__parallel_for_watch(c.nbatch, cf->threads, run_batch, &c, cf->progress ? mc_watch : NULL, &c, 0.25);
+    if (st == NBT_OK)
+        mc_report(&c); /* all done: 1 */
     if (st == NBT_OK && atomic_load(&over))
         st = nbt__fail(NBT_EDOM, "mc: the density callback exceeded rho_max");
     free(c.b);

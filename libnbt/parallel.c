@@ -2,6 +2,7 @@
 #include <config.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <time.h>
 #include <unistd.h>
 #include "internal.h"
 
@@ -9,6 +10,7 @@ typedef struct {
     size_t n;
     atomic_size_t next;
     atomic_int status;
+    atomic_uint running; /* threads other than the caller's still in their loop */
     nbt__task fn;
     void *ctx;
 } pool;
@@ -37,6 +39,14 @@ static void *worker(void *vp)
     return NULL;
 }
 
+static void *started_worker(void *vp)
+{
+    worker_arg *a = vp;
+    worker(vp);
+    atomic_fetch_sub(&a->p->running, 1);
+    return NULL;
+}
+
 unsigned nbt__nthreads(unsigned requested, size_t n)
 {
     unsigned t = requested;
@@ -51,24 +61,41 @@ unsigned nbt__nthreads(unsigned requested, size_t n)
     return t;
 }
 
-nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx)
+nbt_status nbt__parallel_for_watch(size_t n, unsigned nthreads, nbt__task fn, void *ctx, void (*watch)(void *),
+                                   void *wctx, double period)
 {
     pool p = {.n = n, .fn = fn, .ctx = ctx};
     atomic_init(&p.next, 0);
     atomic_init(&p.status, NBT_OK);
+    atomic_init(&p.running, 0);
     unsigned nt = nbt__nthreads(nthreads, n);
     pthread_t th[64];
     worker_arg args[64];
     unsigned started = 0;
     for (unsigned t = 1; t < nt; t++) {
         args[t] = (worker_arg){&p, t};
-        if (pthread_create(&th[t], NULL, worker, &args[t]) != 0)
+        atomic_fetch_add(&p.running, 1);
+        if (pthread_create(&th[t], NULL, started_worker, &args[t]) != 0) {
+            atomic_fetch_sub(&p.running, 1);
             break; /* fewer threads: the loop still completes */
+        }
         started = t;
     }
     args[0] = (worker_arg){&p, 0};
     worker(&args[0]);
+    if (watch) { /* the caller's items are done: it watches the others finish theirs */
+        struct timespec ts = {(time_t)period, (long)(1e9 * (period - (double)(time_t)period))};
+        while (atomic_load(&p.running) > 0) {
+            watch(wctx);
+            nanosleep(&ts, NULL);
+        }
+    }
     for (unsigned t = 1; t <= started; t++)
         pthread_join(th[t], NULL);
     return (nbt_status)atomic_load(&p.status);
+}
+
+nbt_status nbt__parallel_for(size_t n, unsigned nthreads, nbt__task fn, void *ctx)
+{
+    return nbt__parallel_for_watch(n, nthreads, fn, ctx, NULL, NULL, 0);
 }

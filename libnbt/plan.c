@@ -33,6 +33,14 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* CPU time of the process, all threads (the work, whatever else runs on the machine) */
+static double cpu_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 #define failf nbt__failf
 nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
 {
@@ -350,20 +358,24 @@ static size_t ladder_size(double e33, double p, double tol)
 }
 
 /* Plan one set: mappings by rule; all packs at 33^2 (the final quadrature
- * tolerance, error measured) give e33; a 65^2 build gives the convergence
- * rate and cost exponent where the set may be 65^2 or larger (then the
- * proxy is the set, or cheap next to it), else the conservative rate is
- * taken. Both builds are kept for execution at those sizes (cache: 2 x
- * NBT_PLAN_MAX_PACKS slots). */
+ * tolerance, error measured) give e33; a second build gives the convergence
+ * rate and the cost where the set may be 65^2 or larger (then the proxy is
+ * the set, or cheap next to it), else the conservative rate is taken. The
+ * second build is 65^2, or 129^2 for a set of 257 or more nodes on an axis:
+ * builds of 33^2 and 65^2 took about the same time (fixed costs, 10-40 ms on
+ * 2 shared cores, were most of it), so a cost exponent fitted to them came
+ * out at its floor 1 and a 4096^2 H set was predicted 25-40x too fast; the
+ * 129^2 build costs a quarter of a 257^2 set or less. Both builds are kept
+ * for execution at those sizes (cache: 2 x NBT_PLAN_MAX_PACKS slots). */
 static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jcache *gc, nbt_plan_set *ps,
                            nbt_table **cache, double *need_n)
 {
     memset(ps, 0, sizeof *ps);
     ps->req = *r;
     ps->npacks = npacks_of(r);
-    double e[2] = {0, 0}, secs[2] = {0, 0};
-    static const size_t pn[2] = {33, 65};
+    double e[2] = {0, 0}, secs[2] = {0, 0}, cpu[2] = {0, 0};
     size_t N0 = r->size[0], N1 = r->size[1];
+    const size_t pn[2] = {33, r->tol == 0 && (N0 >= 257 || N1 >= 257) ? 129 : 65};
     double p = P_CONSERVATIVE, a = cost_exponent(r);
     for (int q = 0; q < 2; q++) {
         /* for a tolerance the rate comes from the 17^2 sub-grid of the 33^2
@@ -382,19 +394,21 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jc
             break;
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
         nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
-        double t0 = now_s();
+        double t0 = now_s(), c0 = cpu_s();
         nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, gc, t);
         secs[q] = now_s() - t0;
+        cpu[q] = cpu_s() - c0;
         if (st != NBT_OK)
             return st;
         e[q] = set_error(t, ps->npacks);
         if (q == 1) {
             /* err(N) = e33 (32/(N-1))^p, p in [1, 2]: at least the log
              * singularity's first order, at most bilinear's second */
+            double step = log((double)(pn[1] - 1) / (double)(pn[0] - 1));
             if (e[1] > 0 && e[0] > 0)
-                p = fmin(fmax(log(e[0] / e[1]) / log(2.0), 1.0), 2.0);
+                p = fmin(fmax(log(e[0] / e[1]) / step, 1.0), 2.0);
             if (secs[0] > 0 && secs[1] > 0)
-                a = fmin(fmax(log(secs[1] / secs[0]) / log(65.0 / 33.0), 1.0), 2.0);
+                a = fmin(fmax(log(secs[1] / secs[0]) / step, 1.0), 2.0);
         }
     }
     if (r->tol > 0) {
@@ -413,8 +427,19 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jc
     ps->axis[1] = make_axis(r, 1, N1);
     double Nm = sqrt((double)(N0 - 1) * (double)(N1 - 1));
     ps->pred_err = e[0] * pow(32.0 / Nm, p);
-    /* cost ~ N^a from the 33^2 build */
-    ps->pred_seconds = secs[0] * pow((double)N0 * (double)N1 / (33.0 * 33.0), 0.5 * a);
+    double nodes = (double)N0 * (double)N1, n0 = (double)(pn[0] * pn[0]), n1 = (double)(pn[1] * pn[1]);
+    if (r->kind == NBT_TABLE_H && cpu[1] > 0 && secs[1] > 0 && nodes > n1) {
+        /* H: every node is its own set of integrals (all orders at once), so the work is the CPU time
+         * per node of the larger build times the nodes (measured 0.86-1.03 us per node with 16 orders
+         * from 129^2 to 2049^2, while wall times of the same builds varied 2x on 2 shared cores), and
+         * the wall time that work takes here and now is its CPU time times the wall/CPU ratio of both
+         * builds (the threads' speed-up and the machine's other load) */
+        double c = (cpu[1] - cpu[0]) / (n1 - n0), f = cpu[1] - c * n1;
+        if (!(c > 0 && f >= 0)) /* no fixed part to be seen: all per node */
+            c = cpu[1] / n1, f = 0;
+        ps->pred_seconds = (f + c * nodes) * (secs[0] + secs[1]) / (cpu[0] + cpu[1]);
+    } else /* cost ~ N^a from the 33^2 build */
+        ps->pred_seconds = secs[0] * pow(nodes / n0, 0.5 * a);
     return NBT_OK;
 }
 

@@ -92,6 +92,12 @@ static exr_result_t write_cell_err(exr_context_t ctx, int part, const nbt_table 
 
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp)
 {
+    return nbt_table_write_exr_progress(t, path, comp, NULL, NULL);
+}
+
+nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nbt_exr_compression comp,
+                                        void (*progress)(double fraction, void *data), void *data)
+{
     /* a 3-D table: its slices are scan lines one after another */
     size_t nx = t->axis[0].n, ny = t->axis[1].n * t->axis[2].n, nc = t->nch, plen = strlen(path);
     int nax = t->axis[2].n > 1 ? 3 : 2;
@@ -214,6 +220,8 @@ nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_com
         first = 0;
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_encoding_run(ctx, part, &enc);
+        if (rv == EXR_ERR_SUCCESS && progress)
+            progress(y + lpc >= (int32_t)ny ? 1.0 : (double)(y + lpc) / (double)ny, data);
     }
     if (!first)
         exr_encoding_destroy(ctx, &enc);

@@ -45,19 +45,40 @@ M="--albedo 0.7 --sigma-t 1.3 --B 0.0685 --photons 20000 --z-planes 1:4:4 --r-bi
   bad "CSV header and 4 x 7 rows"
 cmp -s "$tmp/a.csv" "$tmp/b.csv" && cmp -s "$tmp/m1" "$tmp/m2" && ok || bad "output differs between 1 and 2 threads"
 [ "$(grep -c '^M ' "$tmp/m1")" -eq 4 ] && ok || bad "one moment line per plane"
-# progress: with one thread every batch is an update; NBT_PROGRESS_SECONDS=0 prints each one as
-# a line of its own (stderr is a file here, not a terminal): 63 with an ETA, then 100%; percent
-# rising; no carriage returns. --quiet: nothing on stderr. Output identical either way.
+# progress: photons are counted every 256 as they finish (not only at the end of each of the 64
+# batches); NBT_PROGRESS_SECONDS=0 prints every update as a line of its own (stderr is a file here,
+# not a terminal): with one thread, 20000 photons give 78 counts of 256 and 64 batch ends: more than
+# 64 lines with an ETA, then one 100% line, the last; percent never falling; no carriage returns.
+# --quiet: nothing on stderr. Output identical either way.
 NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 1 -o "$tmp/p.csv" >"$tmp/mp" 2>"$tmp/perr" && ok || bad "mc with progress"
-[ "$(grep -c '^nbt-fit: mc: .*% done, .* elapsed, ETA ' "$tmp/perr")" -eq 63 ] &&
-  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/perr")" -eq 1 ] && ok || bad "mc progress: 63 ETA lines and 100%: $(cat "$tmp/perr")"
-sed -n 's/^nbt-fit: mc: *\([0-9]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 < p { exit 1 } { p = $1 } END { exit NR != 64 }' &&
+[ "$(grep -c '^nbt-fit: mc: .*% done, .* elapsed, ETA ' "$tmp/perr")" -gt 64 ] &&
+  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/perr")" -eq 1 ] && grep '% done' "$tmp/perr" | tail -1 | grep -q '100% done' &&
+  ok || bad "mc progress: ETA lines within batches, one 100% at the end: $(cat "$tmp/perr")"
+sed -n 's/^nbt-fit: mc: *\([0-9.e-]*\)% done.*/\1/p' "$tmp/perr" | awk 'NR > 1 && $1 + 0 < p { exit 1 } { p = $1 + 0 } END { exit NR < 65 }' &&
   ok || bad "mc progress: percent not rising"
+# two threads: the same, whichever thread ends last (the calling thread reports while it waits)
+NBT_PROGRESS_SECONDS=0 "$NBT_FIT" mc $M --threads 2 -o "$tmp/p2.csv" >/dev/null 2>"$tmp/p2err" &&
+  [ "$(grep -c '^nbt-fit: mc: 100% done' "$tmp/p2err")" -eq 1 ] && grep '% done' "$tmp/p2err" | tail -1 | grep -q '100% done' &&
+  cmp -s "$tmp/p2.csv" "$tmp/a.csv" && ok || bad "mc progress, 2 threads: $(cat "$tmp/p2err")"
+# a run of 10^12 photons (one batch alone is 1.6e10 photons, hours): progress and the long-run warning
+# arrive while the first batches run (at ~2 s and ~0.5 s; waited for up to 60 s, not timed); SIGTERM
+# then ends it with no output file and no temporary left behind
+mkdir "$tmp/big"
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 1e12 --threads 2 -o "$tmp/big/psi.exr" >/dev/null 2>"$tmp/bigerr" &
+pid=$!
+i=0
+while [ $i -lt 300 ] && ! grep -q '% done, .* elapsed, ETA ' "$tmp/bigerr"; do sleep 0.2; i=$((i + 1)); done
+kill -TERM $pid; wait $pid; rc=$?
+grep -q '^nbt-fit: mc: warning: this run will take about .* h .* (projected from .*% done in ' "$tmp/bigerr" &&
+  grep -q '^nbt-fit: mc: [0-9.e-]*% done, .* elapsed, ETA [0-9]* h ' "$tmp/bigerr" && [ $rc -eq 143 ] && ok ||
+  bad "mc 1e12 photons: a progress line and the warning within a batch (rc $rc): $(cat "$tmp/bigerr")"
+[ -z "$(ls -A "$tmp/big")" ] && ok || bad "mc killed by SIGTERM left files: $(ls -A "$tmp/big")"
+rmdir "$tmp/big"
 tr -d '\n' <"$tmp/perr" | grep -q "$(printf '\r')" && bad "mc progress: carriage return off a terminal" || ok
 # no warning at the default 60 s; exactly one (before any progress line) when the limit is tiny
 grep -q "warning" "$tmp/perr" && bad "mc: a long-run warning for a short run" || ok
 NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_FIT" mc $M --threads 1 -o "$tmp/w.csv" >/dev/null 2>"$tmp/werr"
-[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (estimated from the first ' "$tmp/werr")" -eq 1 ] &&
+[ "$(grep -c '^nbt-fit: mc: warning: this run will take about .* (projected from ' "$tmp/werr")" -eq 1 ] &&
   head -1 "$tmp/werr" | grep -q warning && ok || bad "mc long-run warning: $(cat "$tmp/werr")"
 "$NBT_FIT" mc $M --threads 1 --quiet -o "$tmp/q.csv" >"$tmp/mq" 2>"$tmp/qerr" && [ ! -s "$tmp/qerr" ] && ok ||
   bad "mc --quiet: stderr $(cat "$tmp/qerr")"
@@ -105,7 +126,7 @@ else
   set -- $(head -1 "$tmp/fit.sorted"); close "$1" 0.3 1e-5 "two lobes: w1"; close "$2" 0.01 1e-5 "two lobes: B1"
   set -- $(tail -1 "$tmp/fit.sorted"); close "$1" 0.7 1e-5 "two lobes: w2"; close "$2" 0.2 1e-5 "two lobes: B2"
   "$NBT_FIT" phase --target hg:g=0.8 --terms 4 -o "$tmp/hg.sog" >"$tmp/p3" 2>&1
-  awk '/^K / { if (NR > 1 && $4 > prev * (1 + 1e-9)) bad = 1; prev = $4 } END { exit bad || prev > 0.01 }' "$tmp/p3" && ok ||
+  awk '/^K / { if (n++ && $4 > prev * (1 + 1e-9)) bad = 1; prev = $4 } END { exit bad || prev > 0.01 }' "$tmp/p3" && ok ||
     bad "HG 0.8: errors fall with K to < 1%: $(cat "$tmp/p3")"
   "${NBT_GEN:-$(dirname "$NBT_FIT")/nbt-gen}" eval H --phase "sog:$tmp/hg.sog" --u 1 --v 0.5 >/dev/null && ok || bad "sog:FILE accepted"
   expect_usage "phase without target" "--target" "$NBT_FIT" phase --terms 2
@@ -116,7 +137,7 @@ else
   K="--albedo 0.7 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12"
   "$NBT_FIT" mc $K --seed 21 -o "$tmp/k1.csv" >/dev/null 2>&1 && "$NBT_FIT" mc $K --seed 22 -o "$tmp/k2.exr" >/dev/null 2>&1 || bad "mc for kernel"
   "$NBT_FIT" kernel "$tmp/k1.csv" --albedo 0.7 --sigma-t 1 --B 0.0685 -o "$tmp/kfit.csv" 2>"$tmp/krms" && ok || bad "kernel fit: $(cat "$tmp/krms")"
-  [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,status" ] &&
+  [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,chi2_dof,status" ] &&
     [ "$(wc -l <"$tmp/kfit.csv")" -eq 5 ] && ok || bad "kernel CSV: header and one row per plane"
   awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/krms" && ok || bad "the fitted kernel beats the moment kernel: $(cat "$tmp/krms")"
   "$NBT_FIT" kernel "$tmp/k2.exr" --shape erfc+gauss -o "$tmp/kg.csv" 2>"$tmp/kgrms" && ok || bad "erfc+gauss on EXR input (medium from metadata): $(cat "$tmp/kgrms")"
@@ -132,21 +153,25 @@ else
     awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
-  grep -q '^# fit status: \(ok\|worse\|illcond\|noconv\)' "$tmp/corr.txt" && ok || bad "the correction file records its fit status: $(grep status "$tmp/corr.txt")"
+  # three coefficients per parameter over 2 x 4 planes of 3e5 photons: the smooth correction misses the counts' noise
+  grep -q '^# fit status: misfit: chi^2/dof = .* is above ' "$tmp/corr.txt" && ok || bad "the correction file records its fit status: $(grep status "$tmp/corr.txt")"
 
   # ---- honest fits: every fit judged (doc/fit.md) ----
-  # check_rows CSV ERR WIDTHCOLS AMPCOLS SECOLS: every row 'ok' has finite standard errors, an RMS no
-  # worse than the moment kernel's, no width on its bound (100 x the plane's largest radius, = 100 z
-  # here) and no amplitude at 0; every other row has nan standard errors and one stderr line
-  # "plane z = Z: STATUS: why"; as many flag lines as flagged rows
+  # check_rows CSV ERR WIDTHCOLS AMPCOLS SECOLS: every row 'ok' or 'misfit' has finite standard errors, an
+  # RMS no worse than the moment kernel's, no width on its bound (100 x the plane's largest radius, = 100 z
+  # here) and no amplitude at 0; 'ok' rows a chi2_dof below 3.2 (the limit at the largest dof here, 48, is
+  # 1.83; at 10, 3.12) and 'misfit' rows one above 1.8; every other row has nan standard errors; every row
+  # but 'ok' has one stderr line "plane z = Z: STATUS: why"; as many such lines as such rows
   check_rows() {
     awk -F, -v w="$3" -v a="$4" -v e="$5" 'NR > 1 {
         nw = split(w, W, " "); na = split(a, A, " "); ne = split(e, E, " ")
-        if ($NF == "ok") {
-          for (i = 1; i <= ne; i++) if (($E[i] "") == "nan" || ($E[i] "") ~ /inf/ || $E[i] + 0 <= 0) { print "ok row with stderr " $E[i] ": " $0; bad = 1 }
-          if ($(NF - 1) + 0 > $(NF - 2) + 0) { print "ok row worse than the moment kernel: " $0; bad = 1 }
-          for (i = 1; i <= nw; i++) if ($W[i] + 0 >= 100 * $1 * (1 - 1e-6)) { print "ok row on the width bound: " $0; bad = 1 }
-          for (i = 1; i <= na; i++) if ($A[i] + 0 == 0) { print "ok row with a zero amplitude: " $0; bad = 1 }
+        if ($NF == "ok" || $NF == "misfit") {
+          for (i = 1; i <= ne; i++) if (($E[i] "") == "nan" || ($E[i] "") ~ /inf/ || $E[i] + 0 <= 0) { print $NF " row with stderr " $E[i] ": " $0; bad = 1 }
+          if ($(NF - 2) + 0 > $(NF - 3) + 0) { print $NF " row worse than the moment kernel: " $0; bad = 1 }
+          for (i = 1; i <= nw; i++) if ($W[i] + 0 >= 100 * $1 * (1 - 1e-6)) { print $NF " row on the width bound: " $0; bad = 1 }
+          for (i = 1; i <= na; i++) if ($A[i] + 0 == 0) { print $NF " row with a zero amplitude: " $0; bad = 1 }
+          if ($NF == "ok" && !($(NF - 1) + 0 < 3.2)) { print "ok row with chi2_dof " $(NF - 1) ": " $0; bad = 1 }
+          if ($NF == "misfit") { if (!($(NF - 1) + 0 > 1.8)) { print "misfit row with chi2_dof " $(NF - 1) ": " $0; bad = 1 }; print $1, $NF > "/dev/stderr" }
         } else if ($NF ~ /^(bound|noconv|illcond|worse)$/) {
           for (i = 1; i <= ne; i++) if (($E[i] "") != "nan") { print "flagged row with a stderr: " $0; bad = 1 }
           print $1, $NF > "/dev/stderr"
@@ -165,7 +190,11 @@ else
   awk -F, '$1 == 6 { exit !($NF == "worse" && $7 > $6 && ($4 "") == "nan") }' "$tmp/ufit.csv" && ok ||
     bad "z = 6: worse than the moment kernel: $(grep '^6,' "$tmp/ufit.csv")"
   grep -q "u.csv: plane z = 10: bound: beta = 1000 is on its upper bound 1000" "$tmp/uerr" && ok || bad "flag line for z = 10: $(cat "$tmp/uerr")"
-  grep -q "^RMS .*(2 of 10 planes flagged)" "$tmp/uerr" && ok || bad "summary counts the flagged planes: $(cat "$tmp/uerr")"
+  grep -q "^RMS .*(2 of 10 planes flagged, 8 misfit)" "$tmp/uerr" && ok || bad "summary counts the flagged planes: $(cat "$tmp/uerr")"
+  # a plain erfc at 5-42% RMS is no 'ok': every plane but the flagged z = 6 and 10 misfits (chi^2/dof 6-200)
+  [ "$(grep -c ',misfit$' "$tmp/ufit.csv")" -eq 8 ] && ! grep -q ',ok$' "$tmp/ufit.csv" &&
+    grep -q "u.csv: plane z = 3: misfit: chi^2/dof = .* (dof 48) is above 1.83, " "$tmp/uerr" && ok ||
+    bad "the user's case: misfits: $(cat "$tmp/ufit.csv" "$tmp/uerr")"
   msg=$(check_rows "$tmp/ufit.csv" "$tmp/uerr" "3" "2" "4 5") && ok || bad "erfc rows: $msg"
   # the two-part shapes on the same counts: degenerate splits (a part collapsed to zero or to 1/r) are flagged
   "$NBT_FIT" kernel "$tmp/u.csv" $U --shape erfc2 -o "$tmp/u2.csv" 2>"$tmp/u2err" && ok || bad "erfc2 on the user's case"
@@ -179,29 +208,52 @@ else
   [ ! -e "$tmp/us.csv" ] && [ ! -s "$tmp/out" ] && ok || bad "--strict left output"
   expect_usage "--strict with a correction" "strict" "$NBT_FIT" kernel "$tmp/u.csv" $U --strict --correction "$tmp/uc.txt" -o "$tmp/us.csv"
   [ ! -e "$tmp/us.csv" ] && [ ! -e "$tmp/uc.txt" ] && ok || bad "--strict left a correction"
-  # a good fit: ok, and its standard errors against the spread over 20 independent photon-counting runs
-  # (seeds): the reported error may be conservative (scaled by chi^2/dof where the shape misfits), by at
-  # most 3x, and optimistic by at most 1.5x (20 runs: the spread itself is known to ~16%)
+  # standard errors against the spread of the fitted values over independent photon-counting runs
+  # (seeds). spread_check FILE N LO HI: for every plane and parameter of the rows in FILE (N seeds), the
+  # sample SD over seeds / the mean reported standard error within [LO, HI]. With correct errors,
+  # (N - 1) SD^2 / sigma^2 is chi^2(N - 1): for N = 20 the ratio lies in [0.53, 1.52] with probability
+  # 0.998 (chi^2(19) 0.1% and 99.9% points 5.41, 43.82), for N = 12 in [0.41, 1.69] (chi^2(11): 1.83, 31.26)
+  spread_check() {
+    awk -F, -v N="$2" -v lo="$3" -v hi="$4" '{ n[$1]++; for (c = 2; c <= 3; c++) { s[$1, c] += $c; s2[$1, c] += $c * $c; e[$1, c] += $(c + 2) } }
+      END { for (z in n) for (c = 2; c <= 3; c++) { m = s[z, c] / n[z]; sd = sqrt((s2[z, c] - n[z] * m * m) / (n[z] - 1));
+              r = sd / (e[z, c] / n[z]); printf "z %s %s: spread %.3g, mean stderr %.3g, ratio %.2f\n", z, c == 2 ? "alpha" : "beta", sd, e[z, c] / n[z], r
+              if (!(r >= lo && r <= hi) || n[z] != N) bad = 1 }
+            exit bad }' "$1"
+  }
+  # a good fit (albedo 0.5, z = 1, 2, 10^4 photons: erfc within the noise): all 40 ok under --strict
   : >"$tmp/boot"
   for s in 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20; do
-    "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 40000 --z-planes 1:2:2 --r-bins 12 --seed $s -o "$tmp/b.csv" >/dev/null 2>&1 &&
+    "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 10000 --z-planes 1:2:2 --r-bins 12 --seed $s -o "$tmp/b.csv" >/dev/null 2>&1 &&
       "$NBT_FIT" kernel "$tmp/b.csv" --albedo 0.5 --sigma-t 1 --B 0.0685 --strict 2>>"$tmp/booterr" | tail -n +2 >>"$tmp/boot"
   done
   [ "$(grep -c ',ok$' "$tmp/boot")" -eq 40 ] && ok || bad "good fits: 40 of 40 ok under --strict: $(cat "$tmp/booterr")"
-  awk -F, '{ n[$1]++; for (c = 2; c <= 3; c++) { s[$1, c] += $c; s2[$1, c] += $c * $c; e[$1, c] += $(c + 2) } }
-    END { for (z in n) for (c = 2; c <= 3; c++) { m = s[z, c] / n[z]; sd = sqrt((s2[z, c] - n[z] * m * m) / (n[z] - 1));
-            r = sd / (e[z, c] / n[z]); printf "z %s %s: spread %.3g, mean stderr %.3g, ratio %.2f\n", z, c == 2 ? "alpha" : "beta", sd, e[z, c] / n[z], r
-            if (r < 1 / 3 || r > 1.5) bad = 1 }
-          exit bad }' "$tmp/boot" >"$tmp/bootr" && ok || bad "standard errors vs the spread over seeds: $(cat "$tmp/bootr")"
-  # phase: redundant lobes and lobes on their bounds are flagged; a good fit passes --strict
-  "$NBT_FIT" phase --target hg:g=0.8 --terms 4 --strict -o "$tmp/hgs.sog" >"$tmp/p4" 2>&1 && [ "$(grep -c 'status ok$' "$tmp/p4")" -eq 4 ] &&
-    grep -q "^# fit status: ok" "$tmp/hgs.sog" && ok || bad "HG 0.8, K = 1..4: all ok: $(cat "$tmp/p4")"
+  spread_check "$tmp/boot" 20 0.53 1.52 >"$tmp/bootr" && ok || bad "good fits: standard errors vs the spread over 20 seeds: $(cat "$tmp/bootr")"
+  # a misfit (albedo 0.9, z = 2, 4, 6, 8, 1e5 photons: one erfc cannot follow the diffuse profile, chi^2/dof
+  # 80-350): every fit 'misfit', with standard errors that still match the spread over 12 seeds (measured
+  # 0.90-1.36; scaling (J^T J)^-1 by sqrt(chi^2/dof) gave 0.22-0.39 here, no scaling 2.4-6.1: doc/fit.md)
+  : >"$tmp/mboot"
+  for s in 1 2 3 4 5 6 7 8 9 10 11 12; do
+    "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 100000 --z-planes 2:8:4 --r-bins 12 --seed $s -o "$tmp/b.csv" >/dev/null 2>&1 &&
+      "$NBT_FIT" kernel "$tmp/b.csv" --albedo 0.9 --sigma-t 1 --B 0.0685 --strict 2>>"$tmp/mbooterr" | tail -n +2 >>"$tmp/mboot"
+  done
+  [ "$(grep -c ',misfit$' "$tmp/mboot")" -eq 48 ] && [ "$(grep -c ': misfit: chi^2/dof = ' "$tmp/mbooterr")" -eq 48 ] && ok ||
+    bad "misfits: 48 of 48 under --strict, one line each: $(cat "$tmp/mboot" "$tmp/mbooterr")"
+  spread_check "$tmp/mboot" 12 0.41 1.69 >"$tmp/bootr" && ok || bad "misfits: standard errors vs the spread over 12 seeds: $(cat "$tmp/bootr")"
+  # phase: redundant lobes and lobes on their bounds are flagged; a fit above --tol (default 0.01) is a
+  # misfit, which passes --strict (exit 0): HG 0.8's errors are 0.33, 0.073, 0.020, 0.0054 for K = 1..4
+  "$NBT_FIT" phase --target hg:g=0.8 --terms 4 --strict -o "$tmp/hgs.sog" >"$tmp/p4" 2>"$tmp/p4err" &&
+    [ "$(grep -c 'status misfit$' "$tmp/p4")" -eq 3 ] && grep -q '^K 4 .* status ok$' "$tmp/p4" &&
+    [ "$(grep -c '^nbt-fit: phase K = [123]: misfit: relative L2 error .* is above --tol 0.01' "$tmp/p4err")" -eq 3 ] &&
+    grep -q "^# fit status: ok" "$tmp/hgs.sog" && ok || bad "HG 0.8, K = 1..3 misfit, 4 ok: $(cat "$tmp/p4" "$tmp/p4err")"
+  "$NBT_FIT" phase --target hg:g=0.8 --terms 2 --tol 0.1 >"$tmp/p4" 2>"$tmp/p4err" && grep -q '^K 1 .* status misfit$' "$tmp/p4" &&
+    grep -q '^K 2 .* status ok$' "$tmp/p4" && ok || bad "phase --tol 0.1: K = 2 (error 0.073) ok: $(cat "$tmp/p4" "$tmp/p4err")"
+  expect_usage "phase --tol 0" "--tol" "$NBT_FIT" phase --target iso --terms 1 --tol 0
   "$NBT_FIT" phase --target gauss:B=0.05 --terms 3 >"$tmp/p5" 2>"$tmp/p5err"
   grep -q "^K 1 .* status ok" "$tmp/p5" && ! grep -q "^K [23] .* status ok" "$tmp/p5" &&
     [ "$(grep -c '^nbt-fit: phase K = [23]: \(illcond\|bound\|worse\): ' "$tmp/p5err")" -eq 2 ] && ok ||
     bad "one Gaussian with 2, 3 lobes: redundant, flagged: $(cat "$tmp/p5" "$tmp/p5err")"
   "$NBT_FIT" phase --target rayleigh --terms 4 -o "$tmp/ray.sog" >"$tmp/p6" 2>"$tmp/p6err"
-  [ "$(grep -c 'status ok$' "$tmp/p6")" -eq 1 ] && [ "$(grep -c '^nbt-fit: phase K = ' "$tmp/p6err")" -eq 3 ] &&
+  grep -q '^K 1 .* status misfit$' "$tmp/p6" && [ "$(grep -c '^nbt-fit: phase K = [234]: ' "$tmp/p6err")" -eq 3 ] &&
     grep -q "^# fit status: bound: " "$tmp/ray.sog" && ok || bad "Rayleigh: K >= 2 flagged: $(cat "$tmp/p6" "$tmp/p6err")"
   expect_usage "phase --strict" "strict: 3 of 4 fits flagged" "$NBT_FIT" phase --target rayleigh --terms 4 --strict -o "$tmp/rs.sog"
   [ ! -e "$tmp/rs.sog" ] && [ ! -s "$tmp/out" ] && ok || bad "phase --strict left output"
@@ -212,8 +264,11 @@ else
     "$NBT_FIT" mc --albedo $a --sigma-t 1 --B $B --photons 20000 --z-planes 1:8:8 --r-bins 12 --seed 5 -o "$tmp/mh-$a-$B.exr" >/dev/null 2>&1
   done; done
   "$NBT_FIT" model "$tmp"/mh-*.exr -o "$tmp/m.txt" 2>"$tmp/merr" && ok || bad "model fit: $(cat "$tmp/merr")"
-  [ "$(grep -c '^RMS ' "$tmp/merr")" -eq 9 ] && ! grep -q "^nbt-fit: model" "$tmp/merr" && grep -q "fit status ok" "$tmp/m.txt" && ok ||
-    bad "model: one RMS line per run, not flagged: $(cat "$tmp/merr")"
+  # a sound fit, but at 2-3% RMS against counts with ~1% noise it misfits: one line, exit 0, in the file
+  [ "$(grep -c '^RMS ' "$tmp/merr")" -eq 9 ] && [ "$(grep -c "^nbt-fit: model" "$tmp/merr")" -eq 1 ] &&
+    grep -q "^nbt-fit: model (half): misfit: chi^2/dof = .* (dof 784) is above 1.21" "$tmp/merr" &&
+    grep -q "chi^2/dof .*, fit status misfit" "$tmp/m.txt" && ok ||
+    bad "model: one RMS line per run, a misfit: $(cat "$tmp/merr" "$tmp/m.txt")"
   # the moment kernel misses these by 11-23%; the model (80 coefficients on 9 runs) must reach half of that or better
   awk '/^RMS/ { if (!($4 + 0 < 0.5 * $6)) { print; b = 1 } } END { exit b }' "$tmp/merr" >"$tmp/mbad" && ok ||
     bad "model RMS below half the moment kernel's on every run: $(cat "$tmp/mbad")"

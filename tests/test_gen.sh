@@ -211,14 +211,24 @@ l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max
 awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
 # end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
-grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-9.e+-]* s' "$tmp/herr" &&
-  grep -q '^nbt-gen: airlight: set 1/1 H: built 33x17 in [0-9.]* s (predicted ' "$tmp/herr" && ok ||
+grep -q '^nbt-gen: airlight: planned 1 table set(s) in .* s, predicted build time .* s, writing 0 MB .* s$' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: set 1/1 H: building 33x17, 1 pack(s), predicted [0-9.e+-]* s' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: set 1/1 H: built 33x17 in [0-9.]* s (predicted ' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: writing 2 file(s), 0.0 MB of tables, predicted [0-9.e+-]* s$' "$tmp/herr" &&
+  grep -q '^nbt-gen: airlight: wrote 2 file(s) in [0-9.]* s (predicted [0-9.e+-]* s), [0-9.]* s elapsed$' "$tmp/herr" && ok ||
   bad "airlight progress lines: $(cat "$tmp/herr")"
+# progress while the files are written: the share of the tables' bytes encoded so far, polled every
+# millisecond with NBT_PROGRESS_SECONDS=0 (the one 17 MB file deflates for ~0.5 s), before the 'wrote' line
+NBT_PROGRESS_SECONDS=0 "$NBT_GEN" airlight -o "$tmp/hb.exr" --size 1025x1025 --no-preview >/dev/null 2>"$tmp/hberr" &&
+  grep -q '^nbt-gen: airlight: writing 1 file(s), 16.8 MB of tables, predicted ' "$tmp/hberr" &&
+  sed -n '/writing 1 file/,/wrote 1 file/p' "$tmp/hberr" | grep -q '^nbt-gen: airlight: writing: *[0-9]*% done, .* elapsed, ETA ' &&
+  ok || bad "airlight: progress while writing: $(cat "$tmp/hberr")"
+rm -f "$tmp/hb.exr"
 tr -d '\n' <"$tmp/herr" | grep -q "$(printf '\r')" && bad "airlight progress: carriage return off a terminal" || ok
 # the long-run warning: none by default (60 s), one line when the limit is tiny, before the build starts
 grep -q "warning" "$tmp/herr" && bad "airlight: a long-run warning for a short build" || ok
 NBT_PROGRESS_WARN_SECONDS=1e-9 "$NBT_GEN" airlight -o "$tmp/hw.exr" --size 33x17 --no-preview >/dev/null 2>"$tmp/hwerr"
-[ "$(grep -c "^nbt-gen: airlight: warning: this run will take about .* (the planner's prediction)" "$tmp/hwerr")" -eq 1 ] &&
+[ "$(grep -c "^nbt-gen: airlight: warning: this run will take about .* (the planner's prediction, writing included)" "$tmp/hwerr")" -eq 1 ] &&
   sed -n 2p "$tmp/hwerr" | grep -q warning && ok || bad "airlight long-run warning: $(cat "$tmp/hwerr")"
 "$NBT_GEN" airlight -o "$tmp/hq.exr" --size 33x17 --quiet >"$tmp/hqout" 2>"$tmp/hqerr" && [ ! -s "$tmp/hqerr" ] && ok ||
   bad "airlight --quiet: stderr $(cat "$tmp/hqerr")"

@@ -2,8 +2,13 @@
  * quadrature of the shape), their analytic derivatives (against central
  * differences), exact recovery of known parameters through the shim, and
  * the judgement of fits (fit_status): a good fit is ok with standard errors
- * that match the scatter of a parametric bootstrap; an unidentifiable width
- * or an empty plane is flagged; the statuses' precedence. */
+ * that match the scatter of a parametric bootstrap; a shape that cannot
+ * follow the data is a misfit, and the misfit limit's false-alarm rate is
+ * measured by Monte Carlo; an unidentifiable width or an empty plane is
+ * flagged; the statuses' precedence. */
+#include <gsl/gsl_cdf.h>
+#include <gsl/gsl_randist.h>
+#include <gsl/gsl_rng.h>
 #include <math.h>
 #include <string.h>
 #include <nbt/nbt.h>
@@ -83,8 +88,9 @@ static double t_normal(void)
     return sqrt(-2 * log(1 - u1)) * cos(2 * M_PI * u2);
 }
 
-/* fit one plane with cmd_kernel's bounds (widths <= 100 x the largest radius) and
- * standard errors (scaled by chi^2/dof when above 1); the status from fit_judge */
+/* fit one plane with cmd_kernel's bounds (widths <= 100 x the largest radius); standard errors
+ * (J^T J)^-1 (the noise is known here: no weights to estimate); the status from fit_judge, then
+ * fit_misfit on chi^2 (known sigma: the residuals are the fit's own) */
 static fit_status fit_plane(const plane *d, double a0, double b0, double *p, double *se, char *why)
 {
     static const char *const names[2] = {"alpha", "beta"};
@@ -98,10 +104,10 @@ static fit_status fit_plane(const plane *d, double a0, double b0, double *p, dou
     p[1] = b0;
     if (nbt_fit_solve(2, p, lo, hi, NP, plane_res, (void *)d, &o, &s) != 0)
         return FIT_NOCONV;
-    double sc = fmax(1.0, 2 * s.final_cost / (NP - 2));
     for (int e = 0; e < 2; e++)
-        se[e] = s.covariance_ok ? sqrt(s.covariance[3 * e] * sc) : NAN;
-    return fit_judge(&s, 2, names, p, lo, hi, se, NULL, NAN, NAN, "the start", why, 512);
+        se[e] = s.covariance_ok ? sqrt(s.covariance[3 * e]) : NAN;
+    fit_status st = fit_judge(&s, 2, names, p, lo, hi, se, NULL, NAN, NAN, "the start", why, 512);
+    return fit_misfit(st, 2 * s.final_cost, NP - 2, NAN, why, 512);
 }
 
 static void judge_checks(void)
@@ -121,13 +127,14 @@ static void judge_checks(void)
      * 400 draws: 3.5%; the chi^2/dof >= 1 scaling adds a few % upwards) */
     enum { R = 400 };
     double sa = 0, sa2 = 0, sb = 0, sb2 = 0, ea = 0, eb = 0;
-    int nok = 0;
+    int nok = 0, nmis = 0;
     char why[512];
     for (int rep = 0; rep < R; rep++) {
         for (int k = 0; k < NP; k++)
             d.y[k] = truth[k] + d.sig[k] * t_normal();
         double p[2], se[2];
         fit_status st = fit_plane(&d, 0.5 * A, 2 * Bt, p, se, why);
+        nmis += st == FIT_MISFIT;
         if (st != FIT_OK || !isfinite(se[0]) || !isfinite(se[1]))
             continue;
         nok++;
@@ -138,13 +145,62 @@ static void judge_checks(void)
         ea += se[0];
         eb += se[1];
     }
-    t_true(nok == R, "a good plane: all %d bootstrap fits ok with finite standard errors (%d)", R, nok);
+    /* the shape that made the data fits them: chi^2(18) exceeds the misfit limit with probability
+     * below 1e-3 (the limit allows for estimated errors), so of 400 fits at most 0.4 are expected
+     * misfits; 3 or more would happen with probability < 0.008 */
+    t_true(nok + nmis == R && nmis <= 2, "a good plane: all %d bootstrap fits ok with finite standard errors "
+           "(%d ok, %d misfit)", R, nok, nmis);
     double sda = sqrt((sa2 - sa * sa / nok) / (nok - 1)), sdb = sqrt((sb2 - sb * sb / nok) / (nok - 1));
     t_rel(sda / (ea / nok), 1, 0.15, "alpha: bootstrap spread %.4g vs mean standard error %.4g", sda, ea / nok);
     t_rel(sdb / (eb / nok), 1, 0.15, "beta: bootstrap spread %.4g vs mean standard error %.4g", sdb, eb / nok);
     t_rel(sa / nok, A, 3 * sda / sqrt(nok) / A, "alpha unbiased");
     t_rel(sb / nok, Bt, 3 * sdb / sqrt(nok) / Bt + 0.002, "beta unbiased within 0.2%%");
 
+    /* a shape that cannot follow the data: erfc fitted to erfc plus a diffuse Gaussian carrying 40% of the
+     * light (s = 0.5), 3% noise: misfit, with chi^2/dof in the reason, every time (20 noise draws) */
+    {
+        int nm = 0;
+        for (int rep = 0; rep < 20; rep++) {
+            for (int k = 0; k < NP; k++) {
+                double t = ann_ref(A, Bt, 0.4 * sqrt(2 * M_PI) * A * Bt, 0.5, d.lo[k], d.hi[k]);
+                d.sig[k] = 0.03 * t;
+                d.y[k] = t + d.sig[k] * t_normal();
+            }
+            double p[2], se[2];
+            fit_status st = fit_plane(&d, A, Bt, p, se, why);
+            nm += st == FIT_MISFIT && strstr(why, "chi^2/dof = ") && strstr(why, "(dof 18) is above 2.47");
+        }
+        t_true(nm == 20, "erfc fitted to erfc + Gaussian: 20 of 20 misfit (%d; the last: %s)", nm, why);
+    }
+    /* the misfit limit against Monte Carlo: with standard errors from 64 batch means each squared
+     * residual of a fitting shape is t(63)^2; sums of dof of them exceed fit_chi2_limit(dof) with
+     * probability FIT_MISFIT_P = 1e-3 up to the moment-matching approximation (measured 0.8-1.3e-3 for
+     * dof 2-48), accepted within [0.7, 1.5] x 1e-3; the plain chi^2(dof) 0.1% point, which forgets that
+     * the errors are estimates, is exceeded 2.0e-3 (dof 10) and 2.5e-3 (dof 48) of the time. Draws:
+     * 2e5 each (expected about 200-260 exceedances: Poisson error 6-7%). */
+    {
+        gsl_rng *g = gsl_rng_alloc(gsl_rng_mt19937);
+        gsl_rng_set(g, 2385);
+        static const int dofs[2] = {10, 48};
+        static const long ndraw[2] = {200000, 200000};
+        for (int q = 0; q < 2; q++) {
+            double lim = fit_chi2_limit(dofs[q]);
+            long hit = 0;
+            for (long n = 0; n < ndraw[q]; n++) {
+                double sum = 0;
+                for (int k = 0; k < dofs[q]; k++) {
+                    double z = gsl_ran_ugaussian(g);
+                    sum += z * z / (gsl_ran_chisq(g, FIT_BATCHES - 1) / (FIT_BATCHES - 1));
+                }
+                hit += sum > lim;
+            }
+            double rate = (double)hit / (double)ndraw[q];
+            t_true(rate >= 0.7e-3 && rate <= 1.5e-3, "dof %d: sums of t(63)^2 above the misfit limit %.4g at rate %.3g "
+                   "(want 1e-3; the plain chi^2 point is %.4g)", dofs[q], lim, rate, gsl_cdf_chisq_Qinv(1e-3, dofs[q]));
+        }
+        gsl_rng_free(g);
+        t_true(isnan(fit_chi2_limit(0.5)), "no misfit limit below 1 dof");
+    }
     /* beta not identifiable: the data are alpha/(2r) (beta = infinity), the fit runs to the width bound */
     for (int k = 0; k < NP; k++) {
         d.y[k] = ann_ref(A, 1e12, 0, 1, d.lo[k], d.hi[k]);
@@ -163,7 +219,7 @@ static void judge_checks(void)
     st = fit_plane(&d, A, Bt, p, se, why);
     t_true(st != FIT_OK, "an almost empty plane: flagged (%s: %s)", fit_status_word(st), why);
 
-    /* precedence: noconv > bound > illcond > worse > ok */
+    /* precedence: noconv > bound > illcond > worse > misfit > ok */
     static const char *const nm[2] = {"a", "b"};
     double lo[2] = {0, 0}, hi[2] = {1, 1}, q[2] = {0.5, 1}, ok_se[2] = {0.1, 0.1}, nan_se[2] = {0.1, NAN};
     nbt_fit_summary s;
@@ -174,6 +230,25 @@ static void judge_checks(void)
     t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.2, 0.1, "x", why, sizeof why) == FIT_OK, "judge: ok");
     t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, NAN, 0.1, "x", why, sizeof why) == FIT_OK, "judge: no start error: ok");
     t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_WORSE, "judge: worse");
+    t_true(fit_misfit(FIT_WORSE, 1e6, 10, NAN, why, sizeof why) == FIT_WORSE && fit_misfit(FIT_BOUND, 1e6, 10, NAN, why, sizeof why) == FIT_BOUND,
+           "judge: worse and bound beat misfit");
+    {
+        double l10 = fit_chi2_limit(10);
+        t_true(fit_misfit(FIT_OK, 0.999 * l10, 10, NAN, why, sizeof why) == FIT_OK &&
+                   fit_misfit(FIT_OK, 1.001 * l10, 10, 0.123, why, sizeof why) == FIT_MISFIT && strstr(why, "RMS 0.123") &&
+                   fit_misfit(FIT_OK, 1e9, 0, NAN, why, sizeof why) == FIT_OK && fit_misfit(FIT_OK, NAN, 10, NAN, why, sizeof why) == FIT_OK,
+               "judge: misfit just above the limit only, not without dof or chi^2 (%s)", why);
+        /* a misfit is reported but is not a flag: --strict passes it */
+        fit_report r;
+        fit_report_init(&r, 1);
+        fit_report_fit(&r, "here", FIT_MISFIT, "why");
+        fit_report_fit(&r, "there", FIT_OK, "");
+        t_true(r.nmisfit == 1 && r.nflagged == 0 && r.log.len > 0 && fit_report_finish(&r) == 0, "--strict passes a misfit");
+        fit_report_init(&r, 1);
+        fit_report_fit(&r, "here", FIT_MISFIT, "why");
+        fit_report_fit(&r, "there", FIT_WORSE, "why");
+        t_true(r.nflagged == 1 && !strncmp(r.first, "there: worse", 12) && fit_report_finish(&r) == 1, "--strict fails on worse");
+    }
     double se_max[2] = {1, 0.05};
     t_true(fit_judge(&s, 2, nm, q, lo, hi, ok_se, se_max, 0.2, 0.1, "x", why, sizeof why) == FIT_ILLCOND,
            "judge: a standard error above its limit: illcond (%s)", why);
@@ -193,7 +268,7 @@ static void judge_checks(void)
     t_true(fit_judge(&s, 2, nm, q, lo, hi, nan_se, NULL, 0.1, 0.2, "x", why, sizeof why) == FIT_NOCONV, "judge: noconv first");
     t_true(!strcmp(fit_status_word(FIT_OK), "ok") && !strcmp(fit_status_word(FIT_BOUND), "bound") &&
                !strcmp(fit_status_word(FIT_NOCONV), "noconv") && !strcmp(fit_status_word(FIT_ILLCOND), "illcond") &&
-               !strcmp(fit_status_word(FIT_WORSE), "worse"),
+               !strcmp(fit_status_word(FIT_WORSE), "worse") && !strcmp(fit_status_word(FIT_MISFIT), "misfit"),
            "status words");
 }
 

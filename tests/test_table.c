@@ -29,6 +29,19 @@ static double hand_bilinear(const nbt_table *t, double x0, double x1, size_t c)
 #undef V
 }
 
+/* progress calls of nbt_table_write_exr_progress */
+typedef struct {
+    int n;
+    double f[64];
+} wrec;
+static void on_write(double f, void *vp)
+{
+    wrec *w = vp;
+    if (w->n < 64)
+        w->f[w->n] = f;
+    w->n++;
+}
+
 static int same_tables(const nbt_table *a, const nbt_table *b)
 {
     if (a->kind != b->kind || a->nch != b->nch || a->n != b->n || a->half != b->half || strcmp(a->phase, b->phase))
@@ -298,6 +311,32 @@ int main(void)
     t_true(nbt_table_write_exr(t, path, NBT_EXR_ZIP) == NBT_OK && nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK &&
                same_tables(t, r), "half round trip is bit-exact");
     nbt_table_free(r);
+    /* the writer's progress: after every chunk of scan lines (16 for ZIP, 1 without compression) the
+     * fraction written, rising, 1 at the end; 37 lines: 16/37, 32/37, 1 and 1/37 .. 37/37; the same file */
+    {
+        nbt_axis ax = {0, 2.385, NBT_AXIS_LINEAR, 0, 5}, ay = {-1, 1, NBT_AXIS_LINEAR, 0, 37};
+        nbt_table *pt = nbt_table_alloc(NBT_TABLE_H, &ax, &ay, 2);
+        for (size_t i = 0; i < 5 * 37 * 2; i++)
+            pt->data[i] = (float)sin(0.37 * (double)i);
+        pt->k[0] = 0;
+        pt->k[1] = 1;
+        for (int comp = 0; comp < 2; comp++) {
+            wrec w = {0, {0}};
+            r = NULL;
+            int okw = nbt_table_write_exr_progress(pt, path, comp ? NBT_EXR_NONE : NBT_EXR_ZIP, on_write, &w) == NBT_OK;
+            int rising = w.n > 0 && w.f[w.n - 1] == 1.0;
+            for (int i = 1; i < w.n; i++)
+                rising &= w.f[i] > w.f[i - 1];
+            int want_n = comp ? 37 : 3;
+            double want_first = comp ? 1.0 / 37 : 16.0 / 37;
+            t_true(okw && w.n == want_n && rising && fabs(w.f[0] - want_first) < 1e-15 &&
+                       nbt_table_read_exr(path, &r, err, sizeof err) == NBT_OK && same_tables(pt, r),
+                   "write with progress (%s): %d calls (want %d), first %.4g (want %.4g), rising to 1, same file",
+                   comp ? "none" : "zip", w.n, want_n, w.n ? w.f[0] : NAN, want_first);
+            nbt_table_free(r);
+        }
+        nbt_table_free(pt);
+    }
     /* a single-channel fixed-phase table keeps its phase */
     nbt_table *p1 = nbt_table_alloc(NBT_TABLE_H, &maps[1], &maps[4], 1);
     p1->k[0] = -1;

@@ -65,7 +65,10 @@ typedef struct {
     uint64_t seed;
     unsigned threads;        /* 0: all CPUs */
     /* optional progress callback, called from the calling thread with the
-     * fraction done; may be NULL */
+     * fraction of photons done (counted every 256 photons on every thread,
+     * not only as batches end: the calling thread reports between its own
+     * photons, and about every 0.25 s while the last batches run on other
+     * threads), at least once with 1 at the end; may be NULL */
     void (*progress)(double fraction, void *data);
     void *progress_data;
     int infinite;            /* nonzero: the medium fills all space (see above); not with a slab */
@@ -102,7 +105,7 @@ void nbt_mc_result_free(nbt_mc_result *r);
  * nbt_mc_finish turns it into a result equal bit for bit to nbt_mc_run's
  * (seconds = 0: the caller times). nbt_mc_part_range gives part p of n
  * parts (p < n) its batches; parts beyond the 64th are empty. The progress
- * callback of a part reports the fraction of that part's batches. */
+ * callback of a part reports the fraction of that part's photons. */
 #define NBT_MC_BATCHES 64
 size_t nbt_mc_tally_len(const nbt_mc_config *cfg);
 void nbt_mc_part_range(size_t part, size_t nparts, size_t *b0, size_t *b1);

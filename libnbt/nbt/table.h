@@ -192,6 +192,13 @@ typedef enum { NBT_EXR_ZIP, NBT_EXR_NONE } nbt_exr_compression;
  * nbt.form names the value form. Writes to a temporary file and renames it, so a failed
  * write leaves nothing behind. */
 nbt_status nbt_table_write_exr(const nbt_table *t, const char *path, nbt_exr_compression comp);
+/* The same, calling progress(fraction, data) (may be NULL) from the calling
+ * thread after every chunk of scan lines is encoded, with the fraction of
+ * scan lines written so far (1 after the last chunk, before the file is
+ * closed and renamed): the deflate of a 4096^2 table's pack takes tens of
+ * seconds. */
+nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nbt_exr_compression comp,
+                                        void (*progress)(double fraction, void *data), void *data);
 
 /* Read a table written by nbt_table_write_exr. On failure *out is NULL and
  * err holds a one-line reason. */
