@@ -8,6 +8,8 @@ mode=${1:-run}
 case $mode in run|check) ;; *) echo "usage: ./quickstart.sh [check]" >&2; exit 2 ;; esac
 
 PKGS="build-essential autoconf automake libtool pkg-config libgsl-dev libfftw3-dev libopenexr-dev openexr libpng-dev libceres-dev libeigen3-dev libgoogle-glog-dev libopenvdb-dev libboost-dev libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools spirv-cross glslc python3-numpy libopenmpi-dev openmpi-bin clang libclang-rt-14-dev"
+# the suite also checks the EXR outputs in OpenImageIO and Blender and runs the Blender add-on headless
+[ "$mode" = check ] && PKGS="$PKGS openimageio-tools blender zip"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
