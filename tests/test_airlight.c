@@ -250,5 +250,17 @@ int main(void)
     nbt_phase_free(hg);
     nbt_phase_free(hg9);
     nbt_phase_free(iso);
+
+    /* the series takes exactly b[0..nterms-1]: a moment past them (a
+     * sentinel of 1e3) changes nothing (a random mutant reading one more
+     * order survived every test) */
+    {
+        const double b4[2][4] = {{1, 0.5, 0.25, 0}, {1, 0.5, 0.25, 1e3}};
+        nbt_airlight_geom gs = {0.1, 0.12, 3.0, 7.0, 0.6, 20.0};
+        double Ls[2], Es[2];
+        for (int i = 0; i < 2; i++)
+            nbt_airlight_series(b4[i], 3, &gs, 1e-10, &Ls[i], &Es[i]);
+        t_true(Ls[0] > 0 && Ls[0] == Ls[1], "airlight series of 3 terms ignores b_3: %.17g vs %.17g", Ls[0], Ls[1]);
+    }
     return t_done();
 }

@@ -130,6 +130,18 @@ int main(void)
         t_rel(Ld, want, 1e-12, "kappa_s = 0, theta_r > pi/2: diffuse only");
     }
 
+    /* the series takes exactly b[0..nterms-1]: a moment past them (a
+     * sentinel of 1e3) changes nothing (a random mutant reading one more
+     * order survived every test) */
+    {
+        const double b4[2][4] = {{1, 0.5, 0.25, 0}, {1, 0.5, 0.25, 1e3}};
+        nbt_surface_geom gs = {0.15, 0.2, 2.385, 3.1, 0.4, 1.1, 0.6, 0.35, 20};
+        double L[2], E2[2];
+        for (int i = 0; i < 2; i++)
+            nbt_surface_series(b4[i], 3, &gs, 1e-10, &L[i], &E2[i]);
+        t_true(L[0] > 0 && L[0] == L[1], "surface series of 3 terms ignores b_3: %.17g vs %.17g", L[0], L[1]);
+    }
+
     /* ---- edges ---- */
     nbt_status st = nbt_jk(3, 1, 1e3, 0.3, 1e-10, J, E);
     t_true(st == NBT_OK && isfinite(J[0]) && J[0] >= 0 && J[0] < 1e-300, "T = 1000: finite, tiny, >= 0 (%.3g)", J[0]);
