@@ -379,6 +379,27 @@ static void test_gsliced(void)
     check_lookup3(rt, "RGB32F 7x9x6 asinh (c = 1, 20)");
     nbt_table_free(rt);
 
+    /* the slice axis' uniforms from nbt_gl_set_table_axes, down to two slices
+     * (a random mutant treating a 2-slice table as 2-D survived every test) */
+    {
+        static const char *AX = "uniform vec4 nbt_T_ax2;\nuniform int nbt_T_map2;\nout vec4 color;\n"
+                                "void main() { color = vec4(nbt_T_ax2.x, nbt_T_ax2.y, nbt_T_ax2.w, float(nbt_T_map2)); }\n";
+        nbt_axis t2 = {-0.5, 0.7, NBT_AXIS_COS, 0, 2};
+        rt = random_table3(&q0, &q1, &t2, 1);
+        GLuint p = config_program(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, AX, "slice-axis uniforms shader");
+        if (p) {
+            glUseProgram(p);
+            nbt_gl_set_table_axes(p, "nbt_T", rt);
+            gl_draw_fullscreen();
+            float px[4];
+            glReadPixels(0, 0, 1, 1, GL_RGBA, GL_FLOAT, px);
+            t_true(fabsf(px[0] - -0.5f) < 1e-7f && fabsf(px[1] - 0.7f) < 1e-7f && px[2] == 2.0f && px[3] == 3.0f,
+                   "a 2-slice table's g axis reaches its uniforms: lo %g hi %g n %g map %g", px[0], px[1], px[2], px[3]);
+            glDeleteProgram(p);
+        }
+        nbt_table_free(rt);
+    }
+
     /* airlight and surface radiance from g-sliced H, J^1, J^20 (HG, g nodes clustered at +-0.95) */
     nbt_axis g2 = {-0.95, 0.95, NBT_AXIS_COS, 0, 9};
     nbt_axis h0 = {0, 10, NBT_AXIS_LOG1P_CBRT, 10, 33}, h1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 33};
