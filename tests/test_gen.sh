@@ -368,6 +368,12 @@ expect_usage "negative kappa_t" "kappa_t" "$NBT_GEN" scene "$tmp/bad.scene" -o "
 printf 'kappa_t = 0.1\ndistance = 10\n' >"$tmp/bad.scene"
 expect_usage "no phase" "exactly one of g" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 [ ! -e "$tmp/scene2" ] && ok || bad "rejected scene left output"
+# an extinction range may start at 0 (clear air somewhere in the scene); only its top must be > 0
+printf 'kappa_t = 0:0.05\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/kt0.scene"
+"$NBT_GEN" scene "$tmp/kt0.scene" -o "$tmp/scene0" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/scene0/H_hg_g_0.8.exr" ] &&
+  ok || bad "kappa_t = 0:0.05 is accepted: $(cat "$tmp/err")"
+printf 'kappa_t = 0:0\ndistance = 30\nphase = iso\n' >"$tmp/bad.scene"
+expect_usage "kappa_t = 0:0" "extinction must be > 0" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 printf 'kappa_t = 0.1\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/fixed.scene"
 "$NBT_GEN" scene "$tmp/fixed.scene" -o "$tmp/scene3" >/dev/null 2>&1 && [ -s "$tmp/scene3/H_hg_g_0.8.exr" ] &&
   [ ! -e "$tmp/scene3/J1.exr" ] && ok || bad "fixed-phase scene builds only H: $(ls "$tmp/scene3" 2>&1)"
