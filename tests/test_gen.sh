@@ -349,6 +349,13 @@ miss=$(sed -n 's/.*recorded lookup error is \([0-9.e+-]*\), above tol 1.00e-02.*
   grep -q "^g8s/H_hg_slices.exr .*(rel $miss)\|H_hg_slices.exr .*(rel $miss)" "$tmp/out" &&
   [ "$(ls "$tmp/g8s")" = "H_hg_slices.exr
 H_hg_slices.png" ] && ok || bad "scene beyond 16 orders, basis auto, --allow-tol-miss: $(cat "$tmp/out" "$tmp/err"), $(ls "$tmp/g8s" 2>&1 | tr '\n' ' ')"
+# the sizes the basis line announces are the written table's
+sz=$(sed -n 's/^# basis slices: .*; slices \([0-9]*x[0-9]*x[0-9]*\), .*/\1/p' "$tmp/out")
+"$NBT_GEN" info "$tmp/g8s/H_hg_slices.exr" >"$tmp/info" 2>&1
+fs=$(awk '/^axis[01] / { for (i = 1; i <= NF; i++) if ($(i + 1) == "nodes") n[$1] = $i }
+          /^axis2 / { for (i = 1; i <= NF; i++) if ($(i + 1) == "slices") n[$1] = $i }
+          END { print n["axis0"] "x" n["axis1"] "x" n["axis2"] }' "$tmp/info")
+[ -n "$sz" ] && [ "$sz" = "$fs" ] && ok || bad "basis line sizes $sz vs the file's $fs"
 printf 'basis = legendre\n' >>"$tmp/g8.scene"
 "$NBT_GEN" scene "$tmp/g8.scene" -o "$tmp/g8" >/dev/null 2>"$tmp/err"; rc=$?
 [ $rc -eq 1 ] && [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "orders_max = 16" "$tmp/err" && grep -q "at most 16" "$tmp/err" &&
