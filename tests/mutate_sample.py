@@ -427,6 +427,8 @@ def main():
     ap.add_argument("--work", default="")
     ap.add_argument("--full", type=int, default=0)
     ap.add_argument("--sites", action="store_true")
+    ap.add_argument("--reverse", action="store_true",
+                    help="take the permutation from its end (a second runner on another --work: disjoint mutants)")
     ap.add_argument("-j", default="2")
     a = ap.parse_args()
     src = os.path.abspath(a.srcdir)
@@ -444,6 +446,8 @@ def main():
     seed = int(a.seed) if a.seed else int(time.time())
     order = list(range(len(sites)))
     random.Random(seed).shuffle(order)
+    if a.reverse:
+        order.reverse()
     work = os.path.abspath(a.work) if a.work else tempfile.mkdtemp(prefix="nbt-mutate-sample.")
     os.makedirs(work, exist_ok=True)
     log = os.path.join(work, "mutate-sample.log")

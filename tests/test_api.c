@@ -3,8 +3,8 @@
  * of a pixel (non-square image, non-unit and non-orthogonal fwd/up, every
  * corner), the box of a density grid (unequal sizes, an off-centre origin),
  * the two-term HG phase (values at both signs of mu, odd moments, the mean
- * cosine), the direct beam through a layered medium, status messages and
- * the version. */
+ * cosine), the direct beam through a layered medium, a zero-width screen
+ * atom, status messages and the version. */
 #include <config.h>
 #include <math.h>
 #include <string.h>
@@ -98,6 +98,22 @@ static void test_beam_direct(void)
     t_rel(nbt_beam_direct(&m, 2.5), exp(-0.3 * (0.4 * 1.5 + 2.0 * 1.0)), 1e-14, "direct beam past the interface");
 }
 
+/* an atom of zero width is a delta: all its mass in its own pixel, for
+ * both shapes (a random mutant inverting that survived: no test reached
+ * the zero-width branch); a width of 0.05 px leaves erf(10/sqrt 2)^2 */
+static void test_atom_zero_width(void)
+{
+    for (int s = 0; s < 2; s++) {
+        nbt_atom_shape sh = s ? NBT_ATOM_GAUSS : NBT_ATOM_ERFC;
+        double c = nbt_screen_atom_pixel(sh, 0, 0, 0), e = nbt_screen_atom_pixel(sh, 0, 1, 0),
+               d = nbt_screen_atom_pixel(sh, 0, -1, 2);
+        t_true(c == 1 && e == 0 && d == 0, "%s atom of width 0: 1 in its pixel (%g), 0 beside it (%g, %g)",
+               s ? "Gaussian" : "erfc", c, e, d);
+    }
+    t_rel(nbt_screen_atom_pixel(NBT_ATOM_GAUSS, 0.05, 0, 0), pow(erf(10 / sqrt(2.0)), 2), 1e-14,
+          "Gaussian atom of width 0.05 px: its pixel holds erf(10/sqrt 2)^2");
+}
+
 static void test_messages(void)
 {
     const nbt_status all[7] = {NBT_OK, NBT_EDOM, NBT_ENOMEM, NBT_ETOL, NBT_EIO, NBT_EFORMAT, NBT_EINVAL};
@@ -119,6 +135,7 @@ int main(void)
     test_grid_box();
     test_hg2();
     test_beam_direct();
+    test_atom_zero_width();
     test_messages();
     return t_done();
 }
