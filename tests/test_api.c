@@ -114,6 +114,24 @@ static void test_atom_zero_width(void)
           "Gaussian atom of width 0.05 px: its pixel holds erf(10/sqrt 2)^2");
 }
 
+/* libnbt's NNLS (internal, exported for the tests): a problem whose first
+ * column is already along e1, where a Householder reflection with the
+ * wrong sign divides by zero (a random mutant of that sign survived the
+ * kernel fits, whose columns never are); and an active bound */
+nbt_status nbt__nnls(const double *A, size_t m, size_t n, const double *b, double *x, double *resid);
+static void test_nnls(void)
+{
+    const double A[3 * 2] = {2, 0, 0, 3, 0, 0}, b[3] = {4, 6, 1};
+    double x[2], r;
+    nbt_status st = nbt__nnls(A, 3, 2, b, x, &r);
+    t_true(st == NBT_OK && fabs(x[0] - 2) < 1e-15 && fabs(x[1] - 2) < 1e-15 && fabs(r - 1) < 1e-15,
+           "nnls, columns along e1 and e2: x = (2, 2), residual 1: (%g, %g), %g", x[0], x[1], r);
+    const double b2[3] = {4, -6, 1}; /* the second unknown wants -2: held at 0 */
+    st = nbt__nnls(A, 3, 2, b2, x, &r);
+    t_true(st == NBT_OK && fabs(x[0] - 2) < 1e-15 && x[1] == 0 && fabs(r - sqrt(37.0)) < 1e-14,
+           "nnls with an active bound: x = (2, 0), residual sqrt 37: (%g, %g), %g", x[0], x[1], r);
+}
+
 static void test_messages(void)
 {
     const nbt_status all[7] = {NBT_OK, NBT_EDOM, NBT_ENOMEM, NBT_ETOL, NBT_EIO, NBT_EFORMAT, NBT_EINVAL};
@@ -136,6 +154,7 @@ int main(void)
     test_hg2();
     test_beam_direct();
     test_atom_zero_width();
+    test_nnls();
     test_messages();
     return t_done();
 }
