@@ -349,6 +349,11 @@ miss=$(sed -n 's/.*recorded lookup error is \([0-9.e+-]*\), above tol 1.00e-02.*
   grep -q "^g8s/H_hg_slices.exr .*(rel $miss)\|H_hg_slices.exr .*(rel $miss)" "$tmp/out" &&
   [ "$(ls "$tmp/g8s")" = "H_hg_slices.exr
 H_hg_slices.png" ] && ok || bad "scene beyond 16 orders, basis auto, --allow-tol-miss: $(cat "$tmp/out" "$tmp/err"), $(ls "$tmp/g8s" 2>&1 | tr '\n' ' ')"
+# the tail form's coverage line and the warning count the same nodes: the share at tol 1e-2
+c2=$(sed -n 's/^# tail form: .* <= 1e-2 at \([0-9.]*\)% of the nodes.*/\1/p' "$tmp/out")
+cw=$(sed -n 's/.*its error map is <= tol at \([0-9.]*\)% of the nodes.*/\1/p' "$tmp/err")
+[ -n "$c2" ] && [ "$c2" = "$cw" ] && awk -v c="$c2" 'BEGIN { exit !(c > 50 && c < 100) }' && ok ||
+  bad "tail map coverage at 1e-2: summary $c2% vs warning $cw%"
 # the sizes the basis line announces are the written table's
 sz=$(sed -n 's/^# basis slices: .*; slices \([0-9]*x[0-9]*x[0-9]*\), .*/\1/p' "$tmp/out")
 "$NBT_GEN" info "$tmp/g8s/H_hg_slices.exr" >"$tmp/info" 2>&1
