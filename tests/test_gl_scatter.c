@@ -652,6 +652,53 @@ static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke,
     scene_free(&s);
 }
 
+/* NBT_GLS_NBT's weights are linear in log2 beta_px between table entries (1/PER
+ * apart): their slope da must equal a central difference of a(lb) inside each
+ * segment (exact for a linear function, up to rounding ~1e-16/h), be 0
+ * where the weights are held (below the table) and follow their 1/beta
+ * scaling above it. A CPU check: no GL. */
+static void test_nbt_weights_slope(void)
+{
+    enum { NB = NBT_GLS_NBT_NB };
+    const double h = 1e-4, f[3] = {0.21, 0.5, 0.83};
+    double a[NB], da[NB], ap[NB], am[NB], worst = 0, big = 0, held = 0;
+    for (int i = 0; i + 1 < NBT_GLS_NBT_N; i++)
+        for (int q = 0; q < 3; q++) {
+            double lb = NBT_GLS_NBT_LO + ((double)i + f[q]) / NBT_GLS_NBT_PER;
+            nbt_gls_nbt_weights(lb, a, da);
+            nbt_gls_nbt_weights(lb + h, ap, NULL);
+            nbt_gls_nbt_weights(lb - h, am, NULL);
+            for (int b = 0; b < NB; b++) {
+                double cd = (ap[b] - am[b]) / (2 * h);
+                worst = fmax(worst, fabs(da[b] - cd));
+                big = fmax(big, fabs(cd));
+            }
+        }
+    /* below the table the weights are held: slope 0; above it they scale as
+     * 2^(HI - lb), whose slope -ln 2 a is checked by the same difference */
+    nbt_gls_nbt_weights(NBT_GLS_NBT_LO - 0.37, a, da);
+    for (int b = 0; b < NB; b++)
+        held = fmax(held, fabs(da[b]));
+    double above = 0, abig = 0;
+    for (int q = 0; q < 3; q++) {
+        double lb = NBT_GLS_NBT_HI + 0.41 + 3.0 * q;
+        nbt_gls_nbt_weights(lb, a, da);
+        nbt_gls_nbt_weights(lb + h, ap, NULL);
+        nbt_gls_nbt_weights(lb - h, am, NULL);
+        for (int b = 0; b < NB; b++) {
+            double cd = (ap[b] - am[b]) / (2 * h);
+            above = fmax(above, fabs(da[b] - cd));
+            abig = fmax(abig, fabs(cd));
+        }
+    }
+    t_true(big > 0 && worst <= 1e-9 * big, "nbt weights: slope = central difference in log2 beta_px (worst difference %.2g, "
+           "largest slope %.3g) at %d points", worst, big, 3 * (NBT_GLS_NBT_N - 1));
+    t_abs(held, 0, 0, "nbt weights: slope 0 below the table");
+    /* exp2 is not linear: the central difference's error is (ln 2)^2 h^2/6 of the slope */
+    t_true(abig > 0 && above <= 1e-7 * abig, "nbt weights above the table: slope = central difference (worst %.2g of "
+           "%.3g)", above, abig);
+}
+
 int main(void)
 {
     char err[4096];
@@ -661,6 +708,7 @@ int main(void)
         return t_done();
     }
     t_true(1, "GL context: %s", (const char *)glGetString(GL_RENDERER));
+    test_nbt_weights_slope();
     validate_passes();
     nbt_gls *g = nbt_gls_alloc(W, H);
     t_true(g != NULL, "context for %dx%d", W, H);

@@ -461,6 +461,73 @@ static void test_build_io(void)
     nbt_table_free(t);
 }
 
+/* The per-g-cell record takes both quadratic stencils that meet at a g
+ * midpoint: a lookup just below the midpoint of cell m interpolates slices
+ * m-1..m+1, just above it m..m+2 (nbt_table_lookup3), and either may be the
+ * worse. In the planner's J tables (log_et form, atanh g) the two differ by
+ * 15% at most and the in-slice term 1.25 se of the record covers that, so a
+ * record from one stencil looks fine there. J^1 in the plain form on g's cos
+ * axis over [-0.9, 0.9] with 5 slices (17 x 17 T, theta nodes) curves
+ * unevenly in g: in the cell g in [0, 0.64] the stencil below the midpoint
+ * errs by 1.46 at worst, the one above by 0.33, and a record of the upper
+ * stencil alone (0.51) would be 2.9x too small. At every (T, theta) node,
+ * where the in-slice interpolation is exact, |lookup3 - exact| just below
+ * and just above every g midpoint must lie within the cell's record; exact:
+ * fixed-phase J^1 tables built at the midpoint g (nbt_j_table_build, not the
+ * g-sliced one-pass fill; float storage), and the worst node once against
+ * nbt_j_phase's integral. */
+static void test_cell_stencils(void)
+{
+    nbt_axis a0 = {0, 2.0, NBT_AXIS_LOG1P_CBRT, 10.0, 17}, a1 = {0, M_PI, NBT_AXIS_LINEAR, 0, 17};
+    nbt_axis a2 = {-0.9, 0.9, NBT_AXIS_COS, 0, 5};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_J, &a0, &a1, &a2, 1);
+    t->n = 1;
+    t->form = NBT_FORM_PLAIN;
+    t->interp2 = 2;
+    nbt_build_opts o = {1e-10, 1, 2};
+    nbt_status st = nbt_gslice_fill(t, &o);
+    t_true(st == NBT_OK, "plain J^1 17x17x5, quadratic in g: fill");
+    if (st != NBT_OK) {
+        nbt_table_free(t);
+        return;
+    }
+    double worst_ratio = 0, spread = 0, wT = 0, wth = 0, wg = 0, wv = 0;
+    for (size_t m = 0; m + 1 < a2.n; m++) {
+        double gm = nbt_axis_from_unit(&a2, ((double)m + 0.5) / (double)(a2.n - 1)), e[2] = {0, 0};
+        nbt_table *s = nbt_table_alloc(NBT_TABLE_J, &a0, &a1, 1);
+        nbt_phase *p = nbt_phase_hg(gm);
+        s->n = 1;
+        s->k[0] = -1;
+        nbt_build_opts os = {1e-10, 0, 2};
+        t_true(nbt_j_table_build(s, p, &os) == NBT_OK, "fixed-phase J^1 at g = %.4f", gm);
+        for (int side = 0; side < 2; side++) {
+            double g = gm + (side ? 1e-9 : -1e-9), bound = nbt_table_err_at(t, 0, g);
+            for (size_t j = 0; j < a1.n; j++)
+                for (size_t i = 0; i < a0.n; i++) {
+                    double T = nbt_axis_node(&a0, i), th = nbt_axis_node(&a1, j), v, ex = s->data[j * a0.n + i];
+                    nbt_table_lookup3(t, T, th, g, &v);
+                    double d = fabs(v - ex);
+                    if (d > e[side])
+                        e[side] = d;
+                    if (d / bound > worst_ratio)
+                        worst_ratio = d / bound, wT = T, wth = th, wg = gm, wv = ex;
+                }
+        }
+        spread = fmax(spread, fmax(e[0], e[1]) / fmin(e[0], e[1]));
+        nbt_phase_free(p);
+        nbt_table_free(s);
+    }
+    t_true(worst_ratio <= 1.0, "plain J^1 quadratic in g: |lookup - exact| at every node just below and above every g "
+           "midpoint within the cell's record (worst %.2f of it)", worst_ratio);
+    t_true(spread > 3.0, "the two stencils at a g midpoint differ (worst/best up to %.1f)", spread);
+    double ex, ee;
+    nbt_phase *p = nbt_phase_hg(wg);
+    nbt_j_phase(p, 1, wT, wth, 1e-11, &ex, &ee);
+    nbt_phase_free(p);
+    t_rel(wv, ex, 1e-6, "the reference at the worst node (T %.3f, theta %.3f, g %.4f) = nbt_j_phase", wT, wth, wg);
+    nbt_table_free(t);
+}
+
 int main(void)
 {
     nbt_table *H = small_table(NBT_TABLE_H, 0, 97, 97, 9, -0.4, 0.5);
@@ -498,6 +565,7 @@ int main(void)
     test_errors(H, J);
     test_build_io();
     test_log_form();
+    test_cell_stencils();
     test_one_pass();
     nbt_table_free(H);
     nbt_table_free(J);

@@ -14,15 +14,19 @@ for s in plane step layers slant blocks; do
   "$S" scene $s -o "$tmp/$s.exr" --size 64x48 && [ -s "$tmp/$s.exr" ] && ok || bad "scene $s"
 done
 
-# layered depth (Z read as ray distance): FFT = brute force, both operators;
-# the files hold float, so the two agree to float round-off of the whole image
+# layered depth (Z read as ray distance): FFT = brute force, both operators.
+# --compare sets this run's S (double) against the file's S layer (float): each
+# value differs by the float rounding, at most 2^-24 = 5.96e-8 of itself, plus
+# the two operators' own difference (~1e-15), so relL1, max and |bias| are
+# below 6e-8 (measured: 2.2e-8, 3.7e-8 and 5e-10)
 for m in ref-a ref-b; do
   "$S" "$tmp/layers.exr" -o "$tmp/fft-$m.exr" $M --depth ray --method $m --no-png 2>"$tmp/log" || bad "$m fft"
   grep -q "layered FFT" "$tmp/log" && ok || bad "$m: layered scene uses the FFT: $(cat "$tmp/log")"
   set -- $("$S" "$tmp/layers.exr" -o "$tmp/brute-$m.exr" $M --depth ray --method $m --layers 0 --no-png \
     --compare "$tmp/fft-$m.exr" 2>"$tmp/log")
   grep -q "brute force" "$tmp/log" && ok || bad "$m: --layers 0 uses brute force"
-  [ "$1" = relL1 ] && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 1e-6 && b < 1e-6 && b > -1e-6) }' && ok ||
+  [ "$1" = relL1 ] && [ "${9}" = max ] && awk -v a="$2" -v b="$8" -v m="${10}" \
+    'BEGIN { exit !(a < 6e-8 && b < 6e-8 && b > -6e-8 && m < 6e-8) }' && ok ||
     bad "$m: brute force vs layered FFT through files: $*"
 done
 # operator B is not operator A: they differ by far more than round-off

@@ -280,7 +280,10 @@ static void test_operators(void)
             s.rgb[3 * i + 1] = (float)(floor(t_uniform() * 1024) / 1024 * (x == 20 && y == 20 ? 400 : 1)); /* an HDR lamp */
             s.rgb[3 * i + 2] = (float)(floor(t_uniform() * 1024) / 1024);
         }
-    /* at dtheta = 0.005 the kernels (beta ~ 30 px) are wider than the image: both clip them alike */
+    /* at dtheta = 0.005 the kernels (beta ~ 30 px) are wider than the image: both clip them alike.
+     * The two differ by round-off: the FFT's is about u log2(n) of the data's 2-norm (u = 1.1e-16,
+     * n ~ 2^14 padded points, 2-norm <= sqrt(64 x 56) = 60 max S): ~1e-13 of max S; limit 1e-12
+     * (measured 1.6e-15) */
     for (int rule = 0; rule < 4; rule++) {
         in.dtheta = rule < 2 ? dth : 0.005;
         nbt_screen_brute(&in, k, (nbt_screen_rule)(rule % 2), tail, 2, S, NULL);
@@ -288,7 +291,7 @@ static void test_operators(void)
         double d = 0;
         for (size_t i = 0; i < N * 3; i++)
             d = fmax(d, fabs(S[i] - S2[i]));
-        t_true(st == NBT_OK && d <= 1e-10 * t_maxabs(S, N * 3),
+        t_true(st == NBT_OK && d <= 1e-12 * t_maxabs(S, N * 3),
                "%s, dtheta %g: brute force = layered FFT (max diff %.2g of max S)", rule % 2 ? "B" : "A", in.dtheta,
                d / t_maxabs(S, N * 3));
     }
@@ -507,11 +510,163 @@ static void test_medium(void)
     nbt_grid_free(g);
 }
 
+/* ---- a density that varies with height and across: the camera's ray directions ----
+ * rho = 1 + 0.5 y + 0.15 x (world y up, x right), linear along every ray, so
+ * zeta(D) = int_0^D rho(pos + t dir) dt = D rho(pos) + (D^2/2)(0.5 dir_y + 0.15 dir_x)
+ * in closed form and the trapezoid rule is exact (up to rounding). The
+ * pinhole's direction is written here from the header's convention (row 0 at
+ * the top, towards up; column 0 at the left): dir = (u, v, -1)/sqrt(1 + u^2 + v^2)
+ * for a camera looking along -z with up +y, u = (x + 1/2 - W/2) dtheta,
+ * v = (H/2 - y - 1/2) dtheta. A flipped vertical (top row looking down)
+ * moves zeta of the top and bottom rows by D^2 0.5 |v| / sqrt(1 + u^2 + v^2)
+ * (0.6 to 2.2 here: T by a factor 0.8 to 0.43, against 1e-12); a flipped
+ * horizontal, of the outer columns, by D^2 0.15 |u| / sqrt(...) (0.35 to 1.3). */
+static double dens_slope(const double p[3], void *ctx)
+{
+    (void)ctx;
+    return 1.0 + 0.5 * p[1] + 0.15 * p[0];
+}
+
+static void test_medium_height(void)
+{
+    const size_t W = 7, H = 4; /* non-square: a pitch from the width would show too */
+    const double dth = 0.09, cpos[3] = {0.3, -0.2, 1.1};
+    nbt_beam_medium m = nbt_beam_homogeneous(0.37, 0.8, 0.011);
+    float rgb[7 * 4 * 3] = {0}, D[7 * 4];
+    for (size_t i = 0; i < W * H; i++)
+        D[i] = (float)(3.0 + 0.1 * (double)((i * 5) % 29)); /* 3 .. 5.8, no two rows alike */
+    nbt_screen_input in = {W, H, rgb, D, dth, NULL};
+    /* up neither unit nor orthogonal to the view direction; fwd not unit */
+    nbt_camera cam = {{cpos[0], cpos[1], cpos[2]}, {0, 0, -2.0}, {0, 1.5, 0.4}};
+    nbt_screen_pixkern pix[7 * 4];
+    double err, sa = m.sigma_t * (1 - m.albedo), ss = m.sigma_t * m.albedo;
+    nbt_status st = nbt_screen_medium_kernels(&in, &m, dens_slope, NULL, &cam, 0.01, NULL, 1, pix, &err);
+    t_true(st == NBT_OK, "medium kernels: a density linear in height");
+    double worst = 0, worstM = 0;
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            size_t i = y * W + x;
+            double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
+            double n = sqrt(1 + u * u + v * v), Dp = D[i];
+            double zeta = Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+            double T = exp(-m.sigma_t * zeta), M0 = exp(-sa * zeta) * -expm1(-ss * zeta);
+            worst = fmax(worst, fabs(pix[i].T - T) / T);
+            worstM = fmax(worstM, fabs(pix[i].M0 - M0) / M0);
+        }
+    t_true(worst < 1e-12 && worstM < 1e-12,
+           "medium, density linear in height: T and M0 of all 7x4 pixels = the closed form (worst rel %.2g, %.2g)",
+           worst, worstM);
+
+    /* the same field as a dense grid (trilinear: exact for a linear field between
+     * voxel centres, float values: 1e-7 relative): T through nbt_grid_density */
+    double o[3] = {-1.75, -1.5, -5.5};
+    nbt_grid *g = nbt_grid_alloc(17, 11, 29, o, 0.25);
+    t_true(g != NULL, "grid 17x11x29");
+    if (!g)
+        return;
+    for (size_t k = 0; k < 29; k++)
+        for (size_t j = 0; j < 11; j++)
+            for (size_t i = 0; i < 17; i++) {
+                double p[3] = {o[0] + 0.25 * (double)i, o[1] + 0.25 * (double)j, o[2] + 0.25 * (double)k};
+                g->data[(k * 11 + j) * 17 + i] = (float)dens_slope(p, NULL);
+            }
+    st = nbt_screen_medium_kernels(&in, &m, nbt_grid_density, g, &cam, 0.05, NULL, 2, pix, &err);
+    worst = 0;
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            size_t i = y * W + x;
+            double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
+            double n = sqrt(1 + u * u + v * v), Dp = D[i];
+            double zeta = Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+            worst = fmax(worst, fabs(pix[i].T - exp(-m.sigma_t * zeta)) / exp(-m.sigma_t * zeta));
+        }
+    t_true(st == NBT_OK && worst < 1e-6, "medium through a grid of the linear field: T = the closed form (worst rel %.2g)",
+           worst);
+    nbt_grid_free(g);
+}
+
+/* trilinear interpolation is exact for a linear field: probe one with distinct
+ * slopes per axis at unequal fractions (0.1, 0.35, 0.8 in turn on each axis),
+ * where weights swapped between axes show; centre values are multiples of 1/4
+ * (exact in float). The half voxel at the border is constant (clamped). */
+static void test_grid_linear(void)
+{
+    const double o[3] = {-1.0, 0.5, 2.0}, vox = 0.5;
+    nbt_grid *g = nbt_grid_alloc(4, 3, 5, o, vox);
+    t_true(g != NULL, "grid 4x3x5");
+    if (!g)
+        return;
+    for (size_t k = 0; k < 5; k++)
+        for (size_t j = 0; j < 3; j++)
+            for (size_t i = 0; i < 4; i++)
+                g->data[(k * 3 + j) * 4 + i] = (float)(4.0 + 0.25 * (double)i + 2.0 * (double)j - 0.75 * (double)k);
+    /* voxel-centre coordinates (i, j, k) of the probes */
+    const double c[6][3] = {{1.1, 0.35, 2.8}, {2.8, 1.1, 0.35}, {0.35, 1.8, 3.1},
+                            {2.35, 0.8, 3.1}, {-0.3, 1.35, 4.3}, {3.2, 2.45, -0.45}};
+    const double cl[6][3] = {{1.1, 0.35, 2.8}, {2.8, 1.1, 0.35}, {0.35, 1.8, 3.1},
+                             {2.35, 0.8, 3.1}, {0.0, 1.35, 4.0}, {3.0, 2.0, 0.0}}; /* clamped to the centres */
+    double worst = 0;
+    for (int p = 0; p < 6; p++) {
+        double q[3];
+        for (int a = 0; a < 3; a++)
+            q[a] = o[a] + vox * c[p][a];
+        double want = 4.0 + 0.25 * cl[p][0] + 2.0 * cl[p][1] - 0.75 * cl[p][2];
+        worst = fmax(worst, fabs(nbt_grid_density(q, g) - want) / want);
+    }
+    t_true(worst < 1e-14, "grid: a linear field a + b i + c j + d k at unequal fractions, in the border half voxels too "
+           "(worst rel %.2g)", worst);
+    nbt_grid_free(g);
+}
+
+/* the edge band of nbt_screen_compare by hand: per-pixel kernels of 1.05 px
+ * (near side, D = 4) and 1.85 px (far side, D = 9) meet at a straight
+ * vertical edge between columns 13 and 14 of a 40x9 image; the band is every
+ * pixel within 2 x 1.85 = 3.7 px of the edge's midpoints, i.e. the columns
+ * 10..17 (|x - 13.5| <= 3.7) on every row: 72 pixels. (The smaller radius,
+ * or one radius instead of two, gives columns 12..15.) Depths 9 and 9.3 differ
+ * by 3.3% < 5%: no edge there. An error at column 17 counts in the band, one
+ * at column 18 does not. */
+static void test_edge_band(void)
+{
+    const size_t W = 40, H = 9, N = W * H;
+    float rgb[40 * 9 * 3] = {0}, D[40 * 9];
+    nbt_screen_pixkern pix[40 * 9];
+    double S[40 * 9 * 3], R[40 * 9 * 3];
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            size_t i = y * W + x;
+            D[i] = x < 14 ? 4.0f : x < 28 ? 9.0f : 9.3f;
+            pix[i].T = 0.5, pix[i].M0 = 0.2, pix[i].beta_px = x < 14 ? 1.05 : 1.85;
+            for (int c = 0; c < 3; c++)
+                R[3 * i + c] = S[3 * i + c] = 1.0 + 0.01 * (double)i + 0.1 * c;
+        }
+    nbt_screen_input in = {W, H, rgb, D, 0.01, pix};
+    size_t a = 4 * W + 17, b = 2 * W + 18; /* inside the band (3.5 px from the edge), outside (4.5 px) */
+    S[3 * a] += 0.3;
+    S[3 * b + 1] += 0.5;
+    nbt_screen_metrics mt;
+    t_true(nbt_screen_compare(&in, NULL, S, R, &mt) == NBT_OK, "compare with per-pixel kernels");
+    double band2 = 0, all2 = 0;
+    for (size_t i = 0; i < N; i++)
+        for (int c = 0; c < 3; c++) {
+            size_t x = i % W;
+            all2 += R[3 * i + c] * R[3 * i + c];
+            if (x >= 10 && x <= 17)
+                band2 += R[3 * i + c] * R[3 * i + c];
+        }
+    t_true(mt.edge_pixels == 8 * H, "edge band: columns 10..17 on all 9 rows = 72 pixels (got %zu)", mt.edge_pixels);
+    t_rel(mt.edge, sqrt(0.3 * 0.3 / band2), 1e-12, "edge metric: the band's error, by hand");
+    t_rel(mt.rel_rms, sqrt((0.3 * 0.3 + 0.5 * 0.5) / all2), 1e-12, "rel RMS by hand");
+}
+
 int main(void)
 {
     test_pixel_integrals();
     test_kernels();
     test_operators();
     test_medium();
+    test_medium_height();
+    test_grid_linear();
+    test_edge_band();
     return t_done();
 }

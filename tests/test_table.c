@@ -98,6 +98,12 @@ static int saddle_fn(double x0, double x1, double *out, void *ctx)
     out[0] = x0 * x0 - x1 * x1;
     return 0;
 }
+static int exp_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)ctx;
+    out[0] = exp(2.7 * x0) * (1 + 0.4 * x1);
+    return 0;
+}
 static int bowl_fn(double x0, double x1, double *out, void *ctx)
 {
     (void)ctx;
@@ -262,6 +268,39 @@ int main(void)
         t_true(seen <= sd->max_err[0] + 1e-6 && sd->max_err[0] < 1.5 * seen,
                "bump: recorded error %.6g bounds the error %.6g near its peak, within 1.5x", sd->max_err[0], seen);
         nbt_table_free(sd);
+    }
+
+    /* ---- the last cell row counts: f = e^{2.7 x0} (1 + 0.4 x1) on 12 x 7 equal steps.
+     * Linear in x1, so bilinear interpolation errs only in x0, by
+     * (g(x_i) + g(x_i+1))/2 - g(x_i + h/2) = g(mid)(cosh(2.7 h/2) - 1) times
+     * (1 + 0.4 x1) at a midpoint: largest in the LAST x0 cell (the one before
+     * it: e^{-2.7 h} = 0.65 of that) and at the last x1 node. The record is
+     * that, computed here from g (float storage of values up to 260: 1e-5);
+     * random points of the last cell row may exceed the midpoint by 0.13%
+     * (the maximum of an exponential's chord error lies just off the
+     * midpoint), hence 1.002. ---- */
+    {
+        nbt_axis ea0 = {0.15, 1.9, NBT_AXIS_LINEAR, 0, 12}, ea1 = {-0.6, 1.3, NBT_AXIS_LINEAR, 0, 7};
+        nbt_table *te = nbt_table_alloc(NBT_TABLE_J, &ea0, &ea1, 1);
+        t_true(nbt_table_tabulate(te, exp_fn, NULL, 1) == NBT_OK, "tabulate e^{2.7 x0} (1 + 0.4 x1)");
+        double h = 1.75 / 11, want = 0, prev = 0;
+        for (int i = 0; i < 11; i++) {
+            double xa = 0.15 + h * i, e = 0.5 * (exp(2.7 * xa) + exp(2.7 * (xa + h))) - exp(2.7 * (xa + 0.5 * h));
+            prev = want;
+            want = fmax(want, e * (1 + 0.4 * 1.3));
+        }
+        t_true(prev < 0.7 * want, "the largest error sits in the last cell row (%.4g, the row before %.4g)", want, prev);
+        t_rel(te->max_err[0], want, 1e-5, "recorded error = the last cell row's midpoint error %.6g", want);
+        double seen = 0, vv[1];
+        for (int k = 0; k < 4000; k++) {
+            double x0 = 1.9 - h * t_uniform(), x1 = -0.6 + 1.9 * t_uniform();
+            nbt_table_lookup(te, x0, x1, vv);
+            seen = fmax(seen, fabs(vv[0] - exp(2.7 * x0) * (1 + 0.4 * x1)));
+        }
+        t_true(seen <= 1.002 * te->max_err[0] && seen > 0.9 * want,
+               "recorded error %.6g bounds the error %.6g at 4000 random points of the last cell row (1.002x)",
+               te->max_err[0], seen);
+        nbt_table_free(te);
     }
 
     /* ---- EXR round trips ---- */
