@@ -345,10 +345,44 @@ static void test_fitted(void)
     nbt_phase_free(out);
 }
 
+/* ---- one set of paths serves every albedo: the counts at albedo a are
+ * those of a run at a alone (same seed, bit for bit), and a path scattered
+ * once weighs a, so first-order masses scale exactly by a (a random mutant
+ * reading another albedo's row of weights survived the one-albedo tests) ---- */
+static void test_mc_albedos(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.6);
+    const double z[] = {0.7, 2.0}, edges[] = {0.1, 0.5}, alb2[] = {1.0, 0.6, 0.35}, alb1[] = {0.6};
+    nbt_mc_kernel_config cfg = {hg, 1, 2, z, 2, edges, 3, alb2, 60, 0, 20000, 11, 2, NULL, NULL};
+    nbt_mc_kernel_result *r3 = NULL, *r1 = NULL;
+    t_true(nbt_mc_kernel_run(&cfg, &r3) == NBT_OK, "mc kernel run, three albedos");
+    cfg.nalbedo = 1, cfg.albedo = alb1;
+    t_true(nbt_mc_kernel_run(&cfg, &r1) == NBT_OK, "mc kernel run, albedo 0.6 alone");
+    if (r3 && r1) {
+        size_t nb = r3->nbins, same = 1;
+        double worst = 0;
+        for (size_t j = 0; j < 2; j++)
+            for (size_t o = 0; o < 2; o++)
+                for (size_t b = 0; b < nb; b++) {
+                    same &= r3->mass[((j * 3 + 1) * 2 + o) * nb + b] == r1->mass[((j * 1 + 0) * 2 + o) * nb + b];
+                    for (size_t k = 1; o == 0 && k < 3; k++) {
+                        double m1 = r3->mass[((j * 3 + 0) * 2 + 0) * nb + b], mk = r3->mass[((j * 3 + k) * 2 + 0) * nb + b];
+                        worst = fmax(worst, fabs(mk - alb2[k] * m1) / fmax(m1, 1e-300));
+                    }
+                }
+        t_true(same, "albedo 0.6 among three = albedo 0.6 alone, bit for bit (same seed and order cap)");
+        t_true(worst < 1e-12, "first order at albedo a = a x first order at albedo 1 (worst %.2g)", worst);
+    }
+    nbt_mc_kernel_result_free(r3);
+    nbt_mc_kernel_result_free(r1);
+    nbt_phase_free(hg);
+}
+
 int main(void)
 {
     test_first_order();
     test_first_order_mc();
+    test_mc_albedos();
     test_far_weights();
     test_rgb();
     test_model();
