@@ -4,7 +4,7 @@
 . "${top_srcdir:-.}/tests/testlib.sh"
 NBT_FIT=$(abspath "${NBT_FIT:-./nbt-fit}")
 
-"$NBT_FIT" --version | grep -q "nbt-fit (nbt)" && ok || bad "--version"
+"$NBT_FIT" --version >"$tmp/v" && grep -q "nbt-fit (nbt)" "$tmp/v" && ok || bad "--version (exit status 0)"
 "$NBT_FIT" mc --help | grep -q "z,r_lo,r_hi,psi,psi_stderr" && ok || bad "mc --help"
 
 # slab: R and T lines, within 4 standard errors of van de Hulst (0.09739, 0.66096)

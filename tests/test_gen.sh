@@ -5,7 +5,7 @@
 . "${top_srcdir:-.}/tests/testlib.sh"
 NBT_GEN=$(abspath "${NBT_GEN:-./nbt-gen}")
 
-"$NBT_GEN" --version | grep -q "nbt-gen (nbt)" && ok || bad "--version"
+"$NBT_GEN" --version >"$tmp/out" && grep -q "nbt-gen (nbt)" "$tmp/out" && ok || bad "--version (exit status 0)"
 "$NBT_GEN" --help | grep -q "Usage" && ok || bad "--help"
 
 # eval H: closed form H_0(0, v) = v + pi/2
