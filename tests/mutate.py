@@ -60,10 +60,19 @@ def run(cmd, cwd, log, timeout=None, env=None):
         lf.flush()
         try:
             return subprocess.run(cmd, shell=True, cwd=cwd, stdout=lf, stderr=subprocess.STDOUT,
-                                  timeout=timeout, env=env).returncode
+                                  timeout=timeout, env=env, start_new_session=True).returncode
         except subprocess.TimeoutExpired:
             lf.write("(timed out after %s s)\n" % timeout)
             return 124
+
+
+def copy_tree(src, dst):
+    """The tracked files of src into dst (times kept)."""
+    files = subprocess.run(["git", "ls-files", "-z"], cwd=src, capture_output=True, check=True).stdout.decode()
+    for f in files.split("\0"):
+        if f and os.path.isfile(os.path.join(src, f)):
+            os.makedirs(os.path.dirname(os.path.join(dst, f)) or dst, exist_ok=True)
+            shutil.copy2(os.path.join(src, f), os.path.join(dst, f))
 
 
 def main():
@@ -98,11 +107,7 @@ def main():
     scratch = tempfile.mkdtemp(prefix="nbt-mutate.")
     log = os.path.join(scratch, "mutate.log")
     tree = os.path.join(scratch, "src")
-    files = subprocess.run(["git", "ls-files", "-z"], cwd=src, capture_output=True, check=True).stdout.decode().split("\0")
-    for f in files:
-        if f and os.path.isfile(os.path.join(src, f)):
-            os.makedirs(os.path.dirname(os.path.join(tree, f)) or tree, exist_ok=True)
-            shutil.copy2(os.path.join(src, f), os.path.join(tree, f))
+    copy_tree(src, tree)
     j = "-j" + a.j
     print("mutate: %d mutations; scratch tree %s (log: mutate.log)" % (len(muts), tree), flush=True)
     t0 = time.time()

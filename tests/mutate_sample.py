@@ -52,6 +52,8 @@ import sys
 import tempfile
 import time
 
+from mutate import copy_tree, run  # tests/mutate.py: the hand-picked list's driver
+
 SOURCES = ["libnbt/*.c", "libnbt/*.h", "libnbt/nbt/*.h", "shaders/*.c", "shaders/*.h", "shaders/*.glsl",
            "scatter/*.c", "scatter/*.h", "gen/*.c", "gen/*.h", "fit/*.c", "fit/*.cc", "fit/*.h"]
 # generated data (written by doc/*.sh from counted photons) and a bitmap font: numbers, not code
@@ -255,26 +257,6 @@ def enumerate_sites(src):
                 if new != orig:
                     out.append({"file": rel, "line": ln, "kind": kind, "old": orig, "new": new})
     return out
-
-
-def run(cmd, cwd, log, timeout=None, env=None):
-    with open(log, "a") as lf:
-        lf.write("$ %s\n" % cmd)
-        lf.flush()
-        try:
-            return subprocess.run(cmd, shell=True, cwd=cwd, stdout=lf, stderr=subprocess.STDOUT,
-                                  timeout=timeout, env=env, start_new_session=True).returncode
-        except subprocess.TimeoutExpired:
-            lf.write("(timed out after %s s)\n" % timeout)
-            return 124
-
-
-def copy_tree(src, dst):
-    files = subprocess.run(["git", "ls-files", "-z"], cwd=src, capture_output=True, check=True).stdout.decode()
-    for f in files.split("\0"):
-        if f and os.path.isfile(os.path.join(src, f)):
-            os.makedirs(os.path.dirname(os.path.join(dst, f)) or dst, exist_ok=True)
-            shutil.copy2(os.path.join(src, f), os.path.join(dst, f))
 
 
 def make_var(tree, expr):

@@ -657,40 +657,39 @@ static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke,
  * segment (exact for a linear function, up to rounding ~1e-16/h), be 0
  * where the weights are held (below the table) and follow their 1/beta
  * scaling above it. A CPU check: no GL. */
+/* at lb: the largest |da - central difference| into *worst, the largest
+ * |central difference| into *big */
+static void slope_vs_difference(double lb, double *worst, double *big)
+{
+    enum { NB = NBT_GLS_NBT_NB };
+    const double h = 1e-4;
+    double a[NB], da[NB], ap[NB], am[NB];
+    nbt_gls_nbt_weights(lb, a, da);
+    nbt_gls_nbt_weights(lb + h, ap, NULL);
+    nbt_gls_nbt_weights(lb - h, am, NULL);
+    for (int b = 0; b < NB; b++) {
+        double cd = (ap[b] - am[b]) / (2 * h);
+        *worst = fmax(*worst, fabs(da[b] - cd));
+        *big = fmax(*big, fabs(cd));
+    }
+}
+
 static void test_nbt_weights_slope(void)
 {
     enum { NB = NBT_GLS_NBT_NB };
-    const double h = 1e-4, f[3] = {0.21, 0.5, 0.83};
-    double a[NB], da[NB], ap[NB], am[NB], worst = 0, big = 0, held = 0;
+    const double f[3] = {0.21, 0.5, 0.83};
+    double a[NB], da[NB], worst = 0, big = 0, held = 0;
     for (int i = 0; i + 1 < NBT_GLS_NBT_N; i++)
-        for (int q = 0; q < 3; q++) {
-            double lb = NBT_GLS_NBT_LO + ((double)i + f[q]) / NBT_GLS_NBT_PER;
-            nbt_gls_nbt_weights(lb, a, da);
-            nbt_gls_nbt_weights(lb + h, ap, NULL);
-            nbt_gls_nbt_weights(lb - h, am, NULL);
-            for (int b = 0; b < NB; b++) {
-                double cd = (ap[b] - am[b]) / (2 * h);
-                worst = fmax(worst, fabs(da[b] - cd));
-                big = fmax(big, fabs(cd));
-            }
-        }
+        for (int q = 0; q < 3; q++)
+            slope_vs_difference(NBT_GLS_NBT_LO + ((double)i + f[q]) / NBT_GLS_NBT_PER, &worst, &big);
     /* below the table the weights are held: slope 0; above it they scale as
      * 2^(HI - lb), whose slope -ln 2 a is checked by the same difference */
     nbt_gls_nbt_weights(NBT_GLS_NBT_LO - 0.37, a, da);
     for (int b = 0; b < NB; b++)
         held = fmax(held, fabs(da[b]));
     double above = 0, abig = 0;
-    for (int q = 0; q < 3; q++) {
-        double lb = NBT_GLS_NBT_HI + 0.41 + 3.0 * q;
-        nbt_gls_nbt_weights(lb, a, da);
-        nbt_gls_nbt_weights(lb + h, ap, NULL);
-        nbt_gls_nbt_weights(lb - h, am, NULL);
-        for (int b = 0; b < NB; b++) {
-            double cd = (ap[b] - am[b]) / (2 * h);
-            above = fmax(above, fabs(da[b] - cd));
-            abig = fmax(abig, fabs(cd));
-        }
-    }
+    for (int q = 0; q < 3; q++)
+        slope_vs_difference(NBT_GLS_NBT_HI + 0.41 + 3.0 * q, &above, &abig);
     t_true(big > 0 && worst <= 1e-9 * big, "nbt weights: slope = central difference in log2 beta_px (worst difference %.2g, "
            "largest slope %.3g) at %d points", worst, big, 3 * (NBT_GLS_NBT_N - 1));
     t_abs(held, 0, 0, "nbt weights: slope 0 below the table");

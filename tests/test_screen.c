@@ -527,6 +527,15 @@ static double dens_slope(const double p[3], void *ctx)
     return 1.0 + 0.5 * p[1] + 0.15 * p[0];
 }
 
+/* the closed-form optical depth zeta of pixel (x, y) of a W x H image
+ * (ray distance Dp) from a camera at cpos through dens_slope */
+static double zeta_slope(size_t x, size_t y, size_t W, size_t H, double dth, double Dp, const double cpos[3])
+{
+    double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
+    double n = sqrt(1 + u * u + v * v);
+    return Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+}
+
 static void test_medium_height(void)
 {
     const size_t W = 7, H = 4; /* non-square: a pitch from the width would show too */
@@ -546,9 +555,7 @@ static void test_medium_height(void)
     for (size_t y = 0; y < H; y++)
         for (size_t x = 0; x < W; x++) {
             size_t i = y * W + x;
-            double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
-            double n = sqrt(1 + u * u + v * v), Dp = D[i];
-            double zeta = Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+            double zeta = zeta_slope(x, y, W, H, dth, D[i], cpos);
             double T = exp(-m.sigma_t * zeta), M0 = exp(-sa * zeta) * -expm1(-ss * zeta);
             worst = fmax(worst, fabs(pix[i].T - T) / T);
             worstM = fmax(worstM, fabs(pix[i].M0 - M0) / M0);
@@ -575,9 +582,7 @@ static void test_medium_height(void)
     for (size_t y = 0; y < H; y++)
         for (size_t x = 0; x < W; x++) {
             size_t i = y * W + x;
-            double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
-            double n = sqrt(1 + u * u + v * v), Dp = D[i];
-            double zeta = Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+            double zeta = zeta_slope(x, y, W, H, dth, D[i], cpos);
             worst = fmax(worst, fabs(pix[i].T - exp(-m.sigma_t * zeta)) / exp(-m.sigma_t * zeta));
         }
     t_true(st == NBT_OK && worst < 1e-6, "medium through a grid of the linear field: T = the closed form (worst rel %.2g)",

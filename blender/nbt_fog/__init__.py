@@ -27,6 +27,17 @@ def _prefs(context):
     return addon.preferences if addon else None
 
 
+def _job(context):
+    """What both operators start from: the nbt-scatter binary, the scene's camera
+    and medium, and the frame's input and output paths (may raise NbtFogError)."""
+    scene = context.scene
+    prefs = _prefs(context)
+    binary = run.find_binary(prefs.binary if prefs else "")
+    cam, med = run.scene_parameters(scene)
+    src, out = run.output_paths(scene.nbt_fog.output, scene.frame_current)
+    return binary, cam, med, src, out
+
+
 class NBT_AddonPreferences(bpy.types.AddonPreferences):
     bl_idname = __package__
 
@@ -109,9 +120,7 @@ class NBT_OT_apply_fog(bpy.types.Operator):
         scene = context.scene
         settings = scene.nbt_fog
         try:
-            binary = run.find_binary(_prefs(context).binary if _prefs(context) else "")
-            cam, med = run.scene_parameters(scene)
-            src, out = run.output_paths(settings.output, scene.frame_current)
+            binary, cam, med, src, out = _job(context)
             if self.source == 'FILE':
                 if not self.filepath:
                     raise NbtFogError("no EXR file given (source FILE needs filepath)")
@@ -144,9 +153,7 @@ class NBT_OT_render_fog(bpy.types.Operator):
         scene = context.scene
         settings = scene.nbt_fog
         try:
-            binary = run.find_binary(_prefs(context).binary if _prefs(context) else "")
-            cam, med = run.scene_parameters(scene)
-            src, out = run.output_paths(settings.output, scene.frame_current)
+            binary, cam, med, src, out = _job(context)
             _busy = True
             try:
                 with run.Overscan(scene, settings.overscan, settings.mute_volume) as ov:
