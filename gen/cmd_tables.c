@@ -68,26 +68,6 @@ static void axis_desc(const nbt_axis *a, const char *name, char *buf, size_t n)
         snprintf(buf, n, "%s:%s[%g,%g]", name, nbt_axis_map_name(a->map), a->lo, a->hi);
 }
 
-/* the tail form's error map: how much of the table meets a relative error
- * (max_err is set by the corner u -> 0, v -> pi/2 alone) */
-static void print_tail_map(const nbt_table *t)
-{
-    size_t n = nbt_table_size(t) / t->nch, k3 = 0, k2 = 0;
-    for (size_t i = 0; i < n; i++) {
-        double e = t->data[i * t->nch + 1];
-        k3 += e <= 1e-3;
-        k2 += e <= 1e-2;
-    }
-    printf("# tail form: the error map (relative, per node) is <= 1e-3 at %.1f%% and <= 1e-2 at %.1f%% of the "
-           "nodes; the route integrates along the ray where its bound exceeds 1e-3\n", 100.0 * (double)k3 / (double)n,
-           100.0 * (double)k2 / (double)n);
-}
-
-double gslice_lookup_err(const nbt_table *t)
-{
-    return t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? t->max_err[0] : t->max_err[0] / t->max_abs[0];
-}
-
 /* The fraction of a tail-form table's nodes whose error map is <= e. */
 static double tail_coverage(const nbt_table *t, double e)
 {
@@ -95,6 +75,20 @@ static double tail_coverage(const nbt_table *t, double e)
     for (size_t i = 0; i < n; i++)
         k += t->data[i * t->nch + 1] <= e;
     return (double)k / (double)n;
+}
+
+/* the tail form's error map: how much of the table meets a relative error
+ * (max_err is set by the corner u -> 0, v -> pi/2 alone) */
+static void print_tail_map(const nbt_table *t)
+{
+    printf("# tail form: the error map (relative, per node) is <= 1e-3 at %.1f%% and <= 1e-2 at %.1f%% of the "
+           "nodes; the route integrates along the ray where its bound exceeds 1e-3\n", 100.0 * tail_coverage(t, 1e-3),
+           100.0 * tail_coverage(t, 1e-2));
+}
+
+double gslice_lookup_err(const nbt_table *t)
+{
+    return t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? t->max_err[0] : t->max_err[0] / t->max_abs[0];
 }
 
 int gslice_tol_check(const nbt_table *t, const char *name, double tol, int allow)
