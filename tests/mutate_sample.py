@@ -28,13 +28,18 @@ a GLSL line runs every test that executes libnbt-gl. --full N runs the first
 N mutants against the whole suite as well and reports whether the two
 verdicts agree (the check that the subset equals the whole suite).
 
-A mutant is killed when one of its tests fails or runs past 3x its
-unmutated time (at least 60 s). Survivors are listed with their diff; each is
+The scratch tree is built with -Werror, as CI builds: a mutant the compiler
+warns about does not compile and is counted with those skipped. A header
+whose lines no test executes (macros only) runs the tests of the files that
+include it.
+
+A mutant is killed when one of its tests fails or runs past SLOW (default 3)
+times its unmutated time (at least 20 SLOW s). Survivors are listed with their diff; each is
 classified by hand in doc/mutation.md (equivalent, or a real bug and the test
 written for it).
 
   tests/mutate_sample.py [--n 150] [--seed S] [--srcdir DIR] [--work DIR]
-                         [--full K] [--sites] [-j 2]
+                         [--full K] [--sites] [--reverse] [--slow 3] [-j 2]
 
 --sites prints the site counts per file and kind and exits. --work keeps the
 scratch builds and the coverage map between runs (default: a temporary
@@ -381,12 +386,33 @@ def coverage_map(src, work, log, jobs):
     return result
 
 
-def tests_for(m, cov):
+def includers(src, header):
+    """The sources that include header (by its base name), through other headers too."""
+    found, todo = set(), [os.path.basename(header)]
+    files = [f for pat in SOURCES for f in glob.glob(os.path.join(src, pat))]
+    while todo:
+        name = todo.pop()
+        inc = re.compile(r'^\s*#\s*include\s*[<"](?:[\w/]*/)?%s[>"]' % re.escape(name), re.M)
+        for path in files:
+            rel = os.path.relpath(path, src)
+            if rel not in found and inc.search(open(path, errors="replace").read()):
+                found.add(rel)
+                if rel.endswith(".h"):
+                    todo.append(os.path.basename(rel))
+    return found
+
+
+def tests_for(m, cov, src):
     """The tests that can see mutant m: those executing its line; where gcov
-    does not know the line, those executing any line of the file."""
+    does not know the line, those executing any line of the file; for a
+    header no test executes a line of (macros only), those executing any
+    line of a file that includes it."""
     f, ln = m["file"], m["line"]
     out = []
     known = any(ln in set(d["known"].get(f, [])) for d in cov["tests"].values())
+    files = {f}
+    if f.endswith(".h") and not any(d["lines"].get(f) for d in cov["tests"].values()):
+        files |= includers(src, f)
     for t, d in cov["tests"].items():
         if d["verdict"] == "SKIP":
             continue
@@ -395,7 +421,7 @@ def tests_for(m, cov):
         elif known:
             hit = ln in set(d["lines"].get(f, []))
         else:
-            hit = bool(d["lines"].get(f))
+            hit = any(d["lines"].get(g) for g in files)
         if hit:
             out.append(t)
     return sorted(out, key=lambda t: cov["tests"][t]["seconds"])
@@ -412,6 +438,8 @@ def main():
     ap.add_argument("--reverse", action="store_true",
                     help="take the permutation from its end (a second runner on another --work: disjoint mutants)")
     ap.add_argument("-j", default="2")
+    ap.add_argument("--slow", type=float, default=3.0,
+                    help="a test running past SLOW times its unmutated time (at least 20 SLOW s) kills the mutant")
     a = ap.parse_args()
     src = os.path.abspath(a.srcdir)
     sites = enumerate_sites(src)
@@ -440,8 +468,8 @@ def main():
     if not os.path.exists(os.path.join(tree, "config.status")):
         shutil.rmtree(tree, ignore_errors=True)
         copy_tree(src, tree)
-        if run("autoreconf -fi && ./configure -q --disable-static --with-ceres --with-gl --with-openvdb --with-mpi"
-               " && make -j%s && make -j%s check TESTS=" % (a.j, a.j), tree, log) != 0:
+        if run("autoreconf -fi && ./configure -q --disable-static --enable-werror --with-ceres --with-gl"
+               " --with-openvdb --with-mpi && make -j%s && make -j%s check TESTS=" % (a.j, a.j), tree, log) != 0:
             sys.exit("mutate-sample: the unmutated tree does not build; see " + log)
     else:  # a kept tree: bring it to the source revision
         copy_tree(src, tree)
@@ -469,7 +497,7 @@ def main():
                 counts["nobuild"] += 1
                 continue
             done += 1
-            tests = tests_for(m, cov)
+            tests = tests_for(m, cov, src)
             verdict, by = "survived", ""
             jobs = int(a.j)
             with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as ex:
@@ -478,7 +506,7 @@ def main():
                 while pending or futs:
                     while pending and len(futs) < jobs:
                         t = pending.pop(0)
-                        lim = max(60.0, 3 * cov["tests"][t]["seconds"])
+                        lim = max(20.0 * a.slow, a.slow * cov["tests"][t]["seconds"])
                         futs[ex.submit(run_one_test, tree, t, lim, "m")] = t
                     fin, _ = concurrent.futures.wait(list(futs), return_when=concurrent.futures.FIRST_COMPLETED)
                     for fu in fin:
