@@ -114,6 +114,26 @@ nbt_status nbt__airlight_ray(const nbt_phase *p, const double *b, size_t nterms,
                              const void *geom, double tol, double *La, double *err);
 
 /* The first size on a ladder (increasing, n entries) above x; 0 past its end. */
+/* Turns the unit direction u by the polar cosine mu (st = sin) and azimuth
+ * (cp, sp) = (cos, sin): u' = mu u + st (cp e1 + sp e2) with e1, e2 the
+ * orthonormal basis around u of Duff et al. ("Building an orthonormal basis,
+ * revisited", 2017), which has no pole: the usual formula's special case for
+ * |uz| near 1 sets u' about the z axis and forgets the tilt u had. */
+static inline void nbt__turn(double u[3], double mu, double st, double cp, double sp)
+{
+    double sgn = copysign(1.0, u[2]), a = -1.0 / (sgn + u[2]), b = u[0] * u[1] * a;
+    double e1[3] = {1.0 + sgn * u[0] * u[0] * a, sgn * b, -sgn * u[0]};
+    double e2[3] = {b, sgn + u[1] * u[1] * a, -u[1]};
+    double n[3], nn = 0.0;
+    for (int i = 0; i < 3; i++) {
+        n[i] = mu * u[i] + st * (cp * e1[i] + sp * e2[i]);
+        nn += n[i] * n[i];
+    }
+    nn = 1.5 - 0.5 * nn; /* |n|^2 = 1 + e, e ~ 1e-16: 1/sqrt(1 + e) = 1 - e/2 + O(e^2) */
+    for (int i = 0; i < 3; i++)
+        u[i] = n[i] * nn;
+}
+
 static inline size_t nbt__ladder_next(const size_t *ladder, size_t n, size_t x)
 {
     for (size_t i = 0; i < n; i++)

@@ -242,28 +242,15 @@ static inline __attribute__((always_inline)) void photons(const mc_ctx *c, doubl
             if (!planes) {
                 /* no tally planes (a slab): nothing observes x, y, ux or uy, so
                  * only uz turns, and the azimuth enters through cos(phi) alone
-                 * (|uz| <= 1 up to rounding, by Cauchy-Schwarz; near the pole
-                 * the branch below takes over) */
-                double cq = cos(phi);
-                uz = fabs(uz) > 0.99999 ? (uz > 0 ? mu : -mu) : -st * cq * sqrt(1.0 - uz * uz) + uz * mu;
+                 * (|uz| <= 1 up to rounding, by Cauchy-Schwarz) */
+                uz = -st * cos(phi) * sqrt(fmax(0.0, 1.0 - uz * uz)) + uz * mu;
                 continue;
             }
-            double cp = cos(phi), sp = sin(phi);
-            if (fabs(uz) > 0.99999) {
-                ux = st * cp;
-                uy = st * sp;
-                uz = uz > 0 ? mu : -mu; /* mu times the sign of uz */
-            } else {
-                double tmp = sqrt(1.0 - uz * uz), q = st / tmp;
-                double nx = q * (ux * uz * cp - uy * sp) + ux * mu;
-                double ny = q * (uy * uz * cp + ux * sp) + uy * mu;
-                double nz = -st * cp * tmp + uz * mu;
-                /* renormalise: |n|^2 = 1 + e with e ~ 1e-16, and 1/sqrt(1 + e) = 1 - e/2 + O(e^2) */
-                double n = 1.5 - 0.5 * (nx * nx + ny * ny + nz * nz);
-                ux = nx * n;
-                uy = ny * n;
-                uz = nz * n;
-            }
+            double u[3] = {ux, uy, uz};
+            nbt__turn(u, mu, st, cos(phi), sin(phi));
+            ux = u[0];
+            uy = u[1];
+            uz = u[2];
         }
         if (++since == MC_CHUNK) {
             atomic_fetch_add_explicit(c->pdone, MC_CHUNK, memory_order_relaxed);

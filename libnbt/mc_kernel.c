@@ -76,20 +76,11 @@ static nbt_status run_chunk(size_t ch, unsigned thread, void *vp)
             n++;
             double mu = sample_mu(c, &rs), s2 = 1.0 - mu * mu, st = sqrt(s2 > 0 ? s2 : 0.0);
             double phi = 2.0 * NBT_PI * nbt__rng_u(&rs), cp = cos(phi), sp = sin(phi);
-            if (fabs(uz) > 0.99999) {
-                ux = st * cp;
-                uy = st * sp;
-                uz = uz > 0 ? mu : -mu;
-            } else {
-                double tmp = sqrt(1.0 - uz * uz), q = st / tmp;
-                double nx = q * (ux * uz * cp - uy * sp) + ux * mu;
-                double ny = q * (uy * uz * cp + ux * sp) + uy * mu;
-                double nz = -st * cp * tmp + uz * mu;
-                double nn = 1.5 - 0.5 * (nx * nx + ny * ny + nz * nz);
-                ux = nx * nn;
-                uy = ny * nn;
-                uz = nz * nn;
-            }
+            double u[3] = {ux, uy, uz};
+            nbt__turn(u, mu, st, cp, sp);
+            ux = u[0];
+            uy = u[1];
+            uz = u[2];
             double d = -log1p(-nbt__rng_u(&rs)), z1 = z + d * uz;
             if (uz > 0)
                 for (; jf < np && zp[jf] <= z1; jf++) {

@@ -210,16 +210,9 @@ static double exit_dist(const pctx *c, const double x[3], const double w[3])
 /* A unit vector at cosine mu from unit d, azimuth phi. */
 static void rotate(const double d[3], double mu, double phi, double out[3])
 {
-    /* an orthonormal basis around d (Duff et al. 2017) */
-    double sgn = copysign(1.0, d[2]), a = -1.0 / (sgn + d[2]), b = d[0] * d[1] * a;
-    double e1[3] = {1.0 + sgn * d[0] * d[0] * a, sgn * b, -sgn * d[0]};
-    double e2[3] = {b, sgn + d[1] * d[1] * a, -d[1]};
-    double st = sqrt(fmax(0.0, 1.0 - mu * mu)), cp = cos(phi) * st, sp = sin(phi) * st;
     for (int i = 0; i < 3; i++)
-        out[i] = mu * d[i] + cp * e1[i] + sp * e2[i];
-    double n = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
-    for (int i = 0; i < 3; i++)
-        out[i] /= n;
+        out[i] = d[i];
+    nbt__turn(out, mu, sqrt(fmax(0.0, 1.0 - mu * mu)), cos(phi), sin(phi));
 }
 
 /* Next-event estimation from the collision x (travelling along d) to a patch chosen by power. */

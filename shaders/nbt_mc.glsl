@@ -155,13 +155,11 @@ void main()
                     mu = cos(min(th, 3.14159265));
                 }
                 float st = sqrt(max(0.0, 1.0 - mu * mu)), phi = 6.2831853 * rnd(), cp = cos(phi), sp = sin(phi);
-                if (abs(u.z) > 0.99999) {
-                    u = vec3(st * cp, st * sp, u.z > 0.0 ? mu : -mu);
-                } else {
-                    float tmp = sqrt(1.0 - u.z * u.z), q = st / tmp;
-                    u = normalize(vec3(q * (u.x * u.z * cp - u.y * sp) + u.x * mu,
-                                       q * (u.y * u.z * cp + u.x * sp) + u.y * mu, -st * cp * tmp + u.z * mu));
-                }
+                // about u itself at every tilt: the orthonormal basis of Duff et al. (2017), no pole
+                float sgn = u.z >= 0.0 ? 1.0 : -1.0, a = -1.0 / (sgn + u.z), b = u.x * u.y * a;
+                vec3 e1 = vec3(1.0 + sgn * u.x * u.x * a, sgn * b, -sgn * u.x);
+                vec3 e2 = vec3(b, sgn + u.y * u.y * a, -u.y);
+                u = normalize(mu * u + st * (cp * e1 + sp * e2));
             }
         }
         if (done) {
