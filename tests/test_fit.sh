@@ -181,20 +181,33 @@ else
     [ "$(grep -c ': plane z = [^:]*: [a-z]*: ' "$2")" -eq "$(wc -l <"$tmp/flagged")" ] || { echo "flag lines != flagged rows"; return 1; }
   }
   # the user's case (the README's psi.csv, 2e5 photons): z = 10 runs to beta = infinity (it used to
-  # print beta = 6.9e7 +- 0), z = 6 ends above the moment kernel's RMS
+  # print beta = 6.9e7 +- 0) on every seed; which other planes end on the bound varies with the seed
   U="--albedo 0.9 --sigma-t 1 --B 0.0685"
   "$NBT_FIT" mc $U --photons 200000 --seed 1 -o "$tmp/u.csv" >/dev/null 2>&1 || bad "mc: the user's case"
   "$NBT_FIT" kernel "$tmp/u.csv" $U -o "$tmp/ufit.csv" 2>"$tmp/uerr" && ok || bad "user's case: flags are not errors: $(cat "$tmp/uerr")"
   awk -F, '$1 == 10 { exit !($NF == "bound" && $3 == 1000 && ($5 "") == "nan") }' "$tmp/ufit.csv" && ok ||
     bad "z = 10: beta on its bound, no standard error: $(grep '^10,' "$tmp/ufit.csv")"
-  awk -F, '$1 == 6 { exit !($NF == "worse" && $7 > $6 && ($4 "") == "nan") }' "$tmp/ufit.csv" && ok ||
-    bad "z = 6: worse than the moment kernel: $(grep '^6,' "$tmp/ufit.csv")"
   grep -q "u.csv: plane z = 10: bound: beta = 1000 is on its upper bound 1000" "$tmp/uerr" && ok || bad "flag line for z = 10: $(cat "$tmp/uerr")"
-  grep -q "^RMS .*(2 of 10 planes flagged, 8 misfit)" "$tmp/uerr" && ok || bad "summary counts the flagged planes: $(cat "$tmp/uerr")"
-  # a plain erfc at 5-42% RMS is no 'ok': every plane but the flagged z = 6 and 10 misfits (chi^2/dof 6-200)
-  [ "$(grep -c ',misfit$' "$tmp/ufit.csv")" -eq 8 ] && ! grep -q ',ok$' "$tmp/ufit.csv" &&
+  nflag=$(grep -c ',\(bound\|worse\|illcond\|noconv\)$' "$tmp/ufit.csv")
+  grep -q "^RMS .*($nflag of 10 planes flagged, $((10 - nflag)) misfit)" "$tmp/uerr" && ok || bad "summary counts the flagged planes: $(cat "$tmp/uerr")"
+  # a plain erfc at 5-42% RMS is no 'ok': every plane not flagged misfits (chi^2/dof 6-200)
+  [ "$(grep -c ',misfit$' "$tmp/ufit.csv")" -eq $((10 - nflag)) ] && ! grep -q ',ok$' "$tmp/ufit.csv" &&
     grep -q "u.csv: plane z = 3: misfit: chi^2/dof = .* (dof 48) is above 1.83, " "$tmp/uerr" && ok ||
     bad "the user's case: misfits: $(cat "$tmp/ufit.csv" "$tmp/uerr")"
+  # 'worse': the fit weighs bins by their counting errors, the RMS does not, so on some realizations a
+  # plane ends above the moment kernel's RMS it started from (z = 5 of seed 7: 0.3170 vs 0.3154; about 1
+  # seed in 10). Seeds 2.. until one has such a plane: its row has no standard errors and a flag line
+  worse=""
+  for s in 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30; do
+    "$NBT_FIT" mc $U --photons 200000 --seed $s -o "$tmp/uw.csv" >/dev/null 2>&1 &&
+      "$NBT_FIT" kernel "$tmp/uw.csv" $U -o "$tmp/uwfit.csv" 2>"$tmp/uwerr" || { bad "the user's case, seed $s"; break; }
+    msg=$(check_rows "$tmp/uwfit.csv" "$tmp/uwerr" "3" "2" "4 5") || { bad "erfc rows, seed $s: $msg"; break; }
+    worse=$(awk -F, '$NF == "worse" { print $1; exit }' "$tmp/uwfit.csv")
+    [ -n "$worse" ] && break
+  done
+  [ -n "$worse" ] && awk -F, -v z="$worse" '$1 == z { exit !($7 > $6 && ($4 "") == "nan" && ($5 "") == "nan") }' "$tmp/uwfit.csv" &&
+    grep -q "uw.csv: plane z = $worse: worse: RMS .* is above the RMS .* of the moment kernel it started from" "$tmp/uwerr" && ok ||
+    bad "a plane worse than the moment kernel in 29 seeds, flagged without standard errors: $(cat "$tmp/uwfit.csv" "$tmp/uwerr")"
   msg=$(check_rows "$tmp/ufit.csv" "$tmp/uerr" "3" "2" "4 5") && ok || bad "erfc rows: $msg"
   # the two-part shapes on the same counts: degenerate splits (a part collapsed to zero or to 1/r) are flagged
   "$NBT_FIT" kernel "$tmp/u.csv" $U --shape erfc2 -o "$tmp/u2.csv" 2>"$tmp/u2err" && ok || bad "erfc2 on the user's case"
@@ -203,7 +216,7 @@ else
   "$NBT_FIT" kernel "$tmp/u.csv" $U --shape erfc+gauss -o "$tmp/ug.csv" 2>"$tmp/ugerr" && ok || bad "erfc+gauss on the user's case"
   msg=$(check_rows "$tmp/ug.csv" "$tmp/ugerr" "3 7" "2 6" "4 5 8 9") && ok || bad "erfc+gauss rows: $msg"
   # --strict: any flag is an error, one line, nothing written
-  expect_usage "--strict with flagged planes" "strict: 2 of 10 fits flagged, nothing written; the first: .*plane z = 6: worse" \
+  expect_usage "--strict with flagged planes" "strict: $nflag of 10 fits flagged, nothing written; the first: .*u.csv: plane z = [0-9]*: bound: beta = " \
     "$NBT_FIT" kernel "$tmp/u.csv" $U --strict -o "$tmp/us.csv"
   [ ! -e "$tmp/us.csv" ] && [ ! -s "$tmp/out" ] && ok || bad "--strict left output"
   expect_usage "--strict with a correction" "strict" "$NBT_FIT" kernel "$tmp/u.csv" $U --strict --correction "$tmp/uc.txt" -o "$tmp/us.csv"
@@ -269,7 +282,9 @@ else
     grep -q "^nbt-fit: model (half): misfit: chi^2/dof = .* (dof 784) is above 1.21" "$tmp/merr" &&
     grep -q "chi^2/dof .*, fit status misfit" "$tmp/m.txt" && ok ||
     bad "model: one RMS line per run, a misfit: $(cat "$tmp/merr" "$tmp/m.txt")"
-  # the moment kernel misses these by 11-23%; the model (80 coefficients on 9 runs) must reach half of that or better
+  # the moment kernel misses these by 11-27%; the model (80 coefficients on 9 runs) must reach half of that or better
+  # (measured 0.07-0.43 of it over seeds 5-8; from one start only, 3 of those 4 seeds ended in a local minimum at
+  # chi^2/dof 12 and up to 0.59)
   awk '/^RMS/ { if (!($4 + 0 < 0.5 * $6)) { print; b = 1 } } END { exit b }' "$tmp/merr" >"$tmp/mbad" && ok ||
     bad "model RMS below half the moment kernel's on every run: $(cat "$tmp/mbad")"
   [ "$(grep -c '^half P[0-4] ' "$tmp/m.txt")" -eq 5 ] && ! grep -q '^infinite ' "$tmp/m.txt" && grep -q '^range tau 1 8$' "$tmp/m.txt" && ok ||
@@ -408,15 +423,16 @@ fi
   awk '/^(inside|entering)/ { b = $7 < 0 ? -$7 : $7; if (!(b <= 2 * $10 && $8 <= 3 * $10 && $10 > 0)) bad = 1 } END { exit bad }' \
   "$tmp/smc" && ok || bad "screenmodel --check: model vs fresh counts within their noise: $(cat "$tmp/smc")"
 # a fixed phase (two-term HG): its model is keyed by the phase's fingerprint; another phase is refused.
-# Radial L1 within 4x (measured 3.2x at tau 0.5: the model's own noise at 2e5 photons), mass bias within 2x
+# The model from 1e6 photons: radial L1 within 3.5x (measured 2.0-2.4x at tau 0.5 entering over seeds 7-11;
+# a model from 2e5 photons carries its own noise, 3.2-4.1x), mass bias within 2x
 P2=hg2:g1=0.8,g2=-0.3,w=0.85
-"$NBT_FIT" screenmodel -o "$tmp/smp.txt" --phase $P2 --albedo 0.95 --tau 0.5,3 --photons 200000 --seed 1 --quiet &&
+"$NBT_FIT" screenmodel -o "$tmp/smp.txt" --phase $P2 --albedo 0.95 --tau 0.5,3 --photons 1000000 --seed 1 --quiet &&
   grep -q "^family fixed $P2$" "$tmp/smp.txt" && grep -q "^fingerprint " "$tmp/smp.txt" && ok ||
   bad "screenmodel --phase writes a fixed-phase model: $(head -6 "$tmp/smp.txt")"
 "$NBT_FIT" screenmodel --check "$tmp/smp.txt" --phase $P2 --albedo 0.95 --tau 0.5,3 --photons 200000 --seed 7 \
   2>/dev/null >"$tmp/smc"
 [ "$(grep -c '^inside\|^entering' "$tmp/smc")" -eq 4 ] &&
-  awk '/^(inside|entering)/ { b = $7 < 0 ? -$7 : $7; if (!(b <= 2 * $10 && $8 <= 4 * $10 && $10 > 0)) bad = 1 } END { exit bad }' \
+  awk '/^(inside|entering)/ { b = $7 < 0 ? -$7 : $7; if (!(b <= 2 * $10 && $8 <= 3.5 * $10 && $10 > 0)) bad = 1 } END { exit bad }' \
   "$tmp/smc" && ok || bad "screenmodel --check, fixed phase: within the noise: $(cat "$tmp/smc")"
 "$NBT_FIT" screenmodel --check "$tmp/smp.txt" --phase hg:g=0.8 --albedo 0.95 --tau 0.5,3 --photons 2000 >/dev/null \
   2>"$tmp/err" && bad "a fixed-phase model checked against another phase" ||
