@@ -8,7 +8,13 @@
  * kept, plus layers S = 0.25 RGB, T (R 0.5, G 0.25, B 0.125) and offscreen
  * (the fraction of pixels x0..x of the row outside the display window),
  * written over the display window (crop) or the data window (full), with
- * the attribute nbt.method = layers; for the EXR tool tests. */
+ * the attribute nbt.method = layers; for the EXR tool tests.
+ * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
+ * (no longer than FROM), e.g. to take one channel out of a layer.
+ * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
+ * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
+ * edge, so the mirror continuation holds its image). Any other name: the
+ * grey render alone. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -151,6 +157,25 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return rc;
     }
+    if (argc == 6 && !strcmp(argv[2], "rename")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "%s\n", err);
+            return 1;
+        }
+        int rc = 1;
+        for (size_t j = 0; j < in->nchannels; j++)
+            if (!strcmp(in->channels[j].name, argv[4]) && strlen(argv[5]) <= strlen(argv[4])) {
+                strcpy(in->channels[j].name, argv[5]);
+                rc = 0;
+            }
+        if (rc)
+            fprintf(stderr, "mkexr: no channel '%s' to rename to '%s'\n", argv[4], argv[5]);
+        else if ((rc = nbt_image_write_exr_ex(in, argv[1], NULL, err, sizeof err) != NBT_OK))
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(in);
+        return rc;
+    }
     if (argc != 3)
         return 2;
     const char *kind = argv[2];
@@ -172,6 +197,8 @@ int main(int argc, char **argv)
         im->rgb[3 * (7 * 16 + 2) + 1] = NAN;
     else if (!strcmp(kind, "negrgb"))
         im->rgb[3 * (7 * 16 + 2) + 2] = -1e6f;
+    else if (!strncmp(kind, "lamp", 4) && kind[4] >= '0' && kind[4] <= '2' && !kind[5])
+        im->rgb[3 * (5 * 16 + 1) + (kind[4] - '0')] = 1000.0f;
     else if (!strcmp(kind, "border")) { /* a region render: the data window inside a larger display window */
         im->x0 = 4, im->y0 = 2;
         im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 31, im->display.max_y = 23;

@@ -45,6 +45,36 @@ set -- $("$MK" "$tmp/step-out.exr" composite "$tmp/step.exr")
 set -- $("$S" "$tmp/plane.exr" -o "$tmp/y.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 --depth ray --no-png --method ref-a \
   --compare "$tmp/clear.exr" 2>/dev/null)
 [ "$1" = relL1 ] && ok || bad "--compare prints its line: $*"
+# colour symmetry: a grey medium treats R, G and B alike, so a lamp (1000 in one channel, near the
+# left edge of a 0.5 grey render) scatters the same light into its own channel whichever channel it
+# is in. Operators are the same float arithmetic per channel (measured equal to 9 digits), so 1e-6.
+# This holds the mirror continuation's lamp cap (all three channels scaled by cap / (R + G + B)),
+# --compare's lamp finder for the halo measure (R + G + B over 30 x the mean), and the header's
+# nbt.kernel (the kernel that ran)
+for c in 0 1; do
+  "$MK" "$tmp/lamp$c.exr" lamp$c &&
+    "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-a.exr" $M0 --method ref-a --no-png 2>/dev/null || bad "lamp$c run"
+  "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-b.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp$c-a.exr" \
+    2>/dev/null >"$tmp/lamp$c.cmp"
+done
+sr=$("$MK" "$tmp/lamp0-a.exr" mean S | sed -n 's/^S.R //p'); sg=$("$MK" "$tmp/lamp1-a.exr" mean S | sed -n 's/^S.G //p')
+awk -v a="$sr" -v b="$sg" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 1 && d <= 1e-6 * a) }' && ok ||
+  bad "red lamp's S.R $sr = green lamp's S.G $sg"
+h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp0.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp1.cmp")
+awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-6 * a) }' && ok ||
+  bad "--compare halo: red lamp $h0 = green lamp $h1"
+# a reference without S.G falls back to its RGB - T x input for all three channels: the same relL1
+# as with its S layer, but for RGB's float rounding (2^-24 of RGB, summed: below 1e-5 here; measured 1e-6)
+"$MK" "$tmp/lamp0-noG.exr" rename "$tmp/lamp0-a.exr" S.G X.G || bad "mkexr rename"
+set -- $("$S" "$tmp/lamp0.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp0-noG.exr" 2>/dev/null)
+r0=$(cut -d' ' -f2 "$tmp/lamp0.cmp")
+[ "$1" = relL1 ] && awk -v a="$2" -v b="$r0" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0.1 && d <= 1e-5) }' && ok ||
+  bad "--compare, reference without S.G: $* (with S: relL1 $r0)"
+LC_ALL=C grep -aq 'nbt\.kernel.string.....moment' "$tmp/lamp0-a.exr" && LC_ALL=C grep -aq 'nbt\.kernel.string.....elek' "$tmp/lamp0-b.exr" &&
+  ok || bad "nbt.kernel names the kernel (moment for ref-a, elek for ref-b)"
+# --display-window X0,Y0,X1,Y1 (inclusive) makes the frame: 12 x 10 of the 16 x 12 render, as its preview shows
+"$S" "$tmp/lamp0.exr" -o "$tmp/dw.exr" $M --display-window 2,1,13,10 2>/dev/null &&
+  [ "$("${NBT_PNGCHECK:-./tests/pngcheck}" "$tmp/dw.png")" = "12 10" ] && ok || bad "--display-window 2,1,13,10: a 12x10 frame"
 # kernels by name, and a correction file for the corrected kernel
 for k in moment smallangle single lineint elek; do
   "$S" "$tmp/layers.exr" -o "$tmp/k-$k.exr" $M --depth ray --kernel $k --no-png 2>/dev/null && ok || bad "--kernel $k"
