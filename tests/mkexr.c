@@ -13,8 +13,9 @@
  * (no longer than FROM), e.g. to take one channel out of a layer.
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
  * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
- * edge, so the mirror continuation holds its image). Any other name: the
- * grey render alone. */
+ * edge, so the mirror continuation holds its image). mkexr OUT.exr
+ * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15. Any
+ * other name: the grey render alone. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -199,6 +200,10 @@ int main(int argc, char **argv)
         im->rgb[3 * (7 * 16 + 2) + 2] = -1e6f;
     else if (!strncmp(kind, "lamp", 4) && kind[4] >= '0' && kind[4] <= '2' && !kind[5])
         im->rgb[3 * (5 * 16 + 1) + (kind[4] - '0')] = 1000.0f;
+    else if (!strcmp(kind, "greenred"))
+        for (size_t i = 0; i < 16 * 12; i++)
+            for (size_t c = 0; c < 3; c++)
+                im->rgb[3 * i + c] = c == (i % 16 < 10 ? 1u : 0u) ? 1.0f : 0.0f;
     else if (!strcmp(kind, "border")) { /* a region render: the data window inside a larger display window */
         im->x0 = 4, im->y0 = 2;
         im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 31, im->display.max_y = 23;

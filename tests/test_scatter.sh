@@ -72,6 +72,17 @@ r0=$(cut -d' ' -f2 "$tmp/lamp0.cmp")
   bad "--compare, reference without S.G: $* (with S: relL1 $r0)"
 LC_ALL=C grep -aq 'nbt\.kernel.string.....moment' "$tmp/lamp0-a.exr" && LC_ALL=C grep -aq 'nbt\.kernel.string.....elek' "$tmp/lamp0-b.exr" &&
   ok || bad "nbt.kernel names the kernel (moment for ref-a, elek for ref-b)"
+# the preview's tone map: the median luminance (Rec. 709: 0.2126 R + 0.7152 G + 0.0722 B) goes to
+# 0.18, then x / (1 + x) and sRGB. 10 green columns and 6 red ones through a clear medium: the median
+# is green's 0.7152, so a green pixel's G and a red pixel's R are both 255 sRGB(v / (1 + v)),
+# v = 0.18 / 0.7152 (124); pngcheck's luma is 0.587 G and 0.299 R there (8-bit rounding: 1)
+"$MK" "$tmp/gr.exr" greenred && "$S" "$tmp/gr.exr" -o "$tmp/gr-out.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 \
+  --depth ray --method ref-a 2>/dev/null || bad "green/red run"
+lg=$("${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 3 5 1 1 "$tmp/gr-out.png")
+lr=$("${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 13 5 1 1 "$tmp/gr-out.png")
+awk -v g="$lg" -v r="$lr" 'BEGIN { v = 0.18 / 0.7152; v = v / (1 + v); e = 255 * (1.055 * exp(log(v) / 2.4) - 0.055)
+  dg = g / 0.587 - e; dr = r / 0.299 - e; exit !(dg * dg <= 1.01 && dr * dr <= 1.01) }' && ok ||
+  bad "preview tone map: green pixel luma $lg, red $lr (0.587 and 0.299 x 124 expected)"
 # --display-window X0,Y0,X1,Y1 (inclusive) makes the frame: 12 x 10 of the 16 x 12 render, as its preview shows
 "$S" "$tmp/lamp0.exr" -o "$tmp/dw.exr" $M --display-window 2,1,13,10 2>/dev/null &&
   [ "$("${NBT_PNGCHECK:-./tests/pngcheck}" "$tmp/dw.png")" = "12 10" ] && ok || bad "--display-window 2,1,13,10: a 12x10 frame"
