@@ -3,7 +3,8 @@
  * written file's layer (mkexr IN.exr mean LAYER [X0 Y0 X1 Y1]), the frame against its
  * layers (mkexr OUT.exr composite IN.exr: max |RGB - (T IN + S)| / max |RGB|), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
- * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
+ * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE; gridy: the
+ * same with y in [-10, 30], a box whose x and y ranges differ).
  * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
  * kept, plus layers S = 0.25 RGB, T (R 0.5, G 0.25, B 0.125) and offscreen
  * (the fraction of pixels x0..x of the row outside the display window),
@@ -103,8 +104,8 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return rc;
     }
-    if (argc == 4 && !strcmp(argv[2], "grid")) {
-        double o[3] = {-19.5, -19.5, -39.5};
+    if (argc == 4 && (!strcmp(argv[2], "grid") || !strcmp(argv[2], "gridy"))) {
+        double o[3] = {-19.5, argv[2][4] ? -9.5 : -19.5, -39.5}; /* gridy: y in [-10, 30] */
         nbt_grid *g = nbt_grid_alloc(40, 40, 41, o, 1.0);
         if (!g)
             return 1;

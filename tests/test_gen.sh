@@ -181,6 +181,18 @@ S="--g 0.5 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 3.14159265358979
 d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
 s=$("$NBT_GEN" eval surface $S --method series 2>/dev/null | cut -d' ' -f1)
 close "$s" "$d" 1e-6 "surface series vs direct at theta_s = pi"
+# from a J table of order 0 alone, isotropic (no series truncation): the bound is the recorded
+# interpolation error through the diffuse weight, kappa_s I0 kd (2k+1) b_0 max_err_0 / (4 pi dsp),
+# b_0 = 1 (info prints max_err to 4 digits: 1e-3); the value lies within it of direct
+"$NBT_GEN" surface --kmax 0 --size 17x17 --max 4 --no-preview --quiet -o "$tmp/j0.exr" >/dev/null 2>&1
+me=$("$NBT_GEN" info "$tmp/j0.exr" | sed -n 's/^channel R .*max interp err //p')
+S="--g 0 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks 0 --n 1"
+d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
+set -- $("$NBT_GEN" eval surface $S --method table --tables "$tmp/j0.exr" 2>/dev/null)
+awk -v v="$1" -v e="$2" -v m="$me" -v d="$d" 'BEGIN { w = 0.1 * 2 * 0.7 * m / (4 * 3.14159265358979 * 5); x = e - w
+  if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(m > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
+  bad "surface from a k = 0 J table: $1 +- $2 (bound from max_err $me) vs direct $d"
+rm -f "$tmp/j0.exr"
 set -- $("$NBT_GEN" eval surface $S --method table 2>/dev/null)
 awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e) }' && ok ||
   bad "surface table $1 within its reported error $2 of direct $d"
