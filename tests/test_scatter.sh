@@ -153,6 +153,13 @@ else
 fi
 expect_usage "grid misses the camera" "does not hold the camera" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
   --density "$tmp/c1.raw" --camera 0,0,5
+# a box whose x and y ranges differ ([-20,20] x [-10,30] x [-40,1]), the camera looking along -y: the
+# far wall (15 away) lies beyond y = -10, and the message gives the box as it is
+"$MK" "$tmp/gy.raw" gridy 1 || bad "mkexr gridy"
+expect_usage "grid misses the surface" "box \[-20,20\]x\[-10,30\]x\[-40,1\] does not hold the surface seen in pixel" \
+  "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/gy.raw" --look-at 0,-1,0 --up 0,0,1
+expect_usage "grid misses the camera (y)" "box \[-20,20\]x\[-10,30\]x\[-40,1\] does not hold the camera (0,-15,0)" \
+  "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/gy.raw" --camera 0,-15,0
 expect_usage "grid with ref-b" "heterogeneous media use operator A" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
   --density "$tmp/c1.raw" --method ref-b
 expect_usage "not a grid" "not an nbt raw grid" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/corr.txt"
