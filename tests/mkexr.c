@@ -12,6 +12,8 @@
  * the attribute nbt.method = layers; for the EXR tool tests.
  * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
  * (no longer than FROM), e.g. to take one channel out of a layer.
+ * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right
+ * (other channels dropped).
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
  * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
@@ -175,6 +177,29 @@ int main(int argc, char **argv)
             fprintf(stderr, "mkexr: no channel '%s' to rename to '%s'\n", argv[4], argv[5]);
         else if ((rc = nbt_image_write_exr_ex(in, argv[1], NULL, err, sizeof err) != NBT_OK))
             fprintf(stderr, "%s\n", err);
+        nbt_image_free(in);
+        return rc;
+    }
+    if (argc == 4 && !strcmp(argv[2], "flip")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK || !in->z) {
+            fprintf(stderr, "%s\n", in ? "mkexr: no depth" : err);
+            return 1;
+        }
+        nbt_image *o = nbt_image_alloc(in->w, in->h, 1);
+        if (!o)
+            return 1;
+        for (size_t y = 0; y < in->h; y++)
+            for (size_t x = 0; x < in->w; x++) {
+                size_t i = y * in->w + x, j = y * in->w + (in->w - 1 - x);
+                o->z[i] = in->z[j];
+                for (int c = 0; c < 3; c++)
+                    o->rgb[3 * i + (size_t)c] = in->rgb[3 * j + (size_t)c];
+            }
+        int rc = nbt_image_write_exr_ex(o, argv[1], NULL, err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(o);
         nbt_image_free(in);
         return rc;
     }

@@ -107,6 +107,20 @@ if "$S" --help | grep -q "On GL"; then
   set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M0 --depth ray --no-png --compare "$tmp/ref.exr" 2>"$tmp/log")
   grep -q "^nbt-scatter: nbt " "$tmp/log" && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 0.05 && b < 0.02 && b > -0.02) }' \
     && ok || bad "default method nbt vs ref-a (L1 < 5%, |bias| < 2%): $* $(cat "$tmp/log")"
+  # mirror symmetry with a phase (a kernel of many atoms, grouped into bands by each pixel's own depth):
+  # the step scene and its left-right mirror give mirrored S, column by column, at the depth edge
+  # (x = 31, 32) and both borders; measured equal to 4e-8 (float), 1e-4 allowed
+  "$MK" "$tmp/stepf.exr" flip "$tmp/step.exr" || bad "mkexr flip"
+  for f in step stepf; do
+    gl "$S" "$tmp/$f.exr" -o "$tmp/gp-$f.exr" --fov-y 35 --sigma-t 0.15 --albedo 0.9 --phase hg:g=0.9 --depth ray --no-png \
+      --method nbt 2>/dev/null || bad "GL nbt with a phase on $f"
+  done
+  for c in 0 31 32 63; do
+    a=$("$MK" "$tmp/gp-step.exr" mean S $c 0 $((c + 1)) 48 | awk '{ s = s " " $2 } END { print s }')
+    b=$("$MK" "$tmp/gp-stepf.exr" mean S $((63 - c)) 0 $((64 - c)) 48 | awk '{ s = s " " $2 } END { print s }')
+    echo "$a $b" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (!($i > 0 && d <= 1e-4 * $i)) bad = 1 } }
+      END { exit bad }' && ok || bad "GL nbt, phase: column $c ($a) = mirrored column $((63 - c)) ($b)"
+  done
   for m in shinya-literal naive elek; do
     set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl-$m.exr" $M --depth ray --method $m --no-png --compare "$tmp/ref.exr" \
       2>/dev/null)
