@@ -13,7 +13,8 @@
  * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
  * (no longer than FROM), e.g. to take one channel out of a layer.
  * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right
- * (other channels dropped).
+ * (other channels dropped). mkexr IN.exr depths: the number of distinct
+ * depth values in IN's display window.
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
  * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
@@ -179,6 +180,28 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s\n", err);
         nbt_image_free(in);
         return rc;
+    }
+    if (argc == 3 && !strcmp(argv[2], "depths")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[1], &in, err, sizeof err) != NBT_OK || !in->z) {
+            fprintf(stderr, "%s\n", in ? "mkexr: no depth" : err);
+            return 1;
+        }
+        float seen[64];
+        size_t n = 0;
+        for (size_t i = 0; i < in->w * in->h; i++) {
+            long x = in->x0 + (long)(i % in->w), y = in->y0 + (long)(i / in->w);
+            if (x < in->display.min_x || x > in->display.max_x || y < in->display.min_y || y > in->display.max_y)
+                continue;
+            size_t k = 0;
+            while (k < n && seen[k] != in->z[i])
+                k++;
+            if (k == n && n < 64)
+                seen[n++] = in->z[i];
+        }
+        printf("%zu\n", n);
+        nbt_image_free(in);
+        return 0;
     }
     if (argc == 4 && !strcmp(argv[2], "flip")) {
         nbt_image *in = NULL;

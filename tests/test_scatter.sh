@@ -13,6 +13,9 @@ M="$M0 --method ref-a"   # the exact reference; the default method (nbt on GL bu
 for s in plane step layers slant blocks; do
   "$S" scene $s -o "$tmp/$s.exr" --size 64x48 && [ -s "$tmp/$s.exr" ] && ok || bad "scene $s"
 done
+# blocks: ten boxes at six depths over a far wall (doc/screenspace.md), all inside the frame: the frame
+# shows 7 distinct depths
+[ "$("$MK" "$tmp/blocks.exr" depths)" = 7 ] && ok || bad "scene blocks: 7 depths in the frame, $("$MK" "$tmp/blocks.exr" depths)"
 
 # layered depth (Z read as ray distance): FFT = brute force, both operators.
 # --compare sets this run's S (double) against the file's S layer (float): each
