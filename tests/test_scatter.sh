@@ -66,6 +66,16 @@ awk -v a="$sr" -v b="$sg" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 1 &&
 h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp0.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp1.cmp")
 awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-6 * a) }' && ok ||
   bad "--compare halo: red lamp $h0 = green lamp $h1"
+# the halo measure is left-right symmetric: 4x4 bins from x = 0 tile a 64-wide frame, each lamp's bins
+# reach 12 px both ways; the lamps scene and its mirror (mkexr flip) give the same halo (6 digits printed)
+"$S" scene lamps -o "$tmp/lamps.exr" --size 64x48 2>/dev/null && "$MK" "$tmp/lampsf.exr" flip "$tmp/lamps.exr" || bad "lamps scene"
+for f in lamps lampsf; do
+  "$S" "$tmp/$f.exr" -o "$tmp/la-$f.exr" $M0 --method ref-a --no-png --extend 0 2>/dev/null
+  "$S" "$tmp/$f.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --extend 0 --compare "$tmp/la-$f.exr" 2>/dev/null >"$tmp/$f.cmp"
+done
+h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamps.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lampsf.cmp")
+awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 2e-6 * a) }' && ok ||
+  bad "--compare halo of the lamps scene $h0 = of its mirror $h1"
 # a reference without S.G falls back to its RGB - T x input for all three channels: the same relL1
 # as with its S layer, but for RGB's float rounding (2^-24 of RGB, summed: below 1e-5 here; measured 1e-6)
 "$MK" "$tmp/lamp0-noG.exr" rename "$tmp/lamp0-a.exr" S.G X.G || bad "mkexr rename"
