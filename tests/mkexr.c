@@ -3,12 +3,23 @@
  * written file's layer (mkexr IN.exr mean LAYER [X0 Y0 X1 Y1]), the frame against its
  * layers (mkexr OUT.exr composite IN.exr: max |RGB - (T IN + S)| / max |RGB|), and a constant density grid
  * over x, y in [-20, 20], z in [-40, 1] as nbt's raw grid or, in builds
- * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE).
+ * with OpenVDB, as a .vdb file (mkexr OUT.raw|OUT.vdb grid VALUE; gridy: the
+ * same with y in [-10, 30], a box whose x and y ranges differ).
  * mkexr OUT.exr layers IN.exr crop|full: IN's pixels and everything it
  * kept, plus layers S = 0.25 RGB, T (R 0.5, G 0.25, B 0.125) and offscreen
  * (the fraction of pixels x0..x of the row outside the display window),
  * written over the display window (crop) or the data window (full), with
- * the attribute nbt.method = layers; for the EXR tool tests. */
+ * the attribute nbt.method = layers; for the EXR tool tests.
+ * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
+ * (no longer than FROM), e.g. to take one channel out of a layer.
+ * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right
+ * (other channels dropped). mkexr IN.exr depths: the number of distinct
+ * depth values in IN's display window.
+ * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
+ * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
+ * edge, so the mirror continuation holds its image). mkexr OUT.exr
+ * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15. Any
+ * other name: the grey render alone. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -96,8 +107,8 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return rc;
     }
-    if (argc == 4 && !strcmp(argv[2], "grid")) {
-        double o[3] = {-19.5, -19.5, -39.5};
+    if (argc == 4 && (!strcmp(argv[2], "grid") || !strcmp(argv[2], "gridy"))) {
+        double o[3] = {-19.5, argv[2][4] ? -9.5 : -19.5, -39.5}; /* gridy: y in [-10, 30] */
         nbt_grid *g = nbt_grid_alloc(40, 40, 41, o, 1.0);
         if (!g)
             return 1;
@@ -151,6 +162,70 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return rc;
     }
+    if (argc == 6 && !strcmp(argv[2], "rename")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "%s\n", err);
+            return 1;
+        }
+        int rc = 1;
+        for (size_t j = 0; j < in->nchannels; j++)
+            if (!strcmp(in->channels[j].name, argv[4]) && strlen(argv[5]) <= strlen(argv[4])) {
+                strcpy(in->channels[j].name, argv[5]);
+                rc = 0;
+            }
+        if (rc)
+            fprintf(stderr, "mkexr: no channel '%s' to rename to '%s'\n", argv[4], argv[5]);
+        else if ((rc = nbt_image_write_exr_ex(in, argv[1], NULL, err, sizeof err) != NBT_OK))
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(in);
+        return rc;
+    }
+    if (argc == 3 && !strcmp(argv[2], "depths")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[1], &in, err, sizeof err) != NBT_OK || !in->z) {
+            fprintf(stderr, "%s\n", in ? "mkexr: no depth" : err);
+            return 1;
+        }
+        float seen[64];
+        size_t n = 0;
+        for (size_t i = 0; i < in->w * in->h; i++) {
+            long x = in->x0 + (long)(i % in->w), y = in->y0 + (long)(i / in->w);
+            if (x < in->display.min_x || x > in->display.max_x || y < in->display.min_y || y > in->display.max_y)
+                continue;
+            size_t k = 0;
+            while (k < n && seen[k] != in->z[i])
+                k++;
+            if (k == n && n < 64)
+                seen[n++] = in->z[i];
+        }
+        printf("%zu\n", n);
+        nbt_image_free(in);
+        return 0;
+    }
+    if (argc == 4 && !strcmp(argv[2], "flip")) {
+        nbt_image *in = NULL;
+        if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK || !in->z) {
+            fprintf(stderr, "%s\n", in ? "mkexr: no depth" : err);
+            return 1;
+        }
+        nbt_image *o = nbt_image_alloc(in->w, in->h, 1);
+        if (!o)
+            return 1;
+        for (size_t y = 0; y < in->h; y++)
+            for (size_t x = 0; x < in->w; x++) {
+                size_t i = y * in->w + x, j = y * in->w + (in->w - 1 - x);
+                o->z[i] = in->z[j];
+                for (int c = 0; c < 3; c++)
+                    o->rgb[3 * i + (size_t)c] = in->rgb[3 * j + (size_t)c];
+            }
+        int rc = nbt_image_write_exr_ex(o, argv[1], NULL, err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(o);
+        nbt_image_free(in);
+        return rc;
+    }
     if (argc != 3)
         return 2;
     const char *kind = argv[2];
@@ -172,6 +247,12 @@ int main(int argc, char **argv)
         im->rgb[3 * (7 * 16 + 2) + 1] = NAN;
     else if (!strcmp(kind, "negrgb"))
         im->rgb[3 * (7 * 16 + 2) + 2] = -1e6f;
+    else if (!strncmp(kind, "lamp", 4) && kind[4] >= '0' && kind[4] <= '2' && !kind[5])
+        im->rgb[3 * (5 * 16 + 1) + (kind[4] - '0')] = 1000.0f;
+    else if (!strcmp(kind, "greenred"))
+        for (size_t i = 0; i < 16 * 12; i++)
+            for (size_t c = 0; c < 3; c++)
+                im->rgb[3 * i + c] = c == (i % 16 < 10 ? 1u : 0u) ? 1.0f : 0.0f;
     else if (!strcmp(kind, "border")) { /* a region render: the data window inside a larger display window */
         im->x0 = 4, im->y0 = 2;
         im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 31, im->display.max_y = 23;

@@ -6,8 +6,11 @@
  * never rises from top to bottom by more than rounding (1 unit: each
  * component is rounded to 8 bits), and falls from > 200 to < 45 overall
  * (the ramp's ends have luma 215 and 30). With --max-luma X Y W H, prints
- * the largest luma in that rectangle instead. Exit 0 ok, 1 failed check, 2
- * bad file or usage. */
+ * the largest luma in that rectangle instead. The bar's line also gives its
+ * width: the coloured columns of its middle row that adjoin the found column.
+ * With --cells X Y W H N, prints how many distinct ink patterns (luma < 128)
+ * the N cells of W x H pixels at (X + i W, Y) hold: a label's glyph cells.
+ * Exit 0 ok, 1 failed check, 2 bad file or usage. */
 #include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,9 +58,10 @@ static double luma(png_uint_32 x, png_uint_32 y)
 
 int main(int argc, char **argv)
 {
-    int bar = argc == 3 && !strcmp(argv[1], "--bar"), ml = argc == 7 && !strcmp(argv[1], "--max-luma");
-    if (argc != 2 + bar + 5 * ml) {
-        fprintf(stderr, "usage: pngcheck [--bar | --max-luma X Y W H] FILE.png\n");
+    int bar = argc == 3 && !strcmp(argv[1], "--bar"), ml = argc == 7 && !strcmp(argv[1], "--max-luma"),
+        cells = argc == 8 && !strcmp(argv[1], "--cells");
+    if (argc != 2 + bar + 5 * ml + 6 * cells) {
+        fprintf(stderr, "usage: pngcheck [--bar | --max-luma X Y W H | --cells X Y W H N] FILE.png\n");
         return 2;
     }
     FILE *f = fopen(argv[argc - 1], "rb");
@@ -74,6 +78,27 @@ int main(int argc, char **argv)
             for (unsigned x = x0; x < x0 + w && x < W; x++)
                 m = luma(x, y) > m ? luma(x, y) : m;
         printf("%.1f\n", m);
+        return 0;
+    }
+    if (cells) {
+        unsigned x0 = (unsigned)atoi(argv[2]), y0 = (unsigned)atoi(argv[3]), w = (unsigned)atoi(argv[4]),
+                 h = (unsigned)atoi(argv[5]), n = (unsigned)atoi(argv[6]), distinct = 0;
+        if (x0 + n * w > W || y0 + h > H) {
+            fprintf(stderr, "pngcheck: cells outside the %ux%u image\n", (unsigned)W, (unsigned)H);
+            return 2;
+        }
+        for (unsigned i = 0; i < n; i++) {
+            int seen = 0; /* cell i equals an earlier one */
+            for (unsigned j = 0; j < i && !seen; j++) {
+                int same = 1;
+                for (unsigned y = y0; y < y0 + h && same; y++)
+                    for (unsigned x = 0; x < w && same; x++)
+                        same = (luma(x0 + i * w + x, y) < 128) == (luma(x0 + j * w + x, y) < 128);
+                seen = same;
+            }
+            distinct += !seen;
+        }
+        printf("%u\n", distinct);
         return 0;
     }
     printf("%u %u\n", (unsigned)W, (unsigned)H);
@@ -104,7 +129,11 @@ int main(int argc, char **argv)
             printf("bar at column %u: luma %g (top) to %g (bottom), expected > 200 to < 45\n", (unsigned)x, top, bot);
             return 1;
         }
-        printf("bar at column %u, rows %u..%u\n", (unsigned)x, (unsigned)b0, (unsigned)(b0 + best - 1));
+        png_uint_32 ym = b0 + best / 2, x0 = x;
+        while (x0 > 0 && coloured(x0 - 1, ym))
+            x0--;
+        printf("bar at column %u, rows %u..%u, width %u\n", (unsigned)x, (unsigned)b0, (unsigned)(b0 + best - 1),
+               (unsigned)(x - x0 + 1));
         return 0;
     }
     printf("no colour bar (no coloured vertical run of 64 pixels)\n");

@@ -140,6 +140,21 @@ else
   [ "$(head -1 "$tmp/kfit.csv")" = "z,alpha,beta,alpha_stderr,beta_stderr,rms_before,rms_after,chi2_dof,status" ] &&
     [ "$(wc -l <"$tmp/kfit.csv")" -eq 5 ] && ok || bad "kernel CSV: header and one row per plane"
   awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/krms" && ok || bad "the fitted kernel beats the moment kernel: $(cat "$tmp/krms")"
+  # rms_after is the relative RMS of 2 pi r Psi (doc/fit.md) of the fitted Psi = alpha/r G(r/beta) against
+  # the counts, plane by plane: recomputed here with G(x) = erfc(x/sqrt 2)/2 from A&S 7.1.26 (|error|
+  # < 1.5e-7) and each annulus mean by Simpson's rule (64 panels in r/beta), within 1e-4 of itself
+  # (the CSV prints 6 digits)
+  awk -v fit="$tmp/kfit.csv" '
+  function G(x,   y, t) { y = x / sqrt(2); t = 1 / (1 + 0.3275911 * y)
+    return 0.5 * t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) * exp(-y * y) }
+  function mean(a, b, lo, hi,   xl, xh, h, s, i) { xl = lo / b; xh = hi / b; h = (xh - xl) / 64; s = G(xl) + G(xh)
+    for (i = 1; i < 64; i++) s += (i % 2 ? 4 : 2) * G(xl + i * h)
+    return 2 * 3.14159265358979 * a * b * s * h / 3 / (3.14159265358979 * (hi * hi - lo * lo)) }
+  BEGIN { FS = "," }
+  FNR == 1 { next }
+  FILENAME == fit { n++; A[$1 + 0] = $2; B[$1 + 0] = $3; R[$1 + 0] = $7; next }
+  { z = $1 + 0; w = 3.14159265358979 * ($2 + $3); m = mean(A[z], B[z], $2, $3); num[z] += w * w * (m - $4) ^ 2; den[z] += w * w * $4 * $4 }
+  END { for (z in R) { r = sqrt(num[z] / den[z]); d = r - R[z]; if (d * d > (1e-4 * R[z]) ^ 2) bad = 1 }; exit bad || n != 4 }' "$tmp/kfit.csv" "$tmp/k1.csv" && ok || bad "kernel CSV: rms_after recomputed from alpha, beta and the counts"
   "$NBT_FIT" kernel "$tmp/k2.exr" --shape erfc+gauss -o "$tmp/kg.csv" 2>"$tmp/kgrms" && ok || bad "erfc+gauss on EXR input (medium from metadata): $(cat "$tmp/kgrms")"
   awk '/^RMS/ { exit !($6 + 0 < 0.5 * $4 && $6 + 0 < 0.06) }' "$tmp/kgrms" && ok || bad "erfc+gauss within 6%: $(cat "$tmp/kgrms")"
   # the smooth correction, fitted on two runs, judged on a third it has not seen
@@ -153,6 +168,12 @@ else
     awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
+  # an EXR whose header (nbt.phase "mc albedo=A sigma_t=S ...", plain text) names only one of the two:
+  # the same bytes with one key renamed (same length, so the file stays valid) are refused too
+  LC_ALL=C sed 's/ sigma_t=/ sigma_x=/' "$tmp/k2.exr" >"$tmp/k2-nos.exr"
+  LC_ALL=C sed 's/ albedo=/ albedx=/' "$tmp/k2.exr" >"$tmp/k2-noa.exr"
+  expect_usage "--against an EXR without sigma_t" "k2-nos.exr does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k2-nos.exr"
+  expect_usage "--against an EXR without albedo" "k2-noa.exr does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k2-noa.exr"
   # three coefficients per parameter over 2 x 4 planes of 3e5 photons: the smooth correction misses the counts' noise
   grep -q '^# fit status: misfit: chi^2/dof = .* is above ' "$tmp/corr.txt" && ok || bad "the correction file records its fit status: $(grep status "$tmp/corr.txt")"
 
@@ -437,5 +458,12 @@ P2=hg2:g1=0.8,g2=-0.3,w=0.85
 "$NBT_FIT" screenmodel --check "$tmp/smp.txt" --phase hg:g=0.8 --albedo 0.95 --tau 0.5,3 --photons 2000 >/dev/null \
   2>"$tmp/err" && bad "a fixed-phase model checked against another phase" ||
   { grep -q "does not cover hg:g=0.8" "$tmp/err" && ok || bad "fixed-phase model vs another phase: $(cat "$tmp/err")"; }
+# points where no photon scattered twice (tau = 1e-5, 2e-5: a second scattering has probability of order
+# tau^2 ~ 1e-10 per photon, of 1000) have no counted mass to be relative to: their bias and relL1 read 0
+# (no measure), not a 100% bias
+"$NBT_FIT" screenmodel --check default --g 0.7 --albedo 0.95 --tau 1e-5,2e-5 --photons 1000 --seed 3 --threads 1 \
+  2>/dev/null >"$tmp/smz"
+awk '/^(inside|entering) / { n++; if ($5 != 0 || $7 != 0 || $8 != 0) bad = 1 } END { exit bad || n != 4 }' "$tmp/smz" && ok ||
+  bad "screenmodel --check: zero counted mass, bias and relL1 0: $(cat "$tmp/smz")"
 
 finish

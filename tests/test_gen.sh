@@ -75,6 +75,9 @@ expect_usage "--beam-model missing" "No such file" "$NBT_GEN" eval psi --albedo 
 # its tables: the log-parameters at a node (constants here), P4 in the second file
 "$NBT_GEN" kernel --B 0.05 --model fitted --beam-model "$tmp/bm.txt" --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/kf.exr" >/dev/null 2>&1 &&
   [ -s "$tmp/kf-P4.exr" ] && ok || bad "kernel --model fitted: two files"
+# its channels are model parameters, not Legendre orders: the header's nbt.channels_k (plain text
+# in the EXR header) gives every one k = -1
+grep -aq 'R=-1 G=-1 B=-1 A=-1' "$tmp/kf.exr" && ok || bad "kernel --model fitted: nbt.channels_k all -1"
 set -- $("$NBT_GEN" info "$tmp/kf.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
 close "$1" -60 1e-7 "fitted table P0"; close "$2" 0.2 1e-7 "fitted table P1"; close "$3" -0.3 1e-7 "fitted table P2"; close "$4" 0.4 1e-7 "fitted table P3"
 set -- $("$NBT_GEN" info "$tmp/kf-P4.exr" --at 9,0.7 | sed -n 's/^at .*: //p')
@@ -173,6 +176,23 @@ S="--g 0.5 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.
 d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
 s=$("$NBT_GEN" eval surface $S --method series 2>/dev/null | cut -d' ' -f1)
 close "$s" "$d" 1e-6 "surface series vs direct"
+# theta_s = pi (the closed end of its range, light from straight below) is accepted: series vs direct
+S="--g 0.5 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 3.141592653589793 --theta-r 1.9 --kd 0.7 --ks 0.3 --n 20"
+d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
+s=$("$NBT_GEN" eval surface $S --method series 2>/dev/null | cut -d' ' -f1)
+close "$s" "$d" 1e-6 "surface series vs direct at theta_s = pi"
+# from a J table of order 0 alone, isotropic (no series truncation): the bound is the recorded
+# interpolation error through the diffuse weight, kappa_s I0 kd (2k+1) b_0 max_err_0 / (4 pi dsp),
+# b_0 = 1 (info prints max_err to 4 digits: 1e-3); the value lies within it of direct
+"$NBT_GEN" surface --kmax 0 --size 17x17 --max 4 --no-preview --quiet -o "$tmp/j0.exr" >/dev/null 2>&1
+me=$("$NBT_GEN" info "$tmp/j0.exr" | sed -n 's/^channel R .*max interp err //p')
+S="--g 0 --kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks 0 --n 1"
+d=$("$NBT_GEN" eval surface $S --method direct | cut -d' ' -f1)
+set -- $("$NBT_GEN" eval surface $S --method table --tables "$tmp/j0.exr" 2>/dev/null)
+awk -v v="$1" -v e="$2" -v m="$me" -v d="$d" 'BEGIN { w = 0.1 * 2 * 0.7 * m / (4 * 3.14159265358979 * 5); x = e - w
+  if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(m > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
+  bad "surface from a k = 0 J table: $1 +- $2 (bound from max_err $me) vs direct $d"
+rm -f "$tmp/j0.exr"
 set -- $("$NBT_GEN" eval surface $S --method table 2>/dev/null)
 awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e) }' && ok ||
   bad "surface table $1 within its reported error $2 of direct $d"
@@ -193,6 +213,16 @@ expect_usage "tol out of range" "--tol" "$NBT_GEN" airlight -o "$tmp/x.exr" --to
 expect_usage "size and tol" "exclude" "$NBT_GEN" airlight -o "$tmp/x.exr" --tol 0.01 --size 9x9
 expect_usage "bad size" "--size" "$NBT_GEN" airlight -o "$tmp/x.exr" --size 1x9
 expect_usage "not .exr" "\.exr" "$NBT_GEN" airlight -o "$tmp/x.png"
+# -o takes a name of up to 511 bytes (its buffers hold 512 with the terminator): 511 is written
+# and reads back, 512 is refused
+long=$tmp/$(printf '%0200d' 0)/$(printf '%0200d' 0)
+mkdir -p "$long"
+pad=$((511 - ${#long} - 5))
+name=$long/$(printf "%0${pad}d" 0).exr
+[ ${#name} -eq 511 ] && "$NBT_GEN" airlight -o "$name" --size 9x9 --no-preview --quiet >/dev/null 2>&1 &&
+  "$NBT_GEN" info "$name" >/dev/null 2>&1 && ok || bad "-o: a name of 511 bytes"
+expect_usage "-o: a name of 512 bytes" "must be a file name ending in .exr" "$NBT_GEN" airlight -o "$long/$(printf "%0$((pad + 1))d" 0).exr" --size 9x9
+rm -rf "$tmp/$(printf '%0200d' 0)"
 expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
 [ -z "$(ls "$tmp" | grep -v '^out$\|^err$')" ] && ok || bad "no output files left by rejected commands: $(ls "$tmp")"
 
@@ -207,6 +237,13 @@ expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
 PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
 [ "$("$PNGCHECK" "$tmp/h.png")" = "1956 440" ] && ok || bad "h.png size: $("$PNGCHECK" "$tmp/h.png")"
 "$PNGCHECK" --bar "$tmp/h.png" >"$tmp/bar" && ok || bad "h.png colour bar: $(cat "$tmp/bar")"
+# the bar is PREVIEW_BAR_W = 24 coloured columns from x = 124 + 4 x 384 + 3 x 40 + 24 = 1804 (its
+# black frame lies outside them: a frame one pixel too wide eats the ramp's first column)
+grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad "h.png colour bar place: $(cat "$tmp/bar")"
+# labels: "value" centred over the bar (x = 1804 + 12 - (5 x 12 - 2) / 2 = 1787, y = 96 - 18 - 4 = 74)
+# in glyph cells of 12 x 14 pixels: five different letters draw five different cells
+[ "$("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")" = 5 ] && ok ||
+  bad "h.png: the label 'value' as 5 distinct glyphs: $("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")"
 l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
 awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
@@ -456,7 +493,7 @@ lv=$1; lb=$2
 set -- $("$NBT_GEN" eval airlight --g 0.45 $geo)
 awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
   bad "eval --tables 4 Legendre orders at g = 0.45: $lv +- $lb vs direct $1"
-expect_usage "eval --tables: g outside the table" "covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
+expect_usage "eval --tables: g outside the table" "'$tmp/gs.exr' covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
 expect_usage "eval --tables: g-sliced with --phase" "run-time asymmetry with --g" "$NBT_GEN" eval airlight --phase iso $geo --method table --tables "$tmp/gs.exr"

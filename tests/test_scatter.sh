@@ -13,6 +13,9 @@ M="$M0 --method ref-a"   # the exact reference; the default method (nbt on GL bu
 for s in plane step layers slant blocks; do
   "$S" scene $s -o "$tmp/$s.exr" --size 64x48 && [ -s "$tmp/$s.exr" ] && ok || bad "scene $s"
 done
+# blocks: ten boxes at six depths over a far wall (doc/screenspace.md), all inside the frame: the frame
+# shows 7 distinct depths
+[ "$("$MK" "$tmp/blocks.exr" depths)" = 7 ] && ok || bad "scene blocks: 7 depths in the frame, $("$MK" "$tmp/blocks.exr" depths)"
 
 # layered depth (Z read as ray distance): FFT = brute force, both operators.
 # --compare sets this run's S (double) against the file's S layer (float): each
@@ -45,6 +48,58 @@ set -- $("$MK" "$tmp/step-out.exr" composite "$tmp/step.exr")
 set -- $("$S" "$tmp/plane.exr" -o "$tmp/y.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 --depth ray --no-png --method ref-a \
   --compare "$tmp/clear.exr" 2>/dev/null)
 [ "$1" = relL1 ] && ok || bad "--compare prints its line: $*"
+# colour symmetry: a grey medium treats R, G and B alike, so a lamp (1000 in one channel, near the
+# left edge of a 0.5 grey render) scatters the same light into its own channel whichever channel it
+# is in. Operators are the same float arithmetic per channel (measured equal to 9 digits), so 1e-6
+# for S (mkexr prints 9 digits) and 1e-5 for --compare's halo (printed to 6).
+# This holds the mirror continuation's lamp cap (all three channels scaled by cap / (R + G + B)),
+# --compare's lamp finder for the halo measure (R + G + B over 30 x the mean), and the header's
+# nbt.kernel (the kernel that ran)
+for c in 0 1; do
+  "$MK" "$tmp/lamp$c.exr" lamp$c &&
+    "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-a.exr" $M0 --method ref-a --no-png 2>/dev/null || bad "lamp$c run"
+  "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-b.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp$c-a.exr" \
+    2>/dev/null >"$tmp/lamp$c.cmp"
+done
+sr=$("$MK" "$tmp/lamp0-a.exr" mean S | sed -n 's/^S.R //p'); sg=$("$MK" "$tmp/lamp1-a.exr" mean S | sed -n 's/^S.G //p')
+awk -v a="$sr" -v b="$sg" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 1 && d <= 1e-6 * a) }' && ok ||
+  bad "red lamp's S.R $sr = green lamp's S.G $sg"
+h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp0.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamp1.cmp")
+awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-5 * a) }' && ok ||
+  bad "--compare halo: red lamp $h0 = green lamp $h1"
+# the halo measure is left-right symmetric: 4x4 bins from x = 0 tile a 64-wide frame, each lamp's bins
+# reach 12 px both ways; the lamps scene and its mirror (mkexr flip) give the same halo (printed to 6 digits: 1e-5)
+"$S" scene lamps -o "$tmp/lamps.exr" --size 64x48 2>/dev/null && "$MK" "$tmp/lampsf.exr" flip "$tmp/lamps.exr" || bad "lamps scene"
+for f in lamps lampsf; do
+  "$S" "$tmp/$f.exr" -o "$tmp/la-$f.exr" $M0 --method ref-a --no-png --extend 0 2>/dev/null
+  "$S" "$tmp/$f.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --extend 0 --compare "$tmp/la-$f.exr" 2>/dev/null >"$tmp/$f.cmp"
+done
+h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamps.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lampsf.cmp")
+awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-5 * a) }' && ok ||
+  bad "--compare halo of the lamps scene $h0 = of its mirror $h1"
+# a reference without S.G falls back to its RGB - T x input for all three channels: the same relL1
+# as with its S layer, but for RGB's float rounding (2^-24 of RGB, summed: below 1e-5 here; measured 1e-6)
+"$MK" "$tmp/lamp0-noG.exr" rename "$tmp/lamp0-a.exr" S.G X.G || bad "mkexr rename"
+set -- $("$S" "$tmp/lamp0.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp0-noG.exr" 2>/dev/null)
+r0=$(cut -d' ' -f2 "$tmp/lamp0.cmp")
+[ "$1" = relL1 ] && awk -v a="$2" -v b="$r0" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0.1 && d <= 1e-5) }' && ok ||
+  bad "--compare, reference without S.G: $* (with S: relL1 $r0)"
+LC_ALL=C grep -aq 'nbt\.kernel.string.....moment' "$tmp/lamp0-a.exr" && LC_ALL=C grep -aq 'nbt\.kernel.string.....elek' "$tmp/lamp0-b.exr" &&
+  ok || bad "nbt.kernel names the kernel (moment for ref-a, elek for ref-b)"
+# the preview's tone map: the median luminance (Rec. 709: 0.2126 R + 0.7152 G + 0.0722 B) goes to
+# 0.18, then x / (1 + x) and sRGB. 10 green columns and 6 red ones through a clear medium: the median
+# is green's 0.7152, so a green pixel's G and a red pixel's R are both 255 sRGB(v / (1 + v)),
+# v = 0.18 / 0.7152 (124); pngcheck's luma is 0.587 G and 0.299 R there (8-bit rounding: 1)
+"$MK" "$tmp/gr.exr" greenred && "$S" "$tmp/gr.exr" -o "$tmp/gr-out.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 \
+  --depth ray --method ref-a 2>/dev/null || bad "green/red run"
+lg=$("${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 3 5 1 1 "$tmp/gr-out.png")
+lr=$("${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 13 5 1 1 "$tmp/gr-out.png")
+awk -v g="$lg" -v r="$lr" 'BEGIN { v = 0.18 / 0.7152; v = v / (1 + v); e = 255 * (1.055 * exp(log(v) / 2.4) - 0.055)
+  dg = g / 0.587 - e; dr = r / 0.299 - e; exit !(dg * dg <= 1.01 && dr * dr <= 1.01) }' && ok ||
+  bad "preview tone map: green pixel luma $lg, red $lr (0.587 and 0.299 x 124 expected)"
+# --display-window X0,Y0,X1,Y1 (inclusive) makes the frame: 12 x 10 of the 16 x 12 render, as its preview shows
+"$S" "$tmp/lamp0.exr" -o "$tmp/dw.exr" $M --display-window 2,1,13,10 2>/dev/null &&
+  [ "$("${NBT_PNGCHECK:-./tests/pngcheck}" "$tmp/dw.png")" = "12 10" ] && ok || bad "--display-window 2,1,13,10: a 12x10 frame"
 # kernels by name, and a correction file for the corrected kernel
 for k in moment smallangle single lineint elek; do
   "$S" "$tmp/layers.exr" -o "$tmp/k-$k.exr" $M --depth ray --kernel $k --no-png 2>/dev/null && ok || bad "--kernel $k"
@@ -66,6 +121,20 @@ if "$S" --help | grep -q "On GL"; then
   set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M0 --depth ray --no-png --compare "$tmp/ref.exr" 2>"$tmp/log")
   grep -q "^nbt-scatter: nbt " "$tmp/log" && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 0.05 && b < 0.02 && b > -0.02) }' \
     && ok || bad "default method nbt vs ref-a (L1 < 5%, |bias| < 2%): $* $(cat "$tmp/log")"
+  # mirror symmetry with a phase (a kernel of many atoms, grouped into bands by each pixel's own depth):
+  # the step scene and its left-right mirror give mirrored S, column by column, at the depth edge
+  # (x = 31, 32) and both borders; measured equal to 4e-8 (float), 1e-4 allowed
+  "$MK" "$tmp/stepf.exr" flip "$tmp/step.exr" || bad "mkexr flip"
+  for f in step stepf; do
+    gl "$S" "$tmp/$f.exr" -o "$tmp/gp-$f.exr" --fov-y 35 --sigma-t 0.15 --albedo 0.9 --phase hg:g=0.9 --depth ray --no-png \
+      --method nbt 2>/dev/null || bad "GL nbt with a phase on $f"
+  done
+  for c in 0 31 32 63; do
+    a=$("$MK" "$tmp/gp-step.exr" mean S $c 0 $((c + 1)) 48 | awk '{ s = s " " $2 } END { print s }')
+    b=$("$MK" "$tmp/gp-stepf.exr" mean S $((63 - c)) 0 $((64 - c)) 48 | awk '{ s = s " " $2 } END { print s }')
+    echo "$a $b" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i + 3); if (d < 0) d = -d; if (!($i > 0 && d <= 1e-4 * $i)) bad = 1 } }
+      END { exit bad }' && ok || bad "GL nbt, phase: column $c ($a) = mirrored column $((63 - c)) ($b)"
+  done
   for m in shinya-literal naive elek; do
     set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl-$m.exr" $M --depth ray --method $m --no-png --compare "$tmp/ref.exr" \
       2>/dev/null)
@@ -112,6 +181,13 @@ else
 fi
 expect_usage "grid misses the camera" "does not hold the camera" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
   --density "$tmp/c1.raw" --camera 0,0,5
+# a box whose x and y ranges differ ([-20,20] x [-10,30] x [-40,1]), the camera looking along -y: the
+# far wall (15 away) lies beyond y = -10, and the message gives the box as it is
+"$MK" "$tmp/gy.raw" gridy 1 || bad "mkexr gridy"
+expect_usage "grid misses the surface" "box \[-20,20\]x\[-10,30\]x\[-40,1\] does not hold the surface seen in pixel" \
+  "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/gy.raw" --look-at 0,-1,0 --up 0,0,1
+expect_usage "grid misses the camera (y)" "box \[-20,20\]x\[-10,30\]x\[-40,1\] does not hold the camera (0,-15,0)" \
+  "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/gy.raw" --camera 0,-15,0
 expect_usage "grid with ref-b" "heterogeneous media use operator A" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M \
   --density "$tmp/c1.raw" --method ref-b
 expect_usage "not a grid" "not an nbt raw grid" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/corr.txt"
