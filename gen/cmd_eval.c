@@ -56,7 +56,7 @@ static void eval_help(void)
          "                default or FILE (nbt-fit model -o FILE); --infinite: a source inside the medium\n"
          "                (as nbt-fit mc --infinite), default a beam entering a half-space from vacuum;\n"
          "                with --density through zeta and the second moments (nbt_beam_fit_psi); the\n"
-         "                error column is 0 (the model's measured error: doc/fit.md)\n\n"
+         "                error column is nan (no per-point bound; measured errors: doc/fit.md)\n\n"
          "Prints the value and its estimated absolute error, 17 significant digits.\n"
          "A density FILE has lines 'z rho': layers from z (first 0) with density rho >= 0.\n"
          "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
