@@ -228,8 +228,14 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
         double s1, sn;
         nbt_table *J1 = after ? j_after(1, &a0, &a1, ng, &s1) : j_before(1, &a0, &a1, ng, &s1);
         nbt_table *Jn = after ? j_after(20, &a0, &an, ng, &sn) : j_before(20, &a0, &an, ng, &sn);
-        double wl = 0, wr = 0, *rel = malloc((size_t)n * sizeof(double));
-        int ok = 0, fell = 0, cert = 0;
+        /* the per-cell bound (what files without nbt.row_err get) on the same tables */
+        nbt_table *C1 = nbt_table_dup(J1), *Cn = nbt_table_dup(Jn);
+        free(C1->row_err);
+        free(Cn->row_err);
+        C1->row_err = Cn->row_err = NULL;
+        double wl = 0, wr = 0, *rel = malloc((size_t)n * sizeof(double)), *bq = malloc((size_t)n * sizeof(double));
+        double tb_row = 0, tb_cell = 0, wtb_row = 0, wtb_cell = 0;
+        int ok = 0, fell = 0, cert = 0, cert_cell = 0;
         unsigned long long seed = rs;
         rs = 0x51ed2701ull; /* the same geometries for every table */
         for (int i = 0; i < n; i++) {
@@ -240,10 +246,19 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
             nbt_surface_direct(p, &geo, 1e-9, &R, &RE);
             nbt_phase_free(p);
             double Lp = surface_lookup(J1, Jn, g, &geo);
+            double t_b = now(), Ec, Lc;
             nbt_surface_table_g(J1, Jn, g, &geo, 0, &L, &E);
+            tb_row += now() - t_b;
+            t_b = now();
+            nbt_surface_table_g(C1, Cn, g, &geo, 0, &Lc, &Ec);
+            tb_cell += now() - t_b;
             nbt_surface_table_g(J1, Jn, g, &geo, 1e-9, &Lf, &Ef);
             fell += Lf != L;
             cert += E <= 1e-3 * fabs(L);
+            cert_cell += Ec <= 1e-3 * fabs(L);
+            bq[i] = Ec / E;
+            wtb_row = fmax(wtb_row, fabs(L - R) / E);
+            wtb_cell = fmax(wtb_cell, fabs(L - R) / Ec);
             rel[i] = fabs(Lp - R) / fabs(R);
             ok += rel[i] <= 1e-3;
             wl = fmax(wl, rel[i]);
@@ -251,13 +266,22 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
         }
         rs = seed;
         qsort(rel, (size_t)n, sizeof(double), cmpd);
+        qsort(bq, (size_t)n, sizeof(double), cmpd);
         printf("%-6s J1+J20 %3zux%3zux%2zu x2 %5.2f MB build %5.2f s (J1 %.2f, J20 %.2f) rec J1 %.1e J20 %.1e | "
                "lookup: worst %.1e median %.1e <=1e-3 %3.0f%% | bound <=1e-3 %3.0f%% | route: worst %.1e fallback %3.0f%%\n",
                after ? "after" : "before", NT, N, ng, 8e-6 * (double)nbt_table_size(J1), s1 + sn, s1, sn,
                after ? J1->max_err[0] : J1->max_err[0] / J1->max_abs[0],
                after ? Jn->max_err[0] : Jn->max_err[0] / Jn->max_abs[0], wl, rel[n / 2], 100.0 * ok / n,
                100.0 * cert / n, wr, 100.0 * fell / n);
+        if (after)
+            printf("       bound per (T row, g cell) | per g cell: <=1e-3 %3.0f%% | %3.0f%%; true/bound worst %.2f | %.2f; "
+                   "cell/row bound median %.1f (min %.2f, max %.1f); %.2f | %.2f us per route call\n",
+                   100.0 * cert / n, 100.0 * cert_cell / n, wtb_row, wtb_cell, bq[n / 2], bq[0], bq[n - 1],
+                   1e6 * tb_row / n, 1e6 * tb_cell / n);
         free(rel);
+        free(bq);
+        nbt_table_free(C1);
+        nbt_table_free(Cn);
         nbt_table_free(J1);
         nbt_table_free(Jn);
         fflush(stdout);

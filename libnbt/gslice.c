@@ -92,25 +92,41 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     snprintf(t->phase, sizeof t->phase, "hg");
     if (t->kind == NBT_TABLE_H)
         t->n = 0;
+    free(t->row_err); /* a refill records its own, or none */
+    t->row_err = NULL;
     if (form == NBT_FORM_TAIL)
         return nbt__tail_fill(t, o);
     t->form = form;
+    nbt_status st0 = NBT_OK;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
     double qerr = 0, amax = 0;
+    /* per T row (cell between T nodes i and i + 1): the slices' in-slice
+     * error (srow), the g error at the row's two node columns (grow) */
+    size_t nr = nx - 1;
     double *gs = calloc(ng, sizeof *gs), *serr = calloc(ng, sizeof *serr);
+    double *srow = calloc(ng * nr, sizeof *srow), *grow = calloc(nr, sizeof *grow);
     nbt_table **sl = calloc(ng, sizeof *sl);
-    if (!gs || !sl || !serr) {
+    if (!gs || !sl || !serr || !srow || !grow) {
         free(gs);
         free(sl);
         free(serr);
+        free(srow);
+        free(grow);
         NBT_FAIL(NBT_ENOMEM, "g-sliced table: out of memory");
     }
+    /* the row bound where the slices record their rows (J) */
+    int rows = o->measure_error && t->kind == NBT_TABLE_J;
+    if (rows && nbt_table_row_err_alloc(t) != NBT_OK)
+        st0 = NBT_ENOMEM;
     for (size_t m = 0; m < ng; m++)
         gs[m] = nbt_axis_node(&t->axis[2], m);
-    nbt_status st = build_slices(t, gs, ng, o, sl);
+    nbt_status st = st0 != NBT_OK ? st0 : build_slices(t, gs, ng, o, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
         memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
         serr[m] = o->measure_error ? sl[m]->max_err[0] : NAN;
+        /* a slice without its rows: its slice-wide error in every row */
+        for (size_t i = 0; rows && i < nr; i++)
+            srow[m * nr + i] = sl[m]->row_err && !isnan(sl[m]->row_err[i]) ? sl[m]->row_err[i] : serr[m];
         qerr = fmax(qerr, sl[m]->quad_err);
         amax = fmax(amax, sl[m]->max_abs[0]);
     }
@@ -131,6 +147,11 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     double maxe = 0;
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
         double gm = 0, se = 0;
+        for (size_t i = 0; i < nr; i++)
+            grow[i] = 0;
+        double *rerr = rows ? t->row_err + m * nr : NULL;
+        for (size_t i = 0; rows && i < nr; i++)
+            rerr[i] = 0;
         for (size_t c = m; c <= m + 1; c++) {
             /* stencil centre and weights at the midpoint p = m + 1/2 */
             size_t mc = quad ? (c < 1 ? 1 : c > ng - 2 ? ng - 2 : c) : m;
@@ -141,28 +162,52 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
                 w[0] = w[1] = 0.5, w[2] = 0.0; /* slices m, m + 1 */
             size_t m0 = quad ? mc - 1 : m; /* w[q] weighs slice m0 + q */
             for (int q = 0; q < 3; q++)
-                if (w[q] != 0.0)
+                if (w[q] != 0.0) {
                     se = fmax(se, serr[m0 + (size_t)q]);
+                    for (size_t i = 0; rows && i < nr; i++)
+                        rerr[i] = fmax(rerr[i], srow[(m0 + (size_t)q) * nr + i]);
+                }
             for (size_t k = 0; k < ns; k++) {
                 double v = 0;
                 for (int q = 0; q < 3; q++)
                     if (w[q] != 0.0)
                         v += w[q] * (double)t->data[(m0 + (size_t)q) * ns + k];
-                gm = fmax(gm, fabs(v - (double)sl[m]->data[k]));
+                double d = fabs(v - (double)sl[m]->data[k]);
+                gm = fmax(gm, d);
+                /* node column i = k % nx: the rows i - 1 and i meet there */
+                size_t i = k % nx;
+                if (i < nr)
+                    grow[i] = fmax(grow[i], d);
+                if (i >= 1)
+                    grow[i - 1] = fmax(grow[i - 1], d);
             }
         }
         qerr = fmax(qerr, sl[m]->quad_err);
         /* in-slice errors weighted by sum |w| <= 1.25 (quadratic), 1 (linear) */
-        t->cell_err[m] = gm + (quad ? 1.25 : 1.0) * se;
+        double wsum = quad ? 1.25 : 1.0;
+        t->cell_err[m] = gm + wsum * se;
         maxe = fmax(maxe, t->cell_err[m]);
+        /* the same per row: the g error at its nodes and the in-slice
+         * errors of its slices in that row */
+        for (size_t i = 0; rows && i < nr; i++)
+            rerr[i] = grow[i] + wsum * rerr[i];
     }
-    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++)
+    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
         t->cell_err[m] += qerr;
+        for (size_t i = 0; rows && i < nr; i++)
+            t->row_err[m * nr + i] += qerr;
+    }
+    if ((st != NBT_OK || !o->measure_error) && t->row_err) {
+        free(t->row_err);
+        t->row_err = NULL;
+    }
     for (size_t m = 0; m < ng; m++)
         nbt_table_free(sl[m]);
     free(sl);
     free(gs);
     free(serr);
+    free(srow);
+    free(grow);
     if (st != NBT_OK)
         return st;
     t->quad_tol = o->quad_tol;
@@ -319,6 +364,8 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
         double e = nbt__lookup_weight_sum(t) * nbt__table_round_half_change(t, 0);
         for (size_t m = 0; m + 1 < t->axis[2].n; m++)
             t->cell_err[m] += e;
+        for (size_t k = 0; t->row_err && k < nbt_table_row_err_len(t); k++)
+            t->row_err[k] += e;
         t->max_err[0] += e;
     } else if (r->half)
         nbt_table_round_half(*out);

@@ -189,9 +189,17 @@ nbt_table *nbt_table_dup(const nbt_table *t)
     *c = *t;
     c->data = d;
     c->cell_err = e;
+    c->row_err = NULL;
     memcpy(d, t->data, nbt_table_size(t) * sizeof(float));
     if (e)
         memcpy(e, t->cell_err, (t->axis[2].n - 1) * t->nch * sizeof *e);
+    if (t->row_err) {
+        if (nbt_table_row_err_alloc(c) != NBT_OK) {
+            nbt_table_free(c);
+            return NULL;
+        }
+        memcpy(c->row_err, t->row_err, nbt_table_row_err_len(t) * sizeof *c->row_err);
+    }
     return c;
 }
 
@@ -204,6 +212,38 @@ double nbt_table_err_at(const nbt_table *t, size_t c, double x2)
     nbt__axis_cell(&t->axis[2], x2, &m, &f);
     double e = t->cell_err[m * t->nch + c];
     return isnan(e) ? t->max_err[c] : e;
+}
+
+size_t nbt_table_row_err_len(const nbt_table *t)
+{
+    return (t->axis[2].n > 1 ? t->axis[2].n - 1 : 1) * (t->axis[0].n - 1) * t->nch;
+}
+
+nbt_status nbt_table_row_err_alloc(nbt_table *t)
+{
+    size_t n = nbt_table_row_err_len(t);
+    double *r = malloc(n * sizeof *r);
+    if (!r)
+        return NBT_ENOMEM;
+    for (size_t i = 0; i < n; i++)
+        r[i] = NAN;
+    free(t->row_err);
+    t->row_err = r;
+    return NBT_OK;
+}
+
+double nbt_table_err_at_row(const nbt_table *t, size_t c, double x0, double x2)
+{
+    if (!t->row_err || c >= t->nch)
+        return nbt_table_err_at(t, c, x2);
+    size_t i, m = 0;
+    double f;
+    /* the x0 cell the lookup interpolates in (nbt_table_lookup3's, clamped) */
+    nbt__axis_cell(&t->axis[0], x0, &i, &f);
+    if (t->axis[2].n > 1)
+        nbt__axis_cell(&t->axis[2], x2, &m, &f);
+    double e = t->row_err[(m * (t->axis[0].n - 1) + i) * t->nch + c];
+    return isnan(e) ? nbt_table_err_at(t, c, x2) : e;
 }
 
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
@@ -223,6 +263,7 @@ void nbt_table_free(nbt_table *t)
         return;
     free(t->data);
     free(t->cell_err);
+    free(t->row_err);
     free(t);
 }
 
@@ -493,13 +534,27 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                         DT[(i * ny + j) * nc + c] = t->data[(j * nx + i) * nc + c];
 #define D(i, j, c) DT[((i) * ny + (j)) * nc + (c)]
 #define EX(i, jr, c) F[((i) * fy + (jr)) * C + off + (c)]
-#define UPD(c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; } while (0)
+        /* per x row (cell i between x nodes i and i + 1) where the builder
+         * asked for it (row_err allocated): a node row's error belongs to
+         * both cells that meet there */
+        double *rw = t->row_err ? calloc((nx - 1) * nc, sizeof *rw) : NULL;
+        if (t->row_err && !rw) {
+            free(DT);
+            st = nbt__fail(NBT_ENOMEM, "table: out of memory");
+            break;
+        }
+#define RUPD(i, c, v_) do { if (rw && v_ > rw[(i) * nc + (c)]) rw[(i) * nc + (c)] = v_; } while (0)
+#define UPD(i, c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; RUPD(i, c, v_); } while (0)
         double e[NBT_TABLE_MAX_CH] = {0};
         /* node rows, between y nodes */
         for (size_t i = 0; i < nx; i++)
             for (size_t j = 0; j + 1 < ny; j++)
-                for (size_t c = 0; c < nc; c++)
-                    UPD(c, fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, 2 * j + 1, c)));
+                for (size_t c = 0; c < nc; c++) {
+                    double v = fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, 2 * j + 1, c));
+                    UPD(i + 1 < nx ? i : i - 1, c, v);
+                    if (i >= 1 && i + 1 < nx)
+                        RUPD(i - 1, c, v);
+                }
         /* rows between x nodes: exact ones */
         for (size_t r = 0; r < nm; r++) {
             size_t i = im[r];
@@ -508,7 +563,7 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                 for (size_t c = 0; c < nc; c++) {
                     double lk = jr % 2 == 0 ? 0.5 * (D(i, j, c) + D(i + 1, j, c))
                                             : 0.25 * (D(i, j, c) + D(i + 1, j, c) + D(i, j + 1, c) + D(i + 1, j + 1, c));
-                    UPD(c, fabs(lk - Fm[(r * fy + jr) * C + off + c]));
+                    UPD(i, c, fabs(lk - Fm[(r * fy + jr) * C + off + c]));
                 }
             }
         }
@@ -538,14 +593,18 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                         a0 = fabs(D(i, j, c) - EX(i, jr, c));
                         a1 = fabs(D(i + 1, j, c) - EX(i + 1, jr, c));
                     }
-                    UPD(c, MID_MARGIN * d2 / 8.0 + (a0 > a1 ? a0 : a1));
+                    UPD(i, c, MID_MARGIN * d2 / 8.0 + (a0 > a1 ? a0 : a1));
                 }
             }
         }
         /* what the midpoints cannot see: the quadrature error at nodes */
         for (size_t c = 0; c < nc; c++)
             t->max_err[c] = e[c] + qerr;
+        for (size_t k = 0; rw && k < (nx - 1) * nc; k++)
+            t->row_err[k] = rw[k] + qerr;
+        free(rw);
         free(DT);
+#undef RUPD
 #undef UPD
 #undef D
 #undef EX

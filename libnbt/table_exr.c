@@ -6,6 +6,7 @@
  * NONE and ZIP compression are written (ZIPS has an encoder bug in 3.1.5). */
 #include <config.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -85,6 +86,34 @@ static exr_result_t write_cell_err(exr_context_t ctx, int part, const nbt_table 
         }
         snprintf(an, sizeof an, "nbt.cell_err.%s", CH[c]);
         rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)ncell, v);
+    }
+    free(v);
+    return rv;
+}
+
+/* per (x0 row, g cell) errors (row_err), one float vector per channel,
+ * g cell after g cell, rounded up; written only where every value was
+ * recorded. Readers without it use cell_err. */
+static exr_result_t write_row_err(exr_context_t ctx, int part, const nbt_table *t)
+{
+    size_t nc = t->nch, len = nbt_table_row_err_len(t), nr = len / nc;
+    for (size_t i = 0; i < len; i++)
+        if (!(t->row_err[i] >= 0.0))
+            return EXR_ERR_SUCCESS;
+    float *v = malloc(nr * sizeof *v);
+    if (!v)
+        return EXR_ERR_OUT_OF_MEMORY;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    char an[64];
+    for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++) {
+        for (size_t k = 0; k < nr; k++) {
+            double e = t->row_err[k * nc + c];
+            v[k] = (float)e;
+            if ((double)v[k] < e)
+                v[k] = nextafterf(v[k], INFINITY);
+        }
+        snprintf(an, sizeof an, "nbt.row_err.%s", CH[c]);
+        rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)nr, v);
     }
     free(v);
     return rv;
@@ -187,6 +216,8 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         rv = exr_attr_set_string(ctx, part, "nbt.form", nbt_table_form_name(t->form));
     if (rv == EXR_ERR_SUCCESS && nax == 3)
         rv = write_cell_err(ctx, part, t);
+    if (rv == EXR_ERR_SUCCESS && t->row_err)
+        rv = write_row_err(ctx, part, t);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.version", nbt_version());
     if (rv == EXR_ERR_SUCCESS)
@@ -375,6 +406,30 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
             }
             for (size_t m = 0; m < (size_t)ne; m++)
                 t->cell_err[m * nc + c] = ce[m];
+        }
+    }
+    for (size_t c = 0; c < nc; c++) {
+        int32_t ne;
+        const float *re;
+        snprintf(an, sizeof an, "nbt.row_err.%s", CH[c]);
+        if (exr_attr_get_float_vector(ctx, 0, an, &ne, &re) != EXR_ERR_SUCCESS)
+            continue;
+        size_t nr = nbt_table_row_err_len(t) / nc;
+        if ((size_t)ne != nr) {
+            st = rd_fail(err, errlen, path, "an nbt.row_err vector does not have one value per x0 row and g cell");
+            goto done;
+        }
+        if (!t->row_err && nbt_table_row_err_alloc(t) != NBT_OK) {
+            st = NBT_ENOMEM;
+            snprintf(err, errlen, "out of memory");
+            goto done;
+        }
+        for (size_t k = 0; k < nr; k++) {
+            if (!(re[k] >= 0.0f && re[k] <= FLT_MAX)) {
+                st = rd_fail(err, errlen, path, "an nbt.row_err value is negative or not finite (accepted: >= 0)");
+                goto done;
+            }
+            t->row_err[k * nc + c] = re[k];
         }
     }
     size_t nx = ax[0].n, ny = ax[1].n * ax[2].n, bpe = half ? 2 : 4;

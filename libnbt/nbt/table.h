@@ -128,7 +128,16 @@ typedef struct {
                               bounds |lookup3 - exact| of channel c for x2 between nodes m
                               and m + 1; NaN: not recorded (max_err applies). NULL for 2-D. */
     float *data;           /* data[((ig * axis[1].n + iy) * axis[0].n + ix) * nch + c] */
+    double *row_err;       /* per x0 row and x2 cell, or NULL (cell_err applies): nbt_table_row_err_len(t)
+                              values, row_err[(m * (axis[0].n - 1) + i) * nch + c] bounds |lookup3 - exact|
+                              of channel c for x0 between nodes i and i + 1 and x2 in cell m (a 2-D table:
+                              m = 0, its bilinear error), any x1; NaN: not recorded there */
 } nbt_table;
+
+/* Values in row_err: max(axis[2].n - 1, 1) (axis[0].n - 1) nch. */
+size_t nbt_table_row_err_len(const nbt_table *t);
+/* Allocates t->row_err (all NaN, replacing any); NBT_OK or NBT_ENOMEM. */
+nbt_status nbt_table_row_err_alloc(nbt_table *t);
 
 /* Allocates the data for the axes' sizes; axes and channels must be set.
  * Returns NULL on bad sizes or no memory. alloc: a 2-D table (axis[2] gets
@@ -164,6 +173,10 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
 /* The recorded error bound of channel c at x2: cell_err of the cell holding
  * x2 (clamped to the axis) where recorded, else max_err[c]. */
 double nbt_table_err_at(const nbt_table *t, size_t c, double x2);
+/* The same at (x0, x2): row_err of the x0 row (the two x0 nodes the lookup
+ * interpolates between, clamped) and x2 cell where recorded, else
+ * nbt_table_err_at. */
+double nbt_table_err_at_row(const nbt_table *t, size_t c, double x0, double x2);
 
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);
