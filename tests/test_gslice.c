@@ -227,6 +227,9 @@ static void test_surface(const nbt_table *J)
     geo.ks = 0.3;
     t_true(nbt_surface_table_g(J, NULL, 0.1, &geo, 0, &L, &E) == NBT_EINVAL, "specular lobe without table: EINVAL");
     t_true(nbt_surface_table_g(J, J, 0.1, &geo, 0, &L, &E) == NBT_EINVAL, "specular table with n != geo n: EINVAL");
+    /* a diffuse term (kd = 0.7, inside (0, 1]) without its table: refused, not read through NULL */
+    geo.ks = 0;
+    t_true(nbt_surface_table_g(NULL, NULL, 0.1, &geo, 0, &L, &E) == NBT_EINVAL, "diffuse kd = 0.7 without table: EINVAL");
 }
 
 static void test_errors(nbt_table *H, nbt_table *J)

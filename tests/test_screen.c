@@ -528,12 +528,20 @@ static double dens_slope(const double p[3], void *ctx)
 }
 
 /* the closed-form optical depth zeta of pixel (x, y) of a W x H image
- * (ray distance Dp) from a camera at cpos through dens_slope */
-static double zeta_slope(size_t x, size_t y, size_t W, size_t H, double dth, double Dp, const double cpos[3])
+ * (ray distance Dp) from a camera at cpos looking down -z through
+ * dens_slope; roll = 0: up +y (image right = +x, up = +y), roll = 1: up +x
+ * (right = fwd x up = -y, up = +x) */
+static double zeta_slope_roll(size_t x, size_t y, size_t W, size_t H, double dth, double Dp, const double cpos[3],
+                              int roll)
 {
     double u = ((double)x + 0.5 - 0.5 * (double)W) * dth, v = (0.5 * (double)H - (double)y - 0.5) * dth;
-    double n = sqrt(1 + u * u + v * v);
-    return Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * v / n + 0.15 * u / n);
+    double n = sqrt(1 + u * u + v * v), dx = roll ? v / n : u / n, dy = roll ? -u / n : v / n;
+    return Dp * dens_slope(cpos, NULL) + 0.5 * Dp * Dp * (0.5 * dy + 0.15 * dx);
+}
+
+static double zeta_slope(size_t x, size_t y, size_t W, size_t H, double dth, double Dp, const double cpos[3])
+{
+    return zeta_slope_roll(x, y, W, H, dth, Dp, cpos, 0);
 }
 
 static void test_medium_height(void)
@@ -563,6 +571,17 @@ static void test_medium_height(void)
     t_true(worst < 1e-12 && worstM < 1e-12,
            "medium, density linear in height: T and M0 of all 7x4 pixels = the closed form (worst rel %.2g, %.2g)",
            worst, worstM);
+    /* the camera rolled by 90 degrees (up along +x: its right vector fwd x up has no x part) */
+    nbt_camera rolled = {{cpos[0], cpos[1], cpos[2]}, {0, 0, -2.0}, {1.5, 0, 0.4}};
+    st = nbt_screen_medium_kernels(&in, &m, dens_slope, NULL, &rolled, 0.01, NULL, 1, pix, &err);
+    worst = 0;
+    for (size_t y = 0; st == NBT_OK && y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double T = exp(-m.sigma_t * zeta_slope_roll(x, y, W, H, dth, D[y * W + x], cpos, 1));
+            worst = fmax(worst, fabs(pix[y * W + x].T - T) / T);
+        }
+    t_true(st == NBT_OK && worst < 1e-12, "medium, camera rolled 90 degrees: T of all 7x4 pixels = the closed form "
+           "(status %d, worst rel %.2g)", st, worst);
 
     /* the same field as a dense grid (trilinear: exact for a linear field between
      * voxel centres, float values: 1e-7 relative): T through nbt_grid_density */
