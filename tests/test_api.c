@@ -132,6 +132,31 @@ static void test_nnls(void)
            "nnls with an active bound: x = (2, 0), residual sqrt 37: (%g, %g), %g", x[0], x[1], r);
 }
 
+/* libnbt's phase sampler (internal, exported for the tests) at the ends of
+ * its uniform draw: the HG inverse CDF maps u = 0 to mu = -1 exactly (the
+ * cosine of a photon sent straight back). In doubles, g = 0.3 and 0.99 round
+ * to just below -1 there and must be clamped to -1, not to +1 (u = 0 is one
+ * draw in 2^53 of the generator: rare, but a photon turned the wrong way) */
+double nbt__phase_sample_mu(const nbt_phase *p, double (*uniform)(void *), void *rs);
+static double draw_fixed(void *vp)
+{
+    return *(const double *)vp;
+}
+
+static void test_sample_ends(void)
+{
+    const double gs[] = {0.3, 0.99, -0.5};
+    for (int i = 0; i < 3; i++) {
+        nbt_phase *p = nbt_phase_hg(gs[i]);
+        double u0 = 0, u1 = 1 - 0x1p-53;
+        double lo = nbt__phase_sample_mu(p, draw_fixed, &u0), hi = nbt__phase_sample_mu(p, draw_fixed, &u1);
+        /* u = 1 - 2^-53: mu within 2^-53 / q(1) of 1, q the sampled density in mu (>= 0.11 here) */
+        t_true(lo == -1.0 && fabs(hi - 1.0) < 1e-12, "HG g = %g sampled at u = 0: mu = %.17g (want -1), at u -> 1: %.17g",
+               gs[i], lo, hi);
+        nbt_phase_free(p);
+    }
+}
+
 static void test_messages(void)
 {
     const nbt_status all[7] = {NBT_OK, NBT_EDOM, NBT_ENOMEM, NBT_ETOL, NBT_EIO, NBT_EFORMAT, NBT_EINVAL};
@@ -155,6 +180,7 @@ int main(void)
     test_beam_direct();
     test_atom_zero_width();
     test_nnls();
+    test_sample_ends();
     test_messages();
     return t_done();
 }
