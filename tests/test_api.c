@@ -10,6 +10,7 @@
 #include <string.h>
 #include <nbt/nbt.h>
 #include <nbt/grid.h>
+#include "internal.h" /* the G-row store */
 #include "testutil.h"
 
 /* The documented camera: the image plane at unit distance along fwd,
@@ -114,11 +115,10 @@ static void test_atom_zero_width(void)
           "Gaussian atom of width 0.05 px: its pixel holds erf(10/sqrt 2)^2");
 }
 
-/* libnbt's NNLS (internal, exported for the tests): a problem whose first
+/* libnbt's NNLS (internal.h, exported for the tests): a problem whose first
  * column is already along e1, where a Householder reflection with the
  * wrong sign divides by zero (a random mutant of that sign survived the
  * kernel fits, whose columns never are); and an active bound */
-nbt_status nbt__nnls(const double *A, size_t m, size_t n, const double *b, double *x, double *resid);
 static void test_nnls(void)
 {
     const double A[3 * 2] = {2, 0, 0, 3, 0, 0}, b[3] = {4, 6, 1};
@@ -130,6 +130,57 @@ static void test_nnls(void)
     st = nbt__nnls(A, 3, 2, b2, x, &r);
     t_true(st == NBT_OK && fabs(x[0] - 2) < 1e-15 && x[1] == 0 && fabs(r - sqrt(37.0)) < 1e-14,
            "nnls with an active bound: x = (2, 0), residual sqrt 37: (%g, %g), %g", x[0], x[1], r);
+}
+
+/* libnbt's phase sampler (internal.h, exported for the tests) at the ends of
+ * its uniform draw: the HG inverse CDF maps u = 0 to mu = -1 exactly (the
+ * cosine of a photon sent straight back). In doubles, g = 0.3 and 0.99 round
+ * to just below -1 there and must be clamped to -1, not to +1 (u = 0 is one
+ * draw in 2^53 of the generator: rare, but a photon turned the wrong way) */
+static double draw_fixed(void *vp)
+{
+    return *(const double *)vp;
+}
+
+static void test_sample_ends(void)
+{
+    const double gs[] = {0.3, 0.99, -0.5};
+    for (int i = 0; i < 3; i++) {
+        nbt_phase *p = nbt_phase_hg(gs[i]);
+        double u0 = 0, u1 = 1 - 0x1p-53;
+        double lo = nbt__phase_sample_mu(p, draw_fixed, &u0), hi = nbt__phase_sample_mu(p, draw_fixed, &u1);
+        /* u = 1 - 2^-53: mu within 2^-53 / q(1) of 1, q the sampled density in mu (>= 0.11 here) */
+        t_true(lo == -1.0 && fabs(hi - 1.0) < 1e-12, "HG g = %g sampled at u = 0: mu = %.17g (want -1), at u -> 1: %.17g",
+               gs[i], lo, hi);
+        nbt_phase_free(p);
+    }
+}
+
+/* the store of G rows shared by a plan's J builds (internal): 700 rows put,
+ * the table grown from 256 to 2048 slots on the way, and every row found
+ * again with its own values (a row moved to the wrong slot on growth is
+ * missed, and recomputed by every build that wants it) */
+static void test_jcache(void)
+{
+    nbt__jcache *c = nbt__jcache_alloc(1u << 20);
+    int ok = c != NULL, hits = 0;
+    for (int i = 0; ok && i < 700; i++) {
+        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2};
+        double row[3] = {k.T, -k.T, i};
+        nbt__jcache_put(c, &k, row, 0.5 * i);
+    }
+    for (int i = 0; ok && i < 700; i++) {
+        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2};
+        double row[3] = {0}, e = -1;
+        if (nbt__jcache_get(c, &k, row, &e))
+            hits += row[0] == k.T && row[1] == -k.T && row[2] == i && e == 0.5 * i;
+    }
+    nbt__jkey other = {0.37, 1e-9, 3, 4, 2, 1, 1}; /* key 0 with another split: not stored */
+    double row[3], e;
+    t_true(ok && hits == 700 && !nbt__jcache_get(c, &other, row, &e),
+           "G-row store: %d of 700 rows found with their values after growing to 2048 slots; an unstored key missed",
+           hits);
+    nbt__jcache_free(c);
 }
 
 static void test_messages(void)
@@ -155,6 +206,8 @@ int main(void)
     test_beam_direct();
     test_atom_zero_width();
     test_nnls();
+    test_sample_ends();
+    test_jcache();
     test_messages();
     return t_done();
 }

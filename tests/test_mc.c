@@ -91,6 +91,11 @@ static void test_infinite(void)
     t_true(nbt_mc_run(&c, &f) == NBT_OK, "infinite run");
     t_true(same_tallies(h, f) && f->M0[0] == 0 && f->M0[9] == 0 && h->interactions == f->interactions,
            "albedo 0: half-space and infinite medium identical (no scattering)");
+    /* and each photon meets exactly one event (its first collision, where it
+     * is absorbed): the event count is the photon count */
+    t_true(h->interactions == c.photons && f->interactions == c.photons,
+           "albedo 0: %llu and %llu interactions = %llu photons", (unsigned long long)h->interactions,
+           (unsigned long long)f->interactions, (unsigned long long)c.photons);
     nbt_mc_result_free(h);
     nbt_mc_result_free(f);
 

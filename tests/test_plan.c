@@ -124,6 +124,49 @@ static void test_legendre(void)
     t_true(nbt_plan_legendre_terms(1.2, 10, 1e-2, 16, &l) == NBT_EDOM, "gmax 1.2 rejected");
 }
 
+/* Deep media: at u = kappa_t h >> 1 a ray's airlight comes from its first
+ * stretch, where the scattering cosine is cos(gamma), so the relative
+ * truncation of the N-term series tends to that of HG's Legendre series at
+ * one angle, |sum_{k>=N} (2k+1) g^k P_k(cos gamma)| / HG_4pi(cos gamma) (closed
+ * form; the sum to k = 600, where (2k+1) 0.9^k < 1e-24). The budget for
+ * xmax = 1e6 must meet tol/2 there on the sample angles (its smallest rays,
+ * u = 1e3 .. 1e6, are all in that limit), and N - 1 terms must not. (The H
+ * values underflow there, e^{-u s} < e^{-700}: the budget integrates them
+ * shifted; unshifted, those rays were 0/0 and silently dropped out.) */
+static double deep_trunc(double g, size_t N)
+{
+    static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
+    double worst = 0;
+    for (int ig = 0; ig < 6; ig++) {
+        double mu = cos(gam[ig]), p0 = 1, p1 = mu, tail = 0, gk = 1;
+        for (size_t k = 0; k <= 600; k++, gk *= g) {
+            double pk = k == 0 ? 1.0 : p1;
+            if (k >= N)
+                tail += (2.0 * k + 1.0) * gk * pk;
+            if (k >= 1) { /* p0, p1 = P_k, P_{k+1} */
+                double p2 = ((2.0 * k + 1.0) * mu * p1 - (double)k * p0) / ((double)k + 1.0);
+                p0 = p1;
+                p1 = p2;
+            }
+        }
+        worst = fmax(worst, fabs(tail) / ((1 - g * g) / pow(1 + g * g - 2 * g * mu, 1.5)));
+    }
+    return worst;
+}
+
+static void test_legendre_deep(void)
+{
+    nbt_plan_legendre l;
+    double tol = 1e-2;
+    nbt_status st = nbt_plan_legendre_terms(0.9, 1e6, tol, 512, &l);
+    double wN = deep_trunc(0.9, l.nterms), wN1 = deep_trunc(0.9, l.nterms - 1);
+    t_true(st == NBT_OK && wN <= 0.5 * tol && wN1 > 0.5 * tol,
+           "g 0.9, kappa_t h up to 1e6: %zu terms truncate the deep limit by %.3g <= tol/2, %zu by %.3g > tol/2",
+           l.nterms, wN, l.nterms - 1, wN1);
+    /* 2%: the rays' own O(1/u) departures from the limit */
+    t_rel(l.trunc_err, wN, 2e-2, "recorded truncation %.6g = the deep limit %.6g", l.trunc_err, wN);
+}
+
 /* max over random points of |lookup - exact| / recorded max_err, per channel */
 static double worst_ratio(const nbt_tableset *ts, int npts)
 {
@@ -485,6 +528,7 @@ int main(void)
     test_plan_out_of_reach();
     test_scene_check();
     test_legendre();
+    test_legendre_deep();
     test_plan_tables();
     test_plan_scene();
     test_plan_phong();

@@ -111,6 +111,52 @@ static void test_pixel_integrals(void)
             }
 }
 
+/* ---- radial masses of the atoms ----
+ * ERFC atom of unit scale: 2 pi r k(r) = sqrt(2 pi) G(r), so its mass in
+ * a0 <= r < a1 is sqrt(2 pi) int_a0^a1 G, done here by quadrature; GAUSS:
+ * exp(-a0^2/2) - exp(-a1^2/2). Annuli on both sides of a = 1, where the
+ * library switches from the inside form to the tail form. */
+static int G_f(double u, void *vp, unsigned fdim, double *f)
+{
+    (void)vp;
+    (void)fdim;
+    f[0] = sqrt(2.0 * M_PI) * G(u);
+    return 0;
+}
+
+static void test_atom_mass(void)
+{
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(1, 500);
+    const double a[][2] = {{0.0, 0.4}, {0.3, 0.999}, {1.0, 1.7}, {1.7, 3.2}, {2.5, INFINITY}, {0.5, INFINITY}};
+    for (size_t i = 0; i < sizeof a / sizeof a[0]; i++) {
+        double want, e, hi = isinf(a[i][1]) ? 40.0 : a[i][1]; /* G(40) ~ 1e-350: nothing beyond */
+        nbt_quad_gk(ws, G_f, NULL, 1, a[i][0], hi, 0, 1e-13, &want, &e);
+        /* 1e-10: the quadrature is good to ~1e-13; a wrong constant in a form is O(1) */
+        t_rel(nbt_screen_atom_mass(NBT_ATOM_ERFC, a[i][0], a[i][1]), want, 1e-10,
+              "erfc atom mass in [%g, %g) vs quadrature %.12g", a[i][0], a[i][1], want);
+        double wg = exp(-0.5 * a[i][0] * a[i][0]) - exp(-0.5 * hi * hi);
+        t_rel(nbt_screen_atom_mass(NBT_ATOM_GAUSS, a[i][0], a[i][1]), wg, 1e-12, "gauss atom mass in [%g, %g)",
+              a[i][0], a[i][1]);
+    }
+    /* the truncation radius of a scale-3.1 px atom: the circle of radius R + 1/2
+     * leaves at most the tail outside, R - 1/2 more than it */
+    for (int sh = 0; sh < 2; sh++) {
+        nbt_atom_shape shape = sh ? NBT_ATOM_GAUSS : NBT_ATOM_ERFC;
+        double s = 3.1, tail = 1e-4, out_hi, out_lo, e;
+        long R = nbt_screen_atom_radius(shape, s, tail);
+        if (sh) {
+            out_hi = exp(-0.5 * pow((R + 0.5) / s, 2));
+            out_lo = exp(-0.5 * pow((R - 0.5) / s, 2));
+        } else {
+            nbt_quad_gk(ws, G_f, NULL, 1, (R + 0.5) / s, 40, 0, 1e-13, &out_hi, &e);
+            nbt_quad_gk(ws, G_f, NULL, 1, (R - 0.5) / s, 40, 0, 1e-13, &out_lo, &e);
+        }
+        t_true(out_hi <= tail && out_lo > tail, "%s atom %g px, tail %g: R = %ld leaves %.3g beyond R + 1/2, %.3g beyond R - 1/2",
+               sh ? "gauss" : "erfc", s, tail, R, out_hi, out_lo);
+    }
+    nbt_quad_ws_free(ws);
+}
+
 static void test_kernels(void)
 {
     nbt_beam_medium m = nbt_beam_homogeneous(0.7385, 0.9, 0.0685);
@@ -686,6 +732,7 @@ static void test_edge_band(void)
 int main(void)
 {
     test_pixel_integrals();
+    test_atom_mass();
     test_kernels();
     test_operators();
     test_medium();

@@ -308,6 +308,35 @@ static void test_model_cubic(void)
     nbt_screen_model_free(m);
 }
 
+/* ---- beyond the deepest depth the log mass goes on along its slope between
+ * the last two depths: data with the same log mass ln 0.02 - 0.3 tau at every
+ * (g, albedo) node continue exactly as 0.02 e^{-0.3 tau}, at a point between
+ * nodes on both other axes (where all four corners' slopes have weight) ---- */
+static void test_model_deep(void)
+{
+    const double g[] = {0.5, 0.9}, alb[] = {0.6, 0.95}, tau[] = {1.0, 3.0};
+    nbt_screen_model *m = nbt_screen_model_alloc(NULL, 2, g, 2, alb, 2, tau);
+    for (int geo = 0; m && geo < 2; geo++)
+        for (size_t ip = 0; ip < 2; ip++)
+            for (size_t ia = 0; ia < 2; ia++)
+                for (size_t it = 0; it < 2; it++) {
+                    nbt_screen_shape s;
+                    memset(&s, 0, sizeof s);
+                    s.erfc[12] = 0.02 * exp(-0.3 * tau[it]);
+                    nbt_screen_model_set(m, (nbt_screen_geometry)geo, ip, ia, it, &s);
+                }
+    nbt_phase *p = nbt_phase_hg(0.7);
+    nbt_screen_shape o;
+    int ex = 0;
+    t_true(m && nbt_screen_model_eval(m, p, NBT_SCREEN_INSIDE, 0.8, 7.5, &o, &ex) == NBT_OK, "model eval at tau 7.5");
+    /* 1e-12: exact arithmetic on exact data; one corner's slope missing is 20% */
+    t_rel(nbt_screen_shape_mass(&o, 0, INFINITY), 0.02 * exp(-0.3 * 7.5), 1e-12,
+          "model beyond its deepest depth (g 0.7, albedo 0.8, tau 7.5 > 3): the slope of all four corners");
+    t_true(ex != 0, "tau 7.5 beyond the grid is flagged an extrapolation (%d)", ex);
+    nbt_phase_free(p);
+    nbt_screen_model_free(m);
+}
+
 /* ---- the shipped model covers HG 0..0.95; the fitted kernel adds it to the exact first order ---- */
 static void test_fitted(void)
 {
@@ -387,6 +416,7 @@ int main(void)
     test_rgb();
     test_model();
     test_model_cubic();
+    test_model_deep();
     test_fitted();
     return t_done();
 }
