@@ -154,6 +154,15 @@ static void test_sample_ends(void)
                gs[i], lo, hi);
         nbt_phase_free(p);
     }
+    /* Rayleigh by Cardano: the sampled mu inverts the CDF (mu^3 + 3 mu + 4)/8 at asymmetric draws */
+    nbt_phase *r = nbt_phase_rayleigh();
+    double worst = 0;
+    for (int i = 0; i < 5; i++) {
+        double u = (double[]){0.01, 0.3, 0.5, 0.77, 0.999}[i], mu = nbt__phase_sample_mu(r, draw_fixed, &u);
+        worst = fmax(worst, fabs((mu * mu * mu + 3.0 * mu + 4.0) / 8.0 - u));
+    }
+    t_true(worst < 1e-12, "Rayleigh sampled mu: CDF(mu) = u at u = 0.01 .. 0.999 (worst %.2g)", worst);
+    nbt_phase_free(r);
 }
 
 /* the store of G rows shared by a plan's J builds (internal): 700 rows put,
