@@ -244,6 +244,11 @@ grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad
 # in glyph cells of 12 x 14 pixels: five different letters draw five different cells
 [ "$("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")" = 5 ] && ok ||
   bad "h.png: the label 'value' as 5 distinct glyphs: $("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")"
+# the panel title "k = 0" (58 px wide, centred over the first panel at x = 124 + 192: from 287) sits
+# 4 px above the panel (rows 74..87): the gap rows 88..94 under it hold no ink, as blank as the same
+# rows left of it (one pattern; a title drawn 8 px lower makes two)
+[ "$("$PNGCHECK" --cells 229 88 58 7 2 "$tmp/h.png")" = 1 ] && [ "$("$PNGCHECK" --cells 229 74 58 14 2 "$tmp/h.png")" = 2 ] &&
+  ok || bad "h.png: the panel title above its panel"
 l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
 awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
