@@ -27,6 +27,11 @@ within_ref() {
 # the fitted HG kernel against the path tracer (first order exact + fitted higher orders: ~2% error)
 "$S" "$tmp/l.exr" -o "$tmp/lp.exr" $P --spp 256 2>"$tmp/log" || bad "path: $(cat "$tmp/log")"
 grep -q "path tracing (256 samples per pixel" "$tmp/log" && ok || bad "path reports its samples: $(cat "$tmp/log")"
+# the documented defaults: 64 samples per pixel, 16 per pass with --noise (a loose 0.9: one pass)
+"$S" scene lamps --size 16x12 -o "$tmp/l16.exr" &&
+  "$S" "$tmp/l16.exr" -o "$tmp/l16p.exr" $P 2>"$tmp/log" && grep -q "path tracing (64 samples per pixel" "$tmp/log" &&
+  "$S" "$tmp/l16.exr" -o "$tmp/l16n.exr" $P --noise 0.9 2>"$tmp/log" && grep -q "path tracing (16 samples per pixel" "$tmp/log" &&
+  ok || bad "path: default samples per pixel, 64 (16 per pass with --noise): $(cat "$tmp/log")"
 line=$("$S" "$tmp/l.exr" -o "$tmp/lf.exr" $H --compare "$tmp/lp.exr" 2>"$tmp/log")
 within_ref "fitted kernel vs path" 0.03 "$line"
 grep -q "render with overscan" "$tmp/log" && ok || bad "a wide kernel on a plain render warns: $(cat "$tmp/log")"
