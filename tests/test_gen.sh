@@ -73,8 +73,14 @@ rm -f "$tmp/d2.txt"
 expect_usage "--infinite for another model" "--infinite does not apply" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --infinite
 expect_usage "--beam-model missing" "No such file" "$NBT_GEN" eval psi --albedo 0.9 --sigma-t 1 --B 0.0685 --z 2 --r 0.3 --model fitted --beam-model /nonexistent/m.txt
 # its tables: the log-parameters at a node (constants here), P4 in the second file
-"$NBT_GEN" kernel --B 0.05 --model fitted --beam-model "$tmp/bm.txt" --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/kf.exr" >/dev/null 2>&1 &&
+"$NBT_GEN" kernel --B 0.05 --model fitted --beam-model "$tmp/bm.txt" --tau 1:9 --albedo 0.5:0.9 --size 9x5 -o "$tmp/kf.exr" >"$tmp/kfout" 2>&1 &&
   [ -s "$tmp/kf-P4.exr" ] && ok || bad "kernel --model fitted: two files"
+# the summary line's five errors, P0..P4, are those the two files record (nbt-gen info reads them back)
+{ "$NBT_GEN" info "$tmp/kf.exr"; "$NBT_GEN" info "$tmp/kf-P4.exr"; } | sed -n 's/^channel .*max interp err //p' | tr '\n' ' ' >"$tmp/kfinfo"
+sed -n 's/.*max interp err P0\.\.P4 \(.*\) (absolute.*/\1/p' "$tmp/kfout" | awk -v r="$(cat "$tmp/kfinfo")" '{ n = split(r, e, " ")
+    if (NF != 5 || n != 5) exit 1; for (i = 1; i <= 5; i++) if ((($i - e[i]) / e[i]) ^ 2 > 1e-4) exit 1 }' && ok ||
+  bad "kernel --model fitted: the summary's P0..P4 errors = the files' ($(cat "$tmp/kfout") vs $(cat "$tmp/kfinfo"))"
+rm -f "$tmp/kfout" "$tmp/kfinfo"
 # its channels are model parameters, not Legendre orders: the header's nbt.channels_k (plain text
 # in the EXR header) gives every one k = -1
 grep -aq 'R=-1 G=-1 B=-1 A=-1' "$tmp/kf.exr" && ok || bad "kernel --model fitted: nbt.channels_k all -1"

@@ -321,6 +321,61 @@ static void test_first_lamp(void)
     world_free(&r);
 }
 
+/* two lamps (at different depths, different colours): next-event estimation picks a lamp by its
+ * weight; a pick that favours the first lamp while dividing by the true weights biases both pixels
+ * (one beside each lamp) against the sum of the two lamps' first-order quadratures */
+static void test_first_two_lamps(void)
+{
+    world r = world_alloc(50, 36, 0.04, 21.6, 15.3);
+    world_fill(&r, 2.5f, (const float[3]){0, 0, 0});
+    const size_t lx[2] = {27, 14}, ly[2] = {12, 22};
+    const float Zl[2] = {1.0f, 1.4f}, Le[2][3] = {{5.0f, 2.0f, 1.0f}, {1.0f, 3.0f, 4.0f}};
+    nbt_phase *p = nbt_phase_hg(0.5);
+    const double sig[3] = {0.5, 0.7, 0.9}, alb[3] = {0.95, 0.9, 0.8};
+    lamp_ctx c[2];
+    for (int l = 0; l < 2; l++) {
+        size_t li = ly[l] * 50 + lx[l];
+        r.Z[li] = Zl[l];
+        memcpy(r.rgb + 3 * li, Le[l], sizeof Le[l]);
+        c[l] = (lamp_ctx){.p = p, .Zl = Zl[l], .u0 = (lx[l] - r.W.cx) * r.W.dtheta,
+                          .u1 = (lx[l] + 1 - r.W.cx) * r.W.dtheta, .v0 = (r.W.cy - ly[l] - 1) * r.W.dtheta,
+                          .v1 = (r.W.cy - ly[l]) * r.W.dtheta, .wu = nbt_quad_ws_alloc(3, 2000),
+                          .wv = nbt_quad_ws_alloc(3, 2000)};
+        for (int ch = 0; ch < 3; ch++) {
+            c[l].sig[ch] = sig[ch];
+            c[l].sigs[ch] = sig[ch] * alb[ch];
+            c[l].Le[ch] = Le[l][ch];
+        }
+    }
+    nbt_screen_path_medium m = {.sigma_t = {sig[0], sig[1], sig[2]}, .albedo = {alb[0], alb[1], alb[2]},
+                                .phase = p, .radius = INFINITY};
+    nbt_screen_path_opts o = {.spp = 20000, .seed = 9, .nthreads = 0, .max_order = 1};
+    const size_t px[2][2] = {{25, 10}, {16, 24}};
+    for (int k = 0; k < 2; k++) {
+        double S[3], se[3], ref[3] = {0, 0, 0}, d[3], v[3];
+        path_pixel(&r, &m, &o, px[k][0], px[k][1], S, se);
+        for (int i = 0; i < 4; i++)
+            for (int j = 0; j < 4; j++) {
+                dir_of(&r.W, px[k][0] + 0.5 + 0.5 * GL4x[i], px[k][1] + 0.5 + 0.5 * GL4x[j], d);
+                for (int l = 0; l < 2; l++) {
+                    lamp_first(&c[l], d, v);
+                    for (int ch = 0; ch < 3; ch++)
+                        ref[ch] += 0.25 * GL4w[i] * GL4w[j] * v[ch];
+                }
+            }
+        for (int ch = 0; ch < 3; ch++)
+            t_abs(S[ch], ref[ch], 4.5 * se[ch] + 1e-3 * ref[ch],
+                  "first order, two lamps, pixel (%zu, %zu), channel %d: %.5g +- %.2g vs %.5g", px[k][0], px[k][1],
+                  ch, S[ch], se[ch], ref[ch]);
+    }
+    for (int l = 0; l < 2; l++) {
+        nbt_quad_ws_free(c[l].wu);
+        nbt_quad_ws_free(c[l].wv);
+    }
+    nbt_phase_free(p);
+    world_free(&r);
+}
+
 /* ---- 3. all orders against photon counting: the axis pixel before a
  * uniform wall sees L times the kernel's total scattered mass (reciprocity) ---- */
 static void test_all_orders(void)
@@ -494,6 +549,7 @@ int main(void)
     test_bad();
     test_first_wall();
     test_first_lamp();
+    test_first_two_lamps();
     test_all_orders();
     test_nee();
     test_noise();
