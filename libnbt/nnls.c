@@ -122,7 +122,7 @@ nbt_status nbt__nnls(const double *A, size_t m, size_t n, const double *b, doubl
             /* step towards z until the first passive coefficient reaches 0; it and
              * any other that rounding put at or below 0 leave the passive set */
             double alpha = 1;
-            size_t hit = 0;
+            size_t hit = k; /* none yet: with zp exactly 0 (a = 1) no step is shorter, and P[0] must stay */
             for (size_t j = 0; j < k; j++)
                 if (zp[j] <= 0) {
                     double a = x[P[j]] / (x[P[j]] - zp[j]);
