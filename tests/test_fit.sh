@@ -418,6 +418,10 @@ fi
 # unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
 enoent="cannot write .*No such file or directory"
 BIG="--albedo 0.9 --sigma-t 1 --B 0.1 --photons 1e10"
+# --photons: the closed range [64, 1e15]: 64 counts, 63 is refused with the range
+"$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 64 --z-planes 1:2:2 -o "$tmp/p64.csv" >/dev/null 2>&1 &&
+  [ -s "$tmp/p64.csv" ] && ok || bad "mc --photons 64 (the smallest accepted)"
+expect_usage "mc --photons 63" "expected a number in \[64, 1e+15\]" "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 63 --z-planes 1:2:2
 expect_fail "mc CSV to a missing directory" "-o: $enoent" "$NBT_FIT" mc $BIG -o /nonexistent/dir/x.csv
 expect_fail "mc EXR to a missing directory" "-o: $enoent" "$NBT_FIT" mc $BIG -o /nonexistent/dir/x.exr
 mkdir "$tmp/dir.csv"

@@ -529,5 +529,9 @@ expect_usage "scene: basis with a fixed phase" "basis applies to a g range only"
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
   [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
   bad "default scene: $(cat "$tmp/err")"
+# the thesis' set (Hong): H, J^1 and J^20, as their files and headers say
+[ -s "$tmp/nbt-tables/H.exr" ] && [ -s "$tmp/nbt-tables/J1.exr" ] && [ -s "$tmp/nbt-tables/J20.exr" ] &&
+  "$NBT_GEN" info "$tmp/nbt-tables/J20.exr" | grep -q '^n  *20$' && "$NBT_GEN" info "$tmp/nbt-tables/J1.exr" | grep -q '^n  *1$' &&
+  ok || bad "default scene: H, J1, J20: $(ls "$tmp/nbt-tables")"
 
 finish

@@ -234,7 +234,10 @@ static void path_pixel(world *r, const nbt_screen_path_medium *m, nbt_screen_pat
     r->W.x0 = x;
     r->W.y0 = y;
     r->W.ow = r->W.oh = 1;
-    nbt_screen_path(&r->W, m, o, S, se, NULL);
+    S[0] = S[1] = S[2] = NAN; /* a refusal must not leave a previous pixel's values */
+    nbt_status st = nbt_screen_path(&r->W, m, o, S, se, NULL);
+    if (st != NBT_OK)
+        t_true(0, "path at pixel (%zu, %zu): status %d", x, y, st);
 }
 
 /* ---- 2. first order against quadrature: a uniform wall, a lamp ---- */
