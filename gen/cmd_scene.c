@@ -102,9 +102,9 @@ int cmd_scene(int argc, char **argv)
                  "Builds only the tables the scene in FILE needs (format: doc/scene-format.md),\n"
                  "each with the smallest size and Legendre order count meeting its tol; with a g\n"
                  "range, Legendre packs or g-sliced tables by the scene's basis key (default auto:\n"
-                 "the smaller predicted build time, printed with the reason). A g-sliced table\n"
-                 "whose recorded lookup error misses tol is an error (exit 1, nothing written)\n"
-                 "unless --allow-tol-miss.\n"
+                 "the smaller predicted build time, slices only when 1.5x faster; printed with the\n"
+                 "reason). A g-sliced table whose recorded lookup error misses tol is an error\n"
+                 "(exit 1, nothing written) unless --allow-tol-miss.\n"
                  "Progress on stderr: each set's start with its predicted time, its end with the\n"
                  "actual time, one warning line when the plan predicts more than 60 s; --quiet: none.");
             return 0;

@@ -284,6 +284,9 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
  * atanh(g) spanning [-atanh 0.95, atanh 0.95] at 1e-3, quadratic, so the
  * slice count scales with the atanh span and tol^(-1/3). The predicted
  * time scales a small proxy's by the node count. */
+/* --basis auto takes slices when their predicted build is this many times faster */
+#define AUTO_SLICES_GAIN 1.5
+
 static size_t ladder_at_least(const size_t *lad, size_t n, double want)
 {
     for (size_t i = 0; i < n; i++)
@@ -520,7 +523,10 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
                  out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max, out->sl_size[0],
                  out->sl_size[1], out->sl_size[2], 1e-6 * out->sl_bytes, out->sl_seconds);
     } else {
-        out->basis = out->leg_seconds <= out->sl_seconds ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
+        /* the predictions come from proxies of a few 0.01 s, whose times move by tens of percent with the
+         * machine's load: slices only when clearly faster, so that a scene's basis does not flip with it
+         * (the example scene: Legendre 0.032 s against slices 0.027 s on a loaded machine) */
+        out->basis = out->leg_seconds <= AUTO_SLICES_GAIN * out->sl_seconds ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
         snprintf(out->reason, sizeof out->reason,
                  "%s: predicted build Legendre %zu orders %.2g s, %.1f MB; slices %zux%zux%zu %.2g s, %.1f MB",
                  nbt_basis_name(out->basis), out->leg_nterms, out->leg_seconds, 1e-6 * out->leg_bytes,

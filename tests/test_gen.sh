@@ -230,6 +230,9 @@ name=$long/$(printf "%0${pad}d" 0).exr
 expect_usage "-o: a name of 512 bytes" "must be a file name ending in .exr" "$NBT_GEN" airlight -o "$long/$(printf "%0$((pad + 1))d" 0).exr" --size 9x9
 rm -rf "$tmp/$(printf '%0200d' 0)"
 expect_usage "n for airlight" "--n" "$NBT_GEN" airlight -o "$tmp/x.exr" --n 3
+# a tol out of reach is refused at planning time, naming the ladder's largest size (2049) and nothing written
+expect_fail "airlight --tol 1e-12" "out of reach for the H table .* at the largest size, 2049x2049: ask for a larger tolerance" \
+  "$NBT_GEN" airlight -o "$tmp/x.exr" --tol 1e-12
 [ -z "$(ls "$tmp" | grep -v '^out$\|^err$')" ] && ok || bad "no output files left by rejected commands: $(ls "$tmp")"
 
 # tables: write, read back, info
