@@ -508,6 +508,14 @@ set -- $("$NBT_GEN" eval airlight --g 0.45 $geo)
 awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
   bad "eval --tables 4 Legendre orders at g = 0.45: $lv +- $lb vs direct $1"
 expect_usage "eval --tables: g outside the table" "'$tmp/gs.exr' covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
+# a g-sliced J^1 table serves eval surface at run-time g: within its printed bound of the direct integral
+sg="--kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.7 --theta-r 0.4 --kd 0.6 --ks 0 --n 1"
+"$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 2e-2 --n 1 -o "$tmp/gjs.exr" --quiet --no-preview --allow-tol-miss >/dev/null 2>&1
+set -- $("$NBT_GEN" eval surface --g 0.21 $sg --method table --tables "$tmp/gjs.exr" 2>/dev/null) \
+  $("$NBT_GEN" eval surface --g 0.21 $sg --method direct 2>/dev/null)
+awk -v t="$1" -v e="$2" -v d="$3" -v de="$4" 'BEGIN { x = t - d; exit !(e > 0 && (x < 0 ? -x : x) <= e + de) }' &&
+  ok || bad "eval surface from a g-sliced J table at g 0.21 within its bound of direct: $*"
+rm -f "$tmp/gjs.exr"
 expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
 expect_usage "eval --tables: g-sliced with --phase" "run-time asymmetry with --g" "$NBT_GEN" eval airlight --phase iso $geo --method table --tables "$tmp/gs.exr"
