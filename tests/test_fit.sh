@@ -160,7 +160,11 @@ else
   # the smooth correction, fitted on two runs, judged on a third it has not seen
   "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 23 -o "$tmp/k3.exr" >/dev/null 2>&1
   "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 24 -o "$tmp/k4.exr" >/dev/null 2>&1
-  "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/corr.txt" -o "$tmp/kc.csv" 2>/dev/null && [ -s "$tmp/corr.txt" ] && ok || bad "--correction"
+  "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/corr.txt" -o "$tmp/kc.csv" 2>"$tmp/kcerr" && [ -s "$tmp/corr.txt" ] && ok || bad "--correction"
+  # --apply on the fit's own two runs prints the fit's RMS lines: each run's name with its numbers
+  "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --apply "$tmp/corr.txt" 2>/dev/null | grep '^RMS' >"$tmp/app2" &&
+    [ "$(wc -l <"$tmp/app2")" -eq 2 ] && grep '^RMS .* corrected ' "$tmp/kcerr" | cmp -s - "$tmp/app2" && ok ||
+    bad "--apply = the --correction fit's RMS lines: $(cat "$tmp/app2" "$tmp/kcerr")"
   "$NBT_FIT" kernel "$tmp/k2.exr" --apply "$tmp/corr.txt" >"$tmp/app" 2>&1 &&
     awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/app" && ok || bad "the correction helps on a held-out run: $(cat "$tmp/app")"
   # phase --against: the widths' common factor that makes the moment kernel match the counts
