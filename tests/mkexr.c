@@ -12,7 +12,7 @@
  * the attribute nbt.method = layers; for the EXR tool tests.
  * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
  * (no longer than FROM), e.g. to take one channel out of a layer.
- * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right
+ * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right (vflip: top to bottom)
  * (other channels dropped). mkexr IN.exr depths: the number of distinct
  * depth values in IN's display window.
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
@@ -203,7 +203,8 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return 0;
     }
-    if (argc == 4 && !strcmp(argv[2], "flip")) {
+    if (argc == 4 && (!strcmp(argv[2], "flip") || !strcmp(argv[2], "vflip"))) {
+        int v = argv[2][0] == 'v';
         nbt_image *in = NULL;
         if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK || !in->z) {
             fprintf(stderr, "%s\n", in ? "mkexr: no depth" : err);
@@ -214,7 +215,7 @@ int main(int argc, char **argv)
             return 1;
         for (size_t y = 0; y < in->h; y++)
             for (size_t x = 0; x < in->w; x++) {
-                size_t i = y * in->w + x, j = y * in->w + (in->w - 1 - x);
+                size_t i = y * in->w + x, j = v ? (in->h - 1 - y) * in->w + x : y * in->w + (in->w - 1 - x);
                 o->z[i] = in->z[j];
                 for (int c = 0; c < 3; c++)
                     o->rgb[3 * i + (size_t)c] = in->rgb[3 * j + (size_t)c];

@@ -77,6 +77,13 @@ done
 h0=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lamps.cmp"); h1=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lampsf.cmp")
 awk -v a="$h0" -v b="$h1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-5 * a) }' && ok ||
   bad "--compare halo of the lamps scene $h0 = of its mirror $h1"
+# and top-bottom symmetric (12 bins of 4 tile the 48 rows): the scene mirrored upside down, the same halo
+"$MK" "$tmp/lampsv.exr" vflip "$tmp/lamps.exr" || bad "mkexr vflip"
+"$S" "$tmp/lampsv.exr" -o "$tmp/la-lampsv.exr" $M0 --method ref-a --no-png --extend 0 2>/dev/null
+"$S" "$tmp/lampsv.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --extend 0 --compare "$tmp/la-lampsv.exr" 2>/dev/null >"$tmp/lampsv.cmp"
+h2=$(sed -n 's/.* halo \([^ ]*\).*/\1/p' "$tmp/lampsv.cmp")
+awk -v a="$h0" -v b="$h2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-5 * a) }' && ok ||
+  bad "--compare halo of the lamps scene $h0 = of it upside down $h2"
 # a reference without S.G falls back to its RGB - T x input for all three channels: the same relL1
 # as with its S layer, but for RGB's float rounding (2^-24 of RGB, summed: below 1e-5 here; measured 1e-6)
 "$MK" "$tmp/lamp0-noG.exr" rename "$tmp/lamp0-a.exr" S.G X.G || bad "mkexr rename"
