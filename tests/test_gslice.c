@@ -533,6 +533,18 @@ static void test_cell_stencils(void)
     nbt_table_free(t);
 }
 
+/* basis legendre for a g range no Legendre series within 512 orders serves: refused, and the
+ * message says "more than 512" (the planner reports 513 for "not reached by 512") */
+static void test_basis_legendre_out_of_reach(void)
+{
+    nbt_gslice_request r = {NBT_TABLE_H, 0, 10.0, {-0.99, 0.99}, 1e-3, {0, 0, 0}, 0};
+    nbt_basis_choice ch;
+    char err[512] = "";
+    nbt_status st = nbt_basis_choose(&r, 512, NBT_BASIS_LEGENDRE, 2, &ch, err, sizeof err);
+    t_true(st == NBT_ETOL && strstr(err, "needs more than 512 Legendre orders at tol 0.001"),
+           "basis legendre, |g| to 0.99 at 1e-3: ETOL naming 'more than 512' (%d: %s)", st, err);
+}
+
 int main(void)
 {
     nbt_table *H = small_table(NBT_TABLE_H, 0, 97, 97, 9, -0.4, 0.5);
@@ -568,6 +580,7 @@ int main(void)
     test_airlight(H);
     test_surface(J);
     test_errors(H, J);
+    test_basis_legendre_out_of_reach();
     test_build_io();
     test_log_form();
     test_cell_stencils();
