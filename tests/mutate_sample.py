@@ -39,9 +39,11 @@ classified by hand in doc/mutation.md (equivalent, or a real bug and the test
 written for it).
 
   tests/mutate_sample.py [--n 150] [--seed S] [--srcdir DIR] [--work DIR]
-                         [--full K] [--sites] [--reverse] [--slow 3] [-j 2]
+                         [--full K] [--sites] [--reverse] [--skip K] [--slow 3] [-j 2]
 
---sites prints the site counts per file and kind and exits. --work keeps the
+--sites prints the site counts per file and kind and exits. --skip K resumes a
+stopped runner (same --seed, --reverse and source): its first K mutants, built
+or not, are passed over and the numbering goes on from K. --work keeps the
 scratch builds and the coverage map between runs (default: a temporary
 directory, removed at the end). Results go to stdout, one line per mutant."""
 import argparse
@@ -437,6 +439,9 @@ def main():
     ap.add_argument("--sites", action="store_true")
     ap.add_argument("--reverse", action="store_true",
                     help="take the permutation from its end (a second runner on another --work: disjoint mutants)")
+    ap.add_argument("--skip", type=int, default=0,
+                    help="pass over the first K mutants of this runner's order (those already run: the built ones "
+                         "plus those that did not compile, as the summary counts them), to resume a stopped run")
     ap.add_argument("-j", default="2")
     ap.add_argument("--slow", type=float, default=3.0,
                     help="a test running past SLOW times its unmutated time (at least 20 SLOW s) kills the mutant")
@@ -478,7 +483,7 @@ def main():
     counts = {"killed": 0, "survived": 0, "nobuild": 0, "nocover": 0}
     survivors, agree, disagree = [], 0, 0
     t0 = time.time()
-    done = 0
+    done, skipped = 0, 0
     for idx in order:
         if done >= a.n:
             break
@@ -487,6 +492,9 @@ def main():
         orig = open(path).read()
         lines = orig.split("\n")
         if lines[m["line"] - 1] != m["old"]:
+            continue
+        if skipped < a.skip:  # run before (built or not): numbered on from there
+            skipped += 1
             continue
         lines[m["line"] - 1] = m["new"]
         t1 = time.time()
@@ -535,7 +543,7 @@ def main():
                     disagree += 1
             counts[verdict] += 1
             print("%3d %-7s %-26s %5d %-5s %4.0f s %2d tests  %s%s" %
-                  (done, verdict, m["file"], m["line"], m["kind"], time.time() - t1, len(tests), by, full),
+                  (a.skip + done, verdict, m["file"], m["line"], m["kind"], time.time() - t1, len(tests), by, full),
                   flush=True)
             if verdict == "survived":
                 survivors.append(m)
