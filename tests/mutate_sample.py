@@ -503,6 +503,8 @@ def main():
         try:
             if rebuild(tree, m["file"], a.j, log, programs) != 0:
                 counts["nobuild"] += 1
+                print("  - nobuild  %-26s %5d %-5s (does not compile; counted by --skip)" %
+                      (m["file"], m["line"], m["kind"]), flush=True)
                 continue
             done += 1
             tests = tests_for(m, cov, src)
