@@ -422,6 +422,13 @@ fi
 # unwritable outputs: refused before any work (these runs would take minutes), with the OS reason
 enoent="cannot write .*No such file or directory"
 BIG="--albedo 0.9 --sigma-t 1 --B 0.1 --photons 1e10"
+# bins per plane: a shape of k parameters needs k + 1; erfc (2) fits 3 and refuses 2 naming 3, erfc2 (4) refuses 3 naming 5
+K="--albedo 0.7 --sigma-t 1.3 --B 0.0685"
+"$NBT_FIT" mc $K --photons 2000 --z-planes 1:2:2 --r-bins 2 --seed 3 -o "$tmp/b2.csv" >/dev/null 2>&1 &&
+  "$NBT_FIT" mc $K --photons 2000 --z-planes 1:2:2 --r-bins 3 --seed 3 -o "$tmp/b3.csv" >/dev/null 2>&1 &&
+  "$NBT_FIT" kernel "$tmp/b3.csv" $K -o "$tmp/b3f.csv" 2>/dev/null && ok || bad "kernel: erfc on 3 bins per plane"
+expect_usage "kernel: erfc on 2 bins" "2 bins per plane: this shape needs at least 3$" "$NBT_FIT" kernel "$tmp/b2.csv" $K
+expect_usage "kernel: erfc2 on 3 bins" "3 bins per plane: this shape needs at least 5$" "$NBT_FIT" kernel "$tmp/b3.csv" $K --shape erfc2
 # --photons: the closed range [64, 1e15]: 64 counts, 63 is refused with the range
 "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 64 --z-planes 1:2:2 -o "$tmp/p64.csv" >/dev/null 2>&1 &&
   [ -s "$tmp/p64.csv" ] && ok || bad "mc --photons 64 (the smallest accepted)"
