@@ -204,6 +204,17 @@ static void test_surface(const nbt_table *J)
         t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-10 * fabs(R),
                "surface_table_g g=%.3f theta=%.3f: |%.8g - %.8g| <= bound %.2e", g, geo.theta_s, L, R, E);
     }
+    /* a specular lobe of exponent 1 from the same table (theta_r != theta_s): the specular term counts */
+    {
+        nbt_surface_geom geo = {0.4, 0.5, 2.0, 3.1, 0.6, 1.9, 0.5, 0.8, 1};
+        double g = J->axis[2].lo + 0.37 * (J->axis[2].hi - J->axis[2].lo), L, E, R, RE;
+        nbt_phase *p = nbt_phase_hg(g);
+        nbt_surface_direct(p, &geo, 1e-8, &R, &RE);
+        nbt_phase_free(p);
+        nbt_status st = nbt_surface_table_g(J, J, g, &geo, 0, &L, &E);
+        t_true(st == NBT_OK && fabs(L - R) <= E + RE + 1e-10 * fabs(R),
+               "surface_table_g with a specular lobe (ks 0.8, theta_r 1.9): |%.8g - %.8g| <= bound %.2e", L, R, E);
+    }
     /* at a node g the lookup is the fixed-phase table route's (surface.c's
      * nbt_surface_table over a 2-D HG(g_m) table on the same axes) */
     double gm = nbt_axis_node(&J->axis[2], 6), L, E, Lf;
