@@ -508,6 +508,11 @@ set -- $("$NBT_GEN" eval airlight --g 0.45 $geo)
 awk -v a="$lv" -v e="$lb" -v b="$1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e > 0 && d <= e) }' && ok ||
   bad "eval --tables 4 Legendre orders at g = 0.45: $lv +- $lb vs direct $1"
 expect_usage "eval --tables: g outside the table" "'$tmp/gs.exr' covers g in" "$NBT_GEN" eval airlight --g 0.7 $geo --method table --tables "$tmp/gs.exr"
+# --g reaches |g| = 0.99 (NBT_GSLICE_GMAX) with slices, closed; 0.995 is refused naming the limit
+"$NBT_GEN" airlight --g 0.5:0.99 --basis slices --tol 5e-2 -o "$tmp/g99.exr" --quiet --no-preview --allow-tol-miss >/dev/null 2>&1 &&
+  [ -s "$tmp/g99.exr" ] && ok || bad "slices up to g = 0.99"
+rm -f "$tmp/g99.exr"
+expect_usage "slices beyond 0.99" "in \[-0.99, 0.99\]" "$NBT_GEN" airlight --g 0.5:0.995 --basis slices --tol 5e-2 -o "$tmp/g99.exr"
 # a g-sliced J^1 table serves eval surface at run-time g: within its printed bound of the direct integral
 sg="--kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.7 --theta-r 0.4 --kd 0.6 --ks 0 --n 1"
 "$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 2e-2 --n 1 -o "$tmp/gjs.exr" --quiet --no-preview --allow-tol-miss >/dev/null 2>&1
