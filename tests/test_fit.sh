@@ -429,6 +429,9 @@ K="--albedo 0.7 --sigma-t 1.3 --B 0.0685"
   "$NBT_FIT" kernel "$tmp/b3.csv" $K -o "$tmp/b3f.csv" 2>/dev/null && ok || bad "kernel: erfc on 3 bins per plane"
 expect_usage "kernel: erfc on 2 bins" "2 bins per plane: this shape needs at least 3$" "$NBT_FIT" kernel "$tmp/b2.csv" $K
 expect_usage "kernel: erfc2 on 3 bins" "3 bins per plane: this shape needs at least 5$" "$NBT_FIT" kernel "$tmp/b3.csv" $K --shape erfc2
+# a counts CSV with an infinite r_hi (each of the five fields must be finite): refused naming the line
+printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.1,2.5,0.1\n1,0.1,inf,1.5,0.1\n' >"$tmp/rinf.csv"
+expect_usage "counts CSV with r_hi = inf" "rinf.csv line 3: expected .* (finite)" "$NBT_FIT" kernel "$tmp/rinf.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685
 # --photons: the closed range [64, 1e15]: 64 counts, 63 is refused with the range
 "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 64 --z-planes 1:2:2 -o "$tmp/p64.csv" >/dev/null 2>&1 &&
   [ -s "$tmp/p64.csv" ] && ok || bad "mc --photons 64 (the smallest accepted)"
