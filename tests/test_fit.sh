@@ -312,8 +312,9 @@ else
   # chi^2/dof 12 and up to 0.59)
   awk '/^RMS/ { if (!($4 + 0 < 0.5 * $6)) { print; b = 1 } } END { exit b }' "$tmp/merr" >"$tmp/mbad" && ok ||
     bad "model RMS below half the moment kernel's on every run: $(cat "$tmp/mbad")"
-  [ "$(grep -c '^half P[0-4] ' "$tmp/m.txt")" -eq 5 ] && ! grep -q '^infinite ' "$tmp/m.txt" && grep -q '^range tau 1 8$' "$tmp/m.txt" && ok ||
-    bad "model file: 5 half-space lines, the range: $(cat "$tmp/m.txt")"
+  [ "$(grep -c '^half P[0-4] ' "$tmp/m.txt")" -eq 5 ] && ! grep -q '^infinite ' "$tmp/m.txt" && grep -q '^range tau 1 8$' "$tmp/m.txt" &&
+    grep -q '^range albedo 0.29999999999999999 0.90000000000000002$' "$tmp/m.txt" && grep -q '^range B 0.029999999999999999 0.154$' "$tmp/m.txt" && ok ||
+    bad "model file: 5 half-space lines, the ranges of tau, albedo and B (the runs' 1..8, 0.3..0.9, 0.03..0.154): $(cat "$tmp/m.txt")"
   # --apply gives the same numbers as the fit's report
   "$NBT_FIT" model --apply "$tmp/m.txt" "$tmp"/mh-*.exr >"$tmp/mapp" 2>&1 && ok || bad "model --apply: $(cat "$tmp/mapp")"
   awk 'NR == FNR { if ($1 == "RMS") f[$2] = $4; next } /^half/ { n++; if (f[$7] != sprintf("%.4f", $5)) b = 1 } END { exit b || n != 9 }' \
