@@ -207,6 +207,17 @@ int main(void)
         t_true(in == 8, "surface table route within its recorded bound of direct on %d/8 geometries", in);
         nbt_phase_free(ray);
     }
+    /* the tables swapped (J^20 as the diffuse one, J^1 as the specular): refused, not summed */
+    {
+        nbt_surface_geom g = {0.15, 0.2, 2.385, 2.0, 0.7, 1.1, 0.7, 0.3, 20};
+        double rb[4] = {1, 0, 0.1, 0}, Lt;
+        t_true(nbt_surface_table((const nbt_table *const *)&jt[1], 1, (const nbt_table *const *)&jt[1], 1, rb, 4, &g,
+                                 &Lt) == NBT_EINVAL,
+               "surface table: a diffuse table with n = 20 is refused");
+        t_true(nbt_surface_table((const nbt_table *const *)&jt[0], 1, (const nbt_table *const *)&jt[0], 1, rb, 4, &g,
+                                 &Lt) == NBT_EINVAL,
+               "surface table: a specular table with n = 1 for the geometry's 20 is refused");
+    }
     nbt_table_free(jt[0]);
     nbt_table_free(jt[1]);
     nbt_phase_free(hg);
