@@ -284,9 +284,6 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
  * atanh(g) spanning [-atanh 0.95, atanh 0.95] at 1e-3, quadratic, so the
  * slice count scales with the atanh span and tol^(-1/3). The predicted
  * time scales a small proxy's by the node count. */
-/* --basis auto takes slices when their predicted build is this many times faster */
-#define AUTO_SLICES_GAIN 1.5
-
 static size_t ladder_at_least(const size_t *lad, size_t n, double want)
 {
     for (size_t i = 0; i < n; i++)
@@ -464,6 +461,9 @@ nbt_status nbt_basis_parse(const char *name, nbt_basis *b)
         return NBT_EINVAL;
     return NBT_OK;
 }
+
+/* --basis auto takes slices when their predicted build is this many times faster */
+#define AUTO_SLICES_GAIN 1.5
 
 nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_basis want, unsigned nthreads,
                             nbt_basis_choice *out, char *err, size_t errlen)

@@ -64,56 +64,30 @@ static const char *axis_attr(int a, const char *what, char *buf, size_t n)
     return buf;
 }
 
-/* per g cell errors, one float vector per channel, rounded up so that they
- * still bound; written only where every cell was recorded */
-static exr_result_t write_cell_err(exr_context_t ctx, int part, const nbt_table *t)
+/* recorded errors e[k * nc + c] (n per channel) as one float vector per
+ * channel, nbt.NAME.R ..., rounded up so that they still bound; written
+ * only where every value was recorded. NAME: cell_err (per g cell) or
+ * row_err (per x0 row and g cell, g cell after g cell; readers without it
+ * use cell_err). */
+static exr_result_t write_err_vectors(exr_context_t ctx, int part, const double *e, size_t n, size_t nc,
+                                      const char *name)
 {
-    size_t ncell = t->axis[2].n - 1, nc = t->nch;
-    for (size_t i = 0; i < ncell * nc; i++)
-        if (!(t->cell_err[i] >= 0.0))
+    for (size_t i = 0; i < n * nc; i++)
+        if (!(e[i] >= 0.0))
             return EXR_ERR_SUCCESS;
-    float *v = malloc(ncell * sizeof *v);
+    float *v = malloc(n * sizeof *v);
     if (!v)
         return EXR_ERR_OUT_OF_MEMORY;
     exr_result_t rv = EXR_ERR_SUCCESS;
     char an[64];
     for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++) {
-        for (size_t m = 0; m < ncell; m++) {
-            double e = t->cell_err[m * nc + c];
-            v[m] = (float)e;
-            if ((double)v[m] < e)
-                v[m] = nextafterf(v[m], INFINITY);
-        }
-        snprintf(an, sizeof an, "nbt.cell_err.%s", CH[c]);
-        rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)ncell, v);
-    }
-    free(v);
-    return rv;
-}
-
-/* per (x0 row, g cell) errors (row_err), one float vector per channel,
- * g cell after g cell, rounded up; written only where every value was
- * recorded. Readers without it use cell_err. */
-static exr_result_t write_row_err(exr_context_t ctx, int part, const nbt_table *t)
-{
-    size_t nc = t->nch, len = nbt_table_row_err_len(t), nr = len / nc;
-    for (size_t i = 0; i < len; i++)
-        if (!(t->row_err[i] >= 0.0))
-            return EXR_ERR_SUCCESS;
-    float *v = malloc(nr * sizeof *v);
-    if (!v)
-        return EXR_ERR_OUT_OF_MEMORY;
-    exr_result_t rv = EXR_ERR_SUCCESS;
-    char an[64];
-    for (size_t c = 0; c < nc && rv == EXR_ERR_SUCCESS; c++) {
-        for (size_t k = 0; k < nr; k++) {
-            double e = t->row_err[k * nc + c];
-            v[k] = (float)e;
-            if ((double)v[k] < e)
+        for (size_t k = 0; k < n; k++) {
+            v[k] = (float)e[k * nc + c];
+            if ((double)v[k] < e[k * nc + c])
                 v[k] = nextafterf(v[k], INFINITY);
         }
-        snprintf(an, sizeof an, "nbt.row_err.%s", CH[c]);
-        rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)nr, v);
+        snprintf(an, sizeof an, "nbt.%s.%s", name, CH[c]);
+        rv = exr_attr_set_float_vector(ctx, part, an, (int32_t)n, v);
     }
     free(v);
     return rv;
@@ -215,9 +189,9 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.form", nbt_table_form_name(t->form));
     if (rv == EXR_ERR_SUCCESS && nax == 3)
-        rv = write_cell_err(ctx, part, t);
+        rv = write_err_vectors(ctx, part, t->cell_err, t->axis[2].n - 1, t->nch, "cell_err");
     if (rv == EXR_ERR_SUCCESS && t->row_err)
-        rv = write_row_err(ctx, part, t);
+        rv = write_err_vectors(ctx, part, t->row_err, nbt_table_row_err_len(t) / t->nch, t->nch, "row_err");
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.version", nbt_version());
     if (rv == EXR_ERR_SUCCESS)

@@ -10,6 +10,7 @@
 #include <unistd.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
+#include "table_roundtrip.h"
 
 /* deterministic uniforms in [0, 1) (LCG: high-entropy points, reproducible) */
 static unsigned long long rs = 0x2385u;
@@ -33,22 +34,6 @@ static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, 
     return t;
 }
 
-/* H_p or J_p^n of the table's kind for HG(g), independently integrated */
-/* t written to a temporary EXR and read back (NULL where either fails) */
-static nbt_table *exr_round_trip(const nbt_table *t)
-{
-    char path[] = "/tmp/test_gslice_XXXXXX.exr", rerr[256];
-    int fd = mkstemps(path, 4);
-    if (fd < 0)
-        return NULL;
-    close(fd);
-    nbt_table *back = NULL;
-    if (nbt_table_write_exr(t, path, NBT_EXR_ZIP) != NBT_OK || nbt_table_read_exr(path, &back, rerr, sizeof rerr) != NBT_OK)
-        back = NULL;
-    unlink(path);
-    return back;
-}
-
 /* two-term HG, a HG(g1) + (1 - a) HG(g2), tabulated at 4001 mu clustered at
  * both ends (spacing ~3e-7 there): an independent phase object for the
  * mixture's references (piecewise-linear error below 1e-7 relative) */
@@ -66,6 +51,7 @@ static nbt_phase *tthg_tabulated(double a, double g1, double g2)
     return nbt_phase_tabulated(N, mu, pv);
 }
 
+/* H_p or J_p^n of the table's kind for HG(g), independently integrated */
 static double exact(const nbt_table *t, double x, double y, double g)
 {
     double v, e;

@@ -13,6 +13,7 @@
 #include <unistd.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
+#include "table_roundtrip.h"
 
 static unsigned long long rs = 0x6a09e667u;
 static double uni(void)
@@ -133,20 +134,6 @@ static void test_row_bound(const nbt_table *t, int npts)
 }
 
 /* ---- (c): the EXR keeps the rows, and a file without them the cells ---- */
-
-static nbt_table *exr_round_trip(const nbt_table *t)
-{
-    char path[] = "/tmp/test_gslice_rows_XXXXXX.exr", rerr[256];
-    int fd = mkstemps(path, 4);
-    if (fd < 0)
-        return NULL;
-    close(fd);
-    nbt_table *back = NULL;
-    if (nbt_table_write_exr(t, path, NBT_EXR_ZIP) != NBT_OK || nbt_table_read_exr(path, &back, rerr, sizeof rerr) != NBT_OK)
-        back = NULL;
-    unlink(path);
-    return back;
-}
 
 static void test_exr(const nbt_table *t)
 {

@@ -277,6 +277,41 @@ static void test_first_wall(void)
     world_free(&r);
 }
 
+/* a lamp patch at world pixel (lx, ly), depth Zl, radiance Le, placed in r,
+ * and its first-order quadrature context for the medium (sig, alb, p) */
+static lamp_ctx lamp_place(world *r, const nbt_phase *p, const double sig[3], const double alb[3], size_t lx,
+                           size_t ly, float Zl, const float Le[3])
+{
+    size_t li = ly * r->W.w + lx;
+    r->Z[li] = Zl;
+    memcpy(r->rgb + 3 * li, Le, 3 * sizeof *Le);
+    lamp_ctx c = {.p = p, .Zl = Zl, .u0 = (lx - r->W.cx) * r->W.dtheta, .u1 = (lx + 1 - r->W.cx) * r->W.dtheta,
+                  .v0 = (r->W.cy - ly - 1) * r->W.dtheta, .v1 = (r->W.cy - ly) * r->W.dtheta,
+                  .wu = nbt_quad_ws_alloc(3, 2000), .wv = nbt_quad_ws_alloc(3, 2000)};
+    for (int ch = 0; ch < 3; ch++) {
+        c.sig[ch] = sig[ch];
+        c.sigs[ch] = sig[ch] * alb[ch];
+        c.Le[ch] = Le[ch];
+    }
+    return c;
+}
+
+/* the first order of nl lamps averaged over pixel (x, y)'s footprint by 4 x 4 Gauss-Legendre */
+static void lamps_footprint(const world *r, lamp_ctx *c, int nl, size_t x, size_t y, double ref[3])
+{
+    double d[3], v[3];
+    ref[0] = ref[1] = ref[2] = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            dir_of(&r->W, x + 0.5 + 0.5 * GL4x[i], y + 0.5 + 0.5 * GL4x[j], d);
+            for (int l = 0; l < nl; l++) {
+                lamp_first(&c[l], d, v);
+                for (int ch = 0; ch < 3; ch++)
+                    ref[ch] += 0.25 * GL4w[i] * GL4w[j] * v[ch];
+            }
+        }
+}
+
 static void test_first_lamp(void)
 {
     /* one lamp patch at Z 1 in front of a black wall at Z 2.5; pixels beside
@@ -284,35 +319,19 @@ static void test_first_lamp(void)
      * cosine or half the azimuths show here */
     world r = world_alloc(50, 36, 0.04, 21.6, 15.3);
     world_fill(&r, 2.5f, (const float[3]){0, 0, 0});
-    const size_t lx = 27, ly = 12, li = ly * 50 + lx;
-    r.Z[li] = 1.0f;
-    const float Le[3] = {5.0f, 2.0f, 1.0f};
-    memcpy(r.rgb + 3 * li, Le, sizeof Le);
+    const size_t lx = 27, ly = 12;
     nbt_phase *p = nbt_phase_hg(0.5);
     const double sig[3] = {0.5, 0.7, 0.9}, alb[3] = {0.95, 0.9, 0.8};
+    lamp_ctx c = lamp_place(&r, p, sig, alb, lx, ly, 1.0f, (const float[3]){5.0f, 2.0f, 1.0f});
     nbt_screen_path_medium m = {.sigma_t = {sig[0], sig[1], sig[2]}, .albedo = {alb[0], alb[1], alb[2]},
                                 .phase = p, .radius = INFINITY};
     nbt_screen_path_opts o = {.spp = 20000, .seed = 5, .nthreads = 0, .max_order = 1};
-    lamp_ctx c = {.p = p, .Zl = 1.0, .u0 = (lx - r.W.cx) * r.W.dtheta, .u1 = (lx + 1 - r.W.cx) * r.W.dtheta,
-                  .v0 = (r.W.cy - ly - 1) * r.W.dtheta, .v1 = (r.W.cy - ly) * r.W.dtheta,
-                  .wu = nbt_quad_ws_alloc(3, 2000), .wv = nbt_quad_ws_alloc(3, 2000)};
-    for (int ch = 0; ch < 3; ch++) {
-        c.sig[ch] = sig[ch];
-        c.sigs[ch] = sig[ch] * alb[ch];
-        c.Le[ch] = Le[ch];
-    }
     const long off[3][2] = {{-3, -2}, {2, 1}, {0, 4}};
     for (int k = 0; k < 3; k++) {
         size_t x = lx + off[k][0], y = ly + off[k][1];
-        double S[3], se[3], ref[3] = {0, 0, 0}, d[3], v[3];
+        double S[3], se[3], ref[3];
         path_pixel(&r, &m, &o, x, y, S, se);
-        for (int i = 0; i < 4; i++)
-            for (int j = 0; j < 4; j++) {
-                dir_of(&r.W, x + 0.5 + 0.5 * GL4x[i], y + 0.5 + 0.5 * GL4x[j], d);
-                lamp_first(&c, d, v);
-                for (int ch = 0; ch < 3; ch++)
-                    ref[ch] += 0.25 * GL4w[i] * GL4w[j] * v[ch];
-            }
+        lamps_footprint(&r, &c, 1, x, y, ref);
         for (int ch = 0; ch < 3; ch++)
             t_abs(S[ch], ref[ch], 4.5 * se[ch] + 1e-3 * ref[ch],
                   "first order, lamp, pixel offset (%ld, %ld), channel %d: %.5g +- %.2g vs %.5g", off[k][0],
@@ -331,41 +350,18 @@ static void test_first_two_lamps(void)
 {
     world r = world_alloc(50, 36, 0.04, 21.6, 15.3);
     world_fill(&r, 2.5f, (const float[3]){0, 0, 0});
-    const size_t lx[2] = {27, 14}, ly[2] = {12, 22};
-    const float Zl[2] = {1.0f, 1.4f}, Le[2][3] = {{5.0f, 2.0f, 1.0f}, {1.0f, 3.0f, 4.0f}};
     nbt_phase *p = nbt_phase_hg(0.5);
     const double sig[3] = {0.5, 0.7, 0.9}, alb[3] = {0.95, 0.9, 0.8};
-    lamp_ctx c[2];
-    for (int l = 0; l < 2; l++) {
-        size_t li = ly[l] * 50 + lx[l];
-        r.Z[li] = Zl[l];
-        memcpy(r.rgb + 3 * li, Le[l], sizeof Le[l]);
-        c[l] = (lamp_ctx){.p = p, .Zl = Zl[l], .u0 = (lx[l] - r.W.cx) * r.W.dtheta,
-                          .u1 = (lx[l] + 1 - r.W.cx) * r.W.dtheta, .v0 = (r.W.cy - ly[l] - 1) * r.W.dtheta,
-                          .v1 = (r.W.cy - ly[l]) * r.W.dtheta, .wu = nbt_quad_ws_alloc(3, 2000),
-                          .wv = nbt_quad_ws_alloc(3, 2000)};
-        for (int ch = 0; ch < 3; ch++) {
-            c[l].sig[ch] = sig[ch];
-            c[l].sigs[ch] = sig[ch] * alb[ch];
-            c[l].Le[ch] = Le[l][ch];
-        }
-    }
+    lamp_ctx c[2] = {lamp_place(&r, p, sig, alb, 27, 12, 1.0f, (const float[3]){5.0f, 2.0f, 1.0f}),
+                     lamp_place(&r, p, sig, alb, 14, 22, 1.4f, (const float[3]){1.0f, 3.0f, 4.0f})};
     nbt_screen_path_medium m = {.sigma_t = {sig[0], sig[1], sig[2]}, .albedo = {alb[0], alb[1], alb[2]},
                                 .phase = p, .radius = INFINITY};
     nbt_screen_path_opts o = {.spp = 20000, .seed = 9, .nthreads = 0, .max_order = 1};
     const size_t px[2][2] = {{25, 10}, {16, 24}};
     for (int k = 0; k < 2; k++) {
-        double S[3], se[3], ref[3] = {0, 0, 0}, d[3], v[3];
+        double S[3], se[3], ref[3];
         path_pixel(&r, &m, &o, px[k][0], px[k][1], S, se);
-        for (int i = 0; i < 4; i++)
-            for (int j = 0; j < 4; j++) {
-                dir_of(&r.W, px[k][0] + 0.5 + 0.5 * GL4x[i], px[k][1] + 0.5 + 0.5 * GL4x[j], d);
-                for (int l = 0; l < 2; l++) {
-                    lamp_first(&c[l], d, v);
-                    for (int ch = 0; ch < 3; ch++)
-                        ref[ch] += 0.25 * GL4w[i] * GL4w[j] * v[ch];
-                }
-            }
+        lamps_footprint(&r, c, 2, px[k][0], px[k][1], ref);
         for (int ch = 0; ch < 3; ch++)
             t_abs(S[ch], ref[ch], 4.5 * se[ch] + 1e-3 * ref[ch],
                   "first order, two lamps, pixel (%zu, %zu), channel %d: %.5g +- %.2g vs %.5g", px[k][0], px[k][1],
