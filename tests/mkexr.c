@@ -18,8 +18,9 @@
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
  * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
- * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15. Any
- * other name: the grey render alone. */
+ * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15.
+ * mkexr IN.exr noise B and mkexr IN.exr zsq OTHER.exr check a path-traced
+ * output's Sse layer (below). Any other name: the grey render alone. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -30,6 +31,22 @@
 #ifdef HAVE_OPENVDB
 #include "../scatter/vdb_shim.h"
 #endif
+
+/* the float channels LAYER.R, LAYER.G, LAYER.B of im (NULL where missing) */
+static int find_layer(const nbt_image *im, const char *layer, const float *out[3])
+{
+    static const char *const RGB[3] = {"R", "G", "B"};
+    size_t n = strlen(layer);
+    out[0] = out[1] = out[2] = NULL;
+    for (size_t j = 0; j < im->nchannels; j++)
+        for (int c = 0; c < 3; c++) {
+            const nbt_image_channel *ch = &im->channels[j];
+            if (ch->type == NBT_PIXEL_FLOAT && ch->data && !strncmp(ch->name, layer, n) && ch->name[n] == '.' &&
+                !strcmp(ch->name + n + 1, RGB[c]))
+                out[c] = ch->data;
+        }
+    return out[0] && out[1] && out[2];
+}
 
 int main(int argc, char **argv)
 {
@@ -77,20 +94,9 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s\n", err);
             return 1;
         }
-        const float *S[3] = {0}, *T[3] = {0};
-        static const char *const RGB[3] = {"R", "G", "B"};
-        for (size_t j = 0; j < out->nchannels; j++)
-            for (int c = 0; c < 3; c++) {
-                const nbt_image_channel *ch = &out->channels[j];
-                if (ch->type != NBT_PIXEL_FLOAT || !ch->data)
-                    continue;
-                if (!strncmp(ch->name, "S.", 2) && !strcmp(ch->name + 2, RGB[c]))
-                    S[c] = ch->data;
-                if (!strncmp(ch->name, "T.", 2) && !strcmp(ch->name + 2, RGB[c]))
-                    T[c] = ch->data;
-            }
+        const float *S[3], *T[3];
         int rc = 1;
-        if (in->w != out->w || in->h != out->h || !S[0] || !S[1] || !S[2] || !T[0] || !T[1] || !T[2])
+        if (in->w != out->w || in->h != out->h || !find_layer(out, "S", S) || !find_layer(out, "T", T))
             fprintf(stderr, "mkexr: %s has no float S and T layers of %s's size\n", argv[1], argv[3]);
         else {
             double d = 0, m = 0;
@@ -105,6 +111,59 @@ int main(int argc, char **argv)
         }
         nbt_image_free(out);
         nbt_image_free(in);
+        return rc;
+    }
+    if (argc == 4 && (!strcmp(argv[2], "noise") || !strcmp(argv[2], "zsq"))) {
+        /* a path-traced output's standard-error layer Sse, checked from its
+         * definition: "noise B" is sqrt(2/pi) sqrt(sum se^2) / |sum S| summed
+         * over BxB bins and the three channels (the expected |error| of a bin's
+         * sum over its size); "zsq OTHER.exr" is, per channel, the mean over
+         * pixels of (S - S')^2 / (se^2 + se'^2) between two independent runs
+         * (1 when the errors are what Sse says) */
+        nbt_image *a = NULL, *b = NULL;
+        const float *S[3], *E[3], *S2[3], *E2[3];
+        int zsq = argv[2][0] == 'z';
+        if (nbt_image_read_exr(argv[1], &a, err, sizeof err) != NBT_OK ||
+            (zsq && nbt_image_read_exr(argv[3], &b, err, sizeof err) != NBT_OK)) {
+            fprintf(stderr, "%s\n", err);
+            nbt_image_free(a);
+            return 1;
+        }
+        int rc = 1;
+        if (!find_layer(a, "S", S) || !find_layer(a, "Sse", E) ||
+            (zsq && (b->w != a->w || b->h != a->h || !find_layer(b, "S", S2) || !find_layer(b, "Sse", E2))))
+            fprintf(stderr, "mkexr: no S and Sse layers (of the same size)\n");
+        else if (zsq) {
+            for (int c = 0; c < 3; c++) {
+                double sum = 0;
+                size_t n = 0;
+                for (size_t i = 0; i < a->w * a->h; i++) {
+                    double v = (double)E[c][i] * E[c][i] + (double)E2[c][i] * E2[c][i], d = S[c][i] - S2[c][i];
+                    if (v > 0)
+                        sum += d * d / v, n++;
+                }
+                printf("%s%.4g", c ? " " : "zsq ", n ? sum / (double)n : NAN);
+            }
+            printf("\n");
+            rc = 0;
+        } else {
+            size_t bin = (size_t)atol(argv[3]), w = a->w, h = a->h;
+            double num = 0, den = 0;
+            for (size_t by = 0; bin && by < h; by += bin)
+                for (size_t bx = 0; bx < w; bx += bin)
+                    for (int c = 0; c < 3; c++) {
+                        double s = 0, v = 0;
+                        for (size_t y = by; y < h && y < by + bin; y++)
+                            for (size_t x = bx; x < w && x < bx + bin; x++)
+                                s += S[c][y * w + x], v += (double)E[c][y * w + x] * E[c][y * w + x];
+                        num += sqrt(2 / 3.14159265358979323846) * sqrt(v);
+                        den += fabs(s);
+                    }
+            printf("noise %.6g\n", num / den);
+            rc = 0;
+        }
+        nbt_image_free(a);
+        nbt_image_free(b);
         return rc;
     }
     if (argc == 4 && (!strcmp(argv[2], "grid") || !strcmp(argv[2], "gridy"))) {

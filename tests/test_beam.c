@@ -163,6 +163,19 @@ int main(void)
     bad.z = zb;
     bad.rho = rb;
     t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "non-increasing layers rejected");
+    /* a negative or NaN density in any layer, the last one too, is refused; the same layers with rho >= 0 run */
+    double z3[3] = {0, 1, 2.5};
+    bad.nlayers = 3;
+    bad.z = z3;
+    for (int i = 0; i < 3; i++) {
+        double r3[3] = {1, 0.5, 2};
+        bad.rho = r3;
+        t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_OK, "layers 1, 0.5, 2 accepted");
+        r3[i] = -0.25;
+        t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_EDOM, "negative layer %d rejected", i);
+        r3[i] = NAN;
+        t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_EDOM, "NaN layer %d rejected", i);
+    }
     nbt_quad_ws_free(ws);
     return t_done();
 }

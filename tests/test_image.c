@@ -794,6 +794,15 @@ static exr_result_t overscan_attrs(exr_context_t ctx, int p)
         rv = exr_attr_set_v2f(ctx, p, "test.v2f", &v);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string_vector(ctx, p, "test.sv", 2, sv);
+    if (rv == EXR_ERR_SUCCESS) { /* a 3 x 2 preview with every byte distinct */
+        static uint8_t px[3 * 2 * 4];
+        for (int i = 0; i < 24; i++)
+            px[i] = (uint8_t)(7 * i + 3);
+        exr_attr_preview_t pv;
+        memset(&pv, 0, sizeof pv);
+        pv.width = 3, pv.height = 2, pv.rgba = px;
+        rv = exr_attr_set_preview(ctx, p, "preview", &pv);
+    }
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_set_pixel_aspect_ratio(ctx, p, 1.25f);
     if (rv == EXR_ERR_SUCCESS)
@@ -861,6 +870,12 @@ static void check_header(const char *path, const char *what, const exr_attr_box2
            "%s: string vector attribute copied", what);
     t_true(par == 1.25f && sww == 0.75f, "%s: pixelAspectRatio and screenWindowWidth kept (%g, %g)", what, (double)par,
            (double)sww);
+    exr_attr_preview_t pv;
+    memset(&pv, 0, sizeof pv);
+    int pok = exr_attr_get_preview(ctx, 0, "preview", &pv) == EXR_ERR_SUCCESS && pv.width == 3 && pv.height == 2 && pv.rgba;
+    for (int i = 0; pok && i < 24; i++)
+        pok = pv.rgba[i] == (uint8_t)(7 * i + 3);
+    t_true(pok, "%s: the 3 x 2 preview attribute copied byte for byte", what);
     exr_finish(&ctx);
 }
 
@@ -925,9 +940,9 @@ static void test_overscan(void)
     for (size_t i = 0; i < nbt_image_attr_count(im); i++)
         if (!strcmp(nbt_image_attr_name(im, i, &tn), "worldToCamera"))
             has_m44 = !strcmp(tn, "m44f");
-    t_true(nbt_image_attr_count(im) == 9, "overscan: 9 attributes kept (%zu)", nbt_image_attr_count(im));
+    t_true(nbt_image_attr_count(im) == 10, "overscan: 10 attributes kept (%zu)", nbt_image_attr_count(im));
     t_true(has_m44 && nbt_image_attr_string(im, "owner") && !strcmp(nbt_image_attr_string(im, "owner"), "nbt test") &&
-               !nbt_image_attr_string(im, "test.count") && !nbt_image_attr_name(im, 9, NULL),
+               !nbt_image_attr_string(im, "test.count") && !nbt_image_attr_name(im, 10, NULL),
            "overscan: attribute names, types, string value");
 
     /* the caller's layers over the data window: S (3), offscreen (1) */
@@ -1039,7 +1054,7 @@ static void test_overscan(void)
     /* a new image given the input's metadata */
     nbt_image *c = nbt_image_alloc((size_t)w, (size_t)h, 0), *c2 = nbt_image_alloc(3, 3, 0);
     t_true(c && nbt_image_copy_meta(c, im) == NBT_OK && c->x0 == X0 && c->nchannels == 3 &&
-               nbt_image_attr_count(c) == 9 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
+               nbt_image_attr_count(c) == 10 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
            "copy_meta: same size copied, other size refused");
     if (c) {
         memcpy(c->rgb, im->rgb, n * 3 * sizeof(float));

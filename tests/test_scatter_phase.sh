@@ -47,7 +47,19 @@ within_ref "fitted kernel vs path, step" 0.05 "$line"
 # RGB medium: per-channel sigma_t and albedo
 R="--sigma-t 0.4,0.3,0.15 --albedo 0.9,0.95,0.99"
 "$S" "$tmp/l.exr" -o "$tmp/rp.exr" --fov-y 40 $R --phase hg:g=0.85 --method path --threads 2 --no-png --spp 256 \
-  2>/dev/null || bad "path, rgb"
+  2>"$tmp/rplog" || bad "path, rgb"
+# the standard-error layer Sse, from its definition: the status line's 4x4-binned noise recomputed from the
+# written S and Sse layers (3x3 bins would give 4.1% here, not 3.1%), and a second seed's run differing from
+# the first by what Sse says, per channel (mean z^2 = 1; over 2240 pixels it scatters by 0.03 between seeds)
+n4=$(sed -n 's/.*4x4-binned noise \([0-9.e+-]*\)%.*/\1/p' "$tmp/rplog")
+close "$("$MK" "$tmp/rp.exr" noise 4 | awk '{ print 100 * $2 }')" "$n4" 2e-3 "path: the status line's 4x4-binned noise"
+# and the noise --noise stops on (the pass lines) is the same 4x4-binned one
+close "$(sed -n 's/^path: pass .* binned noise \([0-9.e+-]*\)%.*/\1/p' "$tmp/rplog" | tail -n 1)" "$n4" 2e-3 \
+  "path: the pass line's binned noise is 4x4"
+"$S" "$tmp/l.exr" -o "$tmp/rp2.exr" --fov-y 40 $R --phase hg:g=0.85 --method path --threads 2 --no-png --spp 256 \
+  --seed 2 2>/dev/null || bad "path, rgb, seed 2"
+"$MK" "$tmp/rp.exr" zsq "$tmp/rp2.exr" | awk '{ for (i = 2; i <= 4; i++) if (!($i > 0.85 && $i < 1.15)) exit 1 }' &&
+  ok || bad "path: Sse is each channel's standard error: $("$MK" "$tmp/rp.exr" zsq "$tmp/rp2.exr")"
 line=$("$S" "$tmp/l.exr" -o "$tmp/rf.exr" --fov-y 40 $R --phase hg:g=0.85 --method ref-a --threads 2 --no-png --extend 0 \
   --compare "$tmp/rp.exr" 2>/dev/null)
 within_ref "rgb medium vs path" 0.03 "$line"
