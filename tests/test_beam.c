@@ -157,6 +157,15 @@ int main(void)
     bad = nbt_beam_homogeneous(1.0, 0.5, 0);
     t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "B = 0 rejected");
     t_true(nbt_beam_moments(&hh, NBT_BEAM_ISHIMARU, NAN, &M0, &M2, NULL) == NBT_EDOM, "z = NaN rejected");
+    /* Psi is defined at r > 0 and z > 0 (the kernel's alpha/r): r = 0, r < 0 and z = 0 are refused by every model */
+    for (int md = NBT_PSI_ISHIMARU; md <= NBT_PSI_ELEK; md++) {
+        double q = -1;
+        int refused = nbt_beam_psi(&hh, (nbt_psi_model)md, 1.5, 0.0, &q, NULL) == NBT_EDOM &&
+                      nbt_beam_psi(&hh, (nbt_psi_model)md, 1.5, -0.25, &q, NULL) == NBT_EDOM &&
+                      nbt_beam_psi(&hh, (nbt_psi_model)md, 0.0, 0.25, &q, NULL) == NBT_EDOM;
+        int runs = nbt_beam_psi(&hh, (nbt_psi_model)md, 1.5, 0.25, &q, NULL) == NBT_OK && q > 0;
+        t_true(refused && runs, "Psi model %d: r = 0, r < 0 and z = 0 refused, (1.5, 0.25) gives %g > 0", md, q);
+    }
     double zb[2] = {0, 0}, rb[2] = {1, 1};
     bad = hh;
     bad.nlayers = 2;
