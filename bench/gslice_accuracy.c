@@ -7,11 +7,13 @@
  * the nearest slice, which leaves only the table's (u, v) error: the
  * difference between the passes is the interpolation in g (quadratic).
  *
- * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP]]]]
+ * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP [misses]]]]]
  *   N_UV nodes on u (log1p_cbrt, c = 10, [0, 10]) and v (cos), default 257;
  *   NUxNV (65x257, say) sets the two apart;
  *   N_G slices on g in [-0.95, 0.95], default 33; RAYS default 2000;
- *   MAP the g mapping (atanh, linear, sqrt, cos, ...; default atanh).
+ *   MAP the g mapping (atanh, linear, sqrt, cos, ...; default atanh);
+ *   misses: print every ray above 1e-3 (CPU lookup, g anywhere) with its
+ *   table coordinates (u, theta_0, theta_d, g).
  * Rays: kappa_t = 0.2, kappa_s = 0.18, d_sv log-uniform in [0.5, 40], gamma
  * uniform in [0.02, pi - 0.02], d_vp infinite for 30%, else d_sv times a
  * log-uniform factor in [0.05, 3]; g uniform in [-0.95, 0.95] for half the
@@ -97,7 +99,7 @@ int main(int argc, char **argv)
     char *end = NULL;
     size_t N = argc > 1 ? strtoul(argv[1], &end, 10) : 257, NG = argc > 2 ? strtoul(argv[2], NULL, 10) : 33;
     size_t NV = end && *end == 'x' ? strtoul(end + 1, NULL, 10) : N;
-    int R = argc > 3 ? atoi(argv[3]) : 2000;
+    int R = argc > 3 ? atoi(argv[3]) : 2000, nmiss = argc > 5 && !strcmp(argv[5], "misses");
     nbt_axis_map gmap = NBT_AXIS_ATANH;
     if ((argc > 4 && nbt_axis_map_parse(argv[4], &gmap) != NBT_OK) || N < 2 || N > 2049 || NV < 2 || NV > 2049 || NG < 3 || NG > 513 ||
         R < 1 || R > 1000000 || gmap == NBT_AXIS_LOG1P || gmap == NBT_AXIS_LOG1P_CBRT) {
@@ -110,6 +112,19 @@ int main(int argc, char **argv)
         return 1;
     }
     nbt_axis a0 = {0, 10, NBT_AXIS_LOG1P_CBRT, 10, N}, a1 = {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, NV};
+    if (argc > 6) { /* VMAP[:c] */
+        char name[32];
+        snprintf(name, sizeof name, "%s", argv[6]);
+        char *colon = strchr(name, ':');
+        if (colon) {
+            *colon = 0;
+            a1.c = atof(colon + 1);
+        }
+        if (nbt_axis_map_parse(name, &a1.map) != NBT_OK) {
+            fprintf(stderr, "gslice_accuracy: v mapping '%s' unknown\n", argv[6]);
+            return 2;
+        }
+    }
     nbt_axis a2 = {-0.95, 0.95, gmap, 0, NG};
     double t0 = now();
     nbt_table *Ht = assemble_gsliced(&a0, &a1, &a2);
@@ -153,9 +168,9 @@ int main(int argc, char **argv)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glUniform1i(glGetUniformLocation(prog, "rays"), 2);
     nbt_gl_set_table_axes(prog, "nbt_H", Ht);
-    printf("g-sliced H %zu x %zu x %zu (u log1p_cbrt [0, 10], v cos, g %s [-0.95, 0.95]), %.1f MB as float, "
+    printf("g-sliced H %zu x %zu x %zu (u log1p_cbrt [0, 10], v %s c %g, g %s [-0.95, 0.95]), %.1f MB as float, "
            "assembled from 2-D builds in %.2f s (2-core machine shared with other jobs); %s\n",
-           N, NV, NG, nbt_axis_map_name(gmap), (double)nbt_table_size(Ht) * 4 / 1e6, tb,
+           N, NV, NG, nbt_axis_map_name(a1.map), a1.c, nbt_axis_map_name(gmap), (double)nbt_table_size(Ht) * 4 / 1e6, tb,
            (const char *)glGetString(GL_RENDERER));
     for (int pass = 0; pass < 2; pass++) {
         int bad = 0;
@@ -195,6 +210,14 @@ int main(int argc, char **argv)
         printf("worst ray (CPU lookup): g %.4f gamma %.4f d_sv %.3g d_vp %.3g (u = kappa_t h %.3g, theta_0 %.4f): %.2e\n",
                gr[iw], geo[iw].gamma, geo[iw].dsv, geo[iw].dvp, KT * geo[iw].dsv * sin(geo[iw].gamma),
                geo[iw].gamma - M_PI_2, ec[iw]);
+        /* MISSES: every ray above 1e-3 (CPU lookup) with its lookup points */
+        for (int i = 0; i < R && nmiss && !pass; i++)
+            if (ec[i] > 1e-3) {
+                double h = geo[i].dsv * sin(geo[i].gamma), tf = geo[i].dsv * cos(geo[i].gamma);
+                printf("miss: g %+.4f u %.4g theta_0 %+.4f theta_d %+.4f d_vp %s: %.2e\n", gr[i], KT * h,
+                       geo[i].gamma - M_PI_2, isinf(geo[i].dvp) ? M_PI_2 : atan2(geo[i].dvp - tf, h),
+                       isinf(geo[i].dvp) ? "inf" : "finite", ec[i]);
+            }
         printf("%s (%d rays without a reference value, counted as failures):\n",
                pass ? "g snapped to the nearest slice: the (u, v) error alone" : "g anywhere in [-0.95, 0.95]", bad);
         static const char *grp[4] = {"all", "d_vp infinite", "d_vp finite", "|g| >= 0.8"};

@@ -62,7 +62,8 @@ nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_l
 
 static void axis_desc(const nbt_axis *a, const char *name, char *buf, size_t n)
 {
-    if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT || a->map == NBT_AXIS_ASINH)
+    if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT || a->map == NBT_AXIS_ASINH ||
+        a->map == NBT_AXIS_ENDS)
         snprintf(buf, n, "%s:%s(c=%g)[%g,%g]", name, nbt_axis_map_name(a->map), a->c, a->lo, a->hi);
     else
         snprintf(buf, n, "%s:%s[%g,%g]", name, nbt_axis_map_name(a->map), a->lo, a->hi);

@@ -223,6 +223,10 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
 
 static const size_t GSIZES[] = {9, 13, 17, 25, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1024};
 #define NGSIZES (sizeof GSIZES / sizeof GSIZES[0])
+/* the ends mapping's strength on H's v (c/2 at -pi/2, c at pi/2): of c = 8 .. 24
+ * (lo 4 .. 12) on 97 x 193 x 33, c = 16 had the fewest rays above 1e-3 (5 of 1e5);
+ * the symmetric form (log1p with c from both ends) had 13-14 */
+#define NBT_GSLICE_V_ENDS_C 16.0
 static const size_t PSIZES[] = {17, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769, 1025, 1537, 2049, 3073, 4097};
 #define NPSIZES (sizeof PSIZES / sizeof PSIZES[0])
 
@@ -277,7 +281,11 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
 
 /* Sizes by rules measured with bench/bench_gslice (doc/tables.md), no
  * error-driven proxies: at tol 1e-3 relative,
- *   H (tail form): u (log1p_cbrt, c = 10) and v (cos) 129 nodes;
+ *   H (tail form): u 97 nodes (log1p_cbrt, c = 10), v 193 (ends, c = 16:
+ *     HG's peaks of width ~1 - |g| at v = pi/2 for g < 0 and -pi/2 for g > 0;
+ *     with bench/gslice_accuracy on 1e5 rays, 4.9 MB: 5 rays above 1e-3,
+ *     worst 1.2e-3, where 129^2 on cos (4.4 MB) had 487, worst 3.5e-3; the
+ *     v error dominated: 129 x 257 on cos had none above);
  *   J (log_et form, T <= 20): T 65 nodes (log1p_cbrt, c = 20), theta 257
  *     (linear for Lambert, cos for Phong lobes);
  * the bilinear error falling as N^-2; g uniform in atanh with 33 slices for
@@ -295,19 +303,19 @@ static size_t ladder_at_least(const size_t *lad, size_t n, double want)
 static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
 {
     int H = r->kind == NBT_TABLE_H;
-    size_t n0 = r->size[0] > 0 ? r->size[0] : H ? 129 : 65, n1 = r->size[1] > 0 ? r->size[1] : H ? 129 : 257;
+    size_t n0 = r->size[0] > 0 ? r->size[0] : H ? 97 : 65, n1 = r->size[1] > 0 ? r->size[1] : H ? 193 : 257;
     size_t ng = r->size[2];
     if (r->tol > 0) {
         double q = 1e-3 / r->tol, span = (atanh(r->g[1]) - atanh(r->g[0])) / (2.0 * atanh(0.95));
-        n0 = ladder_at_least(PSIZES, NPSIZES, (H ? 129.0 : 65.0) * sqrt(q));
-        n1 = ladder_at_least(PSIZES, NPSIZES, (H ? 129.0 : 257.0) * sqrt(q));
+        n0 = ladder_at_least(PSIZES, NPSIZES, (H ? 97.0 : 65.0) * sqrt(q));
+        n1 = ladder_at_least(PSIZES, NPSIZES, (H ? 193.0 : 257.0) * sqrt(q));
         ng = ladder_at_least(GSIZES, NGSIZES, fmax(5.0, 1.0 + 32.0 * span * cbrt(q)));
         n0 = n0 > 4096 ? 4096 : n0;
         n1 = n1 > 4096 ? 4096 : n1;
     }
     if (H) {
         out->axis[0] = (nbt_axis){0.0, r->xmax, NBT_AXIS_LOG1P_CBRT, 10.0, n0};
-        out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_COS, 0.0, n1};
+        out->axis[1] = (nbt_axis){-NBT_PI_2, NBT_PI_2, NBT_AXIS_ENDS, NBT_GSLICE_V_ENDS_C, n1};
     } else {
         out->axis[0] = (nbt_axis){0.0, r->xmax, NBT_AXIS_LOG1P_CBRT, 20.0, n0};
         out->axis[1] = (nbt_axis){0.0, NBT_PI, r->n == 1 ? NBT_AXIS_LINEAR : NBT_AXIS_COS, 0.0, n1};

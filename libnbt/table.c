@@ -9,6 +9,14 @@
 #include "internal.h"
 #include "tablefill.h"
 
+/* ends: s of the middle r = 1/2, where the halves' slopes ds/dr (log1p with
+ * c/2 from lo, c from hi) match, so that the map is C^1 */
+static double ends_split(double c)
+{
+    double k1 = log1p(0.5 * c) * (1.0 + 0.5 * c) / (0.5 * c), k2 = log1p(c) * (1.0 + c) / c;
+    return k1 / (k1 + k2);
+}
+
 double nbt_axis_to_unit(const nbt_axis *a, double x)
 {
     if (a->map == NBT_AXIS_ATANH) {
@@ -31,6 +39,12 @@ double nbt_axis_to_unit(const nbt_axis *a, double x)
         return acos(1.0 - 2.0 * r) / NBT_PI;
     case NBT_AXIS_ASINH:
         return 0.5 + 0.5 * asinh(a->c * (2.0 * r - 1.0)) / asinh(a->c);
+    case NBT_AXIS_ENDS: {
+        double f = ends_split(a->c);
+        if (r <= 0.5)
+            return f * log1p(a->c * r) / log1p(0.5 * a->c);
+        return 1.0 - (1.0 - f) * log1p(2.0 * a->c * (1.0 - r)) / log1p(a->c);
+    }
     default:
         return r;
     }
@@ -55,6 +69,12 @@ double nbt_axis_from_unit(const nbt_axis *a, double s)
     case NBT_AXIS_ASINH:
         r = 0.5 + 0.5 * sinh((2.0 * s - 1.0) * asinh(a->c)) / a->c;
         break;
+    case NBT_AXIS_ENDS: {
+        double f = ends_split(a->c);
+        r = s <= f ? expm1(s / f * log1p(0.5 * a->c)) / a->c
+                   : 1.0 - 0.5 * expm1((1.0 - s) / (1.0 - f) * log1p(a->c)) / a->c;
+        break;
+    }
     case NBT_AXIS_ATANH:
         if (s <= 0.0)
             return a->lo;
@@ -78,7 +98,7 @@ const char *nbt_axis_map_name(nbt_axis_map m)
 {
     return m == NBT_AXIS_SQRT ? "sqrt" : m == NBT_AXIS_LOG1P ? "log1p" : m == NBT_AXIS_COS ? "cos"
          : m == NBT_AXIS_LOG1P_CBRT ? "log1p_cbrt" : m == NBT_AXIS_ATANH ? "atanh"
-         : m == NBT_AXIS_ASINH ? "asinh" : "linear";
+         : m == NBT_AXIS_ASINH ? "asinh" : m == NBT_AXIS_ENDS ? "ends" : "linear";
 }
 
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
@@ -97,6 +117,8 @@ nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m)
         *m = NBT_AXIS_ATANH;
     else if (!strcmp(name, "asinh"))
         *m = NBT_AXIS_ASINH;
+    else if (!strcmp(name, "ends"))
+        *m = NBT_AXIS_ENDS;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -147,7 +169,8 @@ static int axis_ok(const nbt_axis *a)
            (a->map != NBT_AXIS_LOG1P || ((a->c > 0 || (a->c > -1 && a->c < 0)) && isfinite(a->c))) &&
            (a->map != NBT_AXIS_LOG1P_CBRT || (a->c > 0 && isfinite(a->c))) &&
            (a->map != NBT_AXIS_ATANH || (a->lo > -1.0 && a->hi < 1.0)) &&
-           (a->map != NBT_AXIS_ASINH || (a->c > 0 && a->c <= 1e3));
+           (a->map != NBT_AXIS_ASINH || (a->c > 0 && a->c <= 1e3)) &&
+           (a->map != NBT_AXIS_ENDS || (a->c > 0 && a->c <= 1e3));
 }
 
 nbt_table *nbt_table_alloc3(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, const nbt_axis *ax2,

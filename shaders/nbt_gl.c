@@ -86,7 +86,7 @@ void nbt_gl_axis(const nbt_axis *a, float v[4], int *map)
     v[2] = (float)a->c;
     v[3] = (float)a->n;
     *map = a->map == NBT_AXIS_SQRT ? 1 : a->map == NBT_AXIS_LOG1P ? 2 : a->map == NBT_AXIS_COS ? 3
-         : a->map == NBT_AXIS_LOG1P_CBRT ? 4 : a->map == NBT_AXIS_ATANH ? 5 : a->map == NBT_AXIS_ASINH ? 6 : 0;
+         : a->map == NBT_AXIS_LOG1P_CBRT ? 4 : a->map == NBT_AXIS_ATANH ? 5 : a->map == NBT_AXIS_ASINH ? 6 : a->map == NBT_AXIS_ENDS ? 7 : 0;
 }
 
 void nbt_gl_table_axes(const nbt_table *t, float ax0[4], float ax1[4], int *map0, int *map1)

@@ -3,7 +3,8 @@
 // 1 sqrt, 2 log1p (c > 0 clusters at lo, -1 < c < 0 at hi), 3 cos,
 // 4 log1p_cbrt (the cube root of log1p's coordinate, c > 0), 5 atanh
 // (uniform in atanh x, -1 < lo < hi < 1), 6 asinh (nodes clustered at the
-// middle of the range, c > 0).
+// middle of the range, c > 0), 7 ends (log1p from both ends: c/2 at lo, c at
+// hi, the halves' slopes matched at the middle; c > 0).
 // Outside [lo, hi] the unit coordinate clamps (CLAMP_TO_EDGE values).
 // nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
 // g), with the same convention on all three axes: libnbt's nbt_table_lookup3;
@@ -35,6 +36,13 @@ float nbt_axis_unit(float x, vec4 a, int map)
     if (map == 6) { // asinh by its odd log form: no cancellation for z < 0
         float z = a.z * abs(2.0 * r - 1.0);
         return 0.5 + 0.5 * sign(r - 0.5) * log(z + sqrt(z * z + 1.0)) / log(a.z + sqrt(a.z * a.z + 1.0));
+    }
+    if (map == 7) { // ends
+        float l1 = log(1.0 + 0.5 * a.z), l2 = log(1.0 + a.z);
+        float k1 = l1 * (1.0 + 0.5 * a.z) / (0.5 * a.z), k2 = l2 * (1.0 + a.z) / a.z, f = k1 / (k1 + k2);
+        if (r <= 0.5)
+            return f * log(1.0 + a.z * r) / l1;
+        return 1.0 - (1.0 - f) * log(1.0 + 2.0 * a.z * (1.0 - r)) / l2;
     }
     return r;
 }

@@ -378,6 +378,12 @@ static void test_gsliced(void)
     rt = random_table3(&r0, &s1, &s2, 3);
     check_lookup3(rt, "RGB32F 7x9x6 asinh (c = 1, 20)");
     nbt_table_free(rt);
+    /* ends (map code 7): v of the g-sliced H as the planner writes it (c = 16),
+     * and on the slice axis with another c and range (halves c/2 and c apart) */
+    nbt_axis e1 = {-M_PI_2, M_PI_2, NBT_AXIS_ENDS, 16, 11}, e2 = {-0.5, 2.0, NBT_AXIS_ENDS, 3, 6};
+    rt = random_table3(&r0, &e1, &e2, 2);
+    check_lookup3(rt, "RG32F 7x11x6 ends (c = 16, 3)");
+    nbt_table_free(rt);
 
     /* the slice axis' uniforms from nbt_gl_set_table_axes, down to two slices
      * (a random mutant treating a 2-slice table as 2-D survived every test) */

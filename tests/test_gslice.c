@@ -23,7 +23,8 @@ static double uni(void)
 static nbt_table *small_table(nbt_table_kind kind, int n, size_t nx, size_t ny, size_t ng, double glo, double ghi)
 {
     nbt_axis a0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, nx};
-    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI / 2, M_PI / 2, NBT_AXIS_COS, 0, ny}
+    /* H: v on the planner's mapping (ends, c = 16), whose error map check_tail tests */
+    nbt_axis a1 = kind == NBT_TABLE_H ? (nbt_axis){-M_PI / 2, M_PI / 2, NBT_AXIS_ENDS, 16.0, ny}
                                       : (nbt_axis){0, M_PI, NBT_AXIS_LINEAR, 0, ny};
     nbt_axis a2 = {glo, ghi, kind == NBT_TABLE_H ? NBT_AXIS_ATANH : NBT_AXIS_COS, 0, ng};
     nbt_table *t = nbt_table_alloc3(kind, &a0, &a1, &a2, 1);
@@ -386,6 +387,8 @@ static void test_build_io(void)
         return;
     t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 2,
            "build: H in the tail form on an atanh g axis, quadratic in g");
+    t_true(t->axis[1].map == NBT_AXIS_ENDS && t->axis[1].c == 16.0 && t->axis[1].lo == -M_PI_2 && t->axis[1].hi == M_PI_2,
+           "build: v on the ends mapping, c = 16 (the planner's rule)");
     check_tail(t, 60);
     /* a two-term HG from the same table (0.8 HG(0.55) + 0.2 HG(-0.25)) against the ray
      * integral of the tabulated mixture */
@@ -414,6 +417,20 @@ static void test_build_io(void)
                back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 2 &&
                back->nch == 2 && back->data[5] == t->data[5],
            "EXR round trip keeps the g-sliced table (%zu slices)", t->axis[2].n);
+    /* the v mapping survives the file: same map and c, and a lookup between
+     * nodes near each end (where a different mapping lands elsewhere) is the
+     * same number */
+    if (back) {
+        double a[NBT_TABLE_MAX_CH], b[NBT_TABLE_MAX_CH], worst = 0;
+        for (int k = 0; k < 2; k++) {
+            double v = k ? 1.4137 : -1.3391;
+            nbt_table_lookup3(t, 0.77, v, 0.21, a);
+            nbt_table_lookup3(back, 0.77, v, 0.21, b);
+            worst = fmax(worst, fabs(a[0] - b[0]));
+        }
+        t_true(back->axis[1].map == NBT_AXIS_ENDS && back->axis[1].c == 16.0 && worst == 0.0,
+               "EXR round trip keeps v's ends mapping (c %g) and lookups (difference %.1e)", back->axis[1].c, worst);
+    }
     nbt_table_free(back);
     nbt_table_free(t);
     /* half floats: log values rounded to 11 bits (up to 2.4e-4 of |log C W| <= ~7), which the

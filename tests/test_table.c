@@ -132,11 +132,11 @@ static int fail_fn(double x0, double x1, double *out, void *ctx)
 int main(void)
 {
     /* ---- axis maps ---- */
-    nbt_axis maps[7] = {{-1.5, 2.385, NBT_AXIS_LINEAR, 0, 9}, {0, 10, NBT_AXIS_SQRT, 0, 9},
+    nbt_axis maps[8] = {{-1.5, 2.385, NBT_AXIS_LINEAR, 0, 9}, {0, 10, NBT_AXIS_SQRT, 0, 9},
                         {0, 10, NBT_AXIS_LOG1P, 100, 9},     {0, 3, NBT_AXIS_LOG1P, -0.99, 9},
                         {-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 9}, {0, 12.5, NBT_AXIS_LOG1P_CBRT, 12.5, 9},
-                        {0.25, M_PI, NBT_AXIS_ASINH, 3, 9}};
-    for (int m = 0; m < 7; m++) {
+                        {0.25, M_PI, NBT_AXIS_ASINH, 3, 9},  {-M_PI_2, M_PI_2, NBT_AXIS_ENDS, 16, 9}};
+    for (int m = 0; m < 8; m++) {
         double worst = 0;
         for (double s = 0; s <= 1.0; s += 1.0 / 64)
             worst = fmax(worst, fabs(nbt_axis_to_unit(&maps[m], nbt_axis_from_unit(&maps[m], s)) - s));
@@ -159,6 +159,34 @@ int main(void)
      * (log form of asinh); the middle maps to s = 1/2; node spacing at the
      * middle and at the ends against linear: asinh(c)/c and
      * asinh(c) sqrt(1 + c^2)/c (derivative of the inverse) */
+    /* ends (c = 16 as the planner writes H's v): log1p with c/2 = 8 from lo,
+     * c = 16 from hi, split at s = f where the slopes meet:
+     * f = k1/(k1 + k2), k1 = log(9) 9/8, k2 = log(17) 17/16 (the slopes
+     * ds/dr of each half at r = 1/2, up to the common factor 2).
+     * Closed forms at r = 0.3 and r = 0.8 (one point per half, so that c/2
+     * and c swapped or a half's formula on the other side shows); the middle
+     * at s = f with equal one-sided slopes (C^1); node spacing at lo and hi
+     * 1/9 and 1/17 of the middle's */
+    t_true(nbt_axis_map_parse("ends", &mm) == NBT_OK && mm == NBT_AXIS_ENDS && !strcmp(nbt_axis_map_name(mm), "ends"),
+           "ends parses and names itself");
+    {
+        const nbt_axis *en = &maps[7];
+        double L = M_PI, k1 = log(9.0) * 9.0 / 8.0, k2 = log(17.0) * 17.0 / 16.0, f = k1 / (k1 + k2);
+        t_rel(nbt_axis_to_unit(en, en->lo + 0.3 * L), f * log(1 + 16 * 0.3) / log(9.0), 1e-14, "ends at r = 0.3");
+        t_rel(nbt_axis_to_unit(en, en->lo + 0.8 * L), 1 - (1 - f) * log(1 + 32 * 0.2) / log(17.0), 1e-14,
+              "ends at r = 0.8");
+        t_abs(nbt_axis_from_unit(en, f), 0.0, 1e-15, "ends: s = f is the middle of the range");
+        double h = 1e-6, left = (nbt_axis_from_unit(en, f) - nbt_axis_from_unit(en, f - h)) / h;
+        double right = (nbt_axis_from_unit(en, f + h) - nbt_axis_from_unit(en, f)) / h;
+        t_rel(left, right, 1e-5, "ends: equal slopes on both sides of the middle (C^1)");
+        double lo_sp = (nbt_axis_from_unit(en, h) - en->lo) / h, hi_sp = (en->hi - nbt_axis_from_unit(en, 1 - h)) / h;
+        t_rel(left / lo_sp, 9.0, 1e-5, "ends: nodes 1 + c/2 = 9 times denser at lo than at the middle");
+        t_rel(left / hi_sp, 17.0, 1e-5, "ends: nodes 1 + c = 17 times denser at hi than at the middle");
+        nbt_axis e0 = {0, 1, NBT_AXIS_ENDS, 0, 9}, en2 = {0, 1, NBT_AXIS_ENDS, NAN, 9}, eb = {0, 1, NBT_AXIS_ENDS, 1001, 9};
+        t_true(nbt_table_alloc(NBT_TABLE_H, &maps[5], &e0, 1) == NULL && nbt_table_alloc(NBT_TABLE_H, &maps[5], &en2, 1) == NULL &&
+                   nbt_table_alloc(NBT_TABLE_H, &maps[5], &eb, 1) == NULL,
+               "ends with c <= 0, NaN or > 1000 rejected");
+    }
     t_true(nbt_axis_map_parse("asinh", &mm) == NBT_OK && mm == NBT_AXIS_ASINH, "asinh parses");
     {
         const nbt_axis *as = &maps[6];

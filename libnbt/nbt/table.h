@@ -22,6 +22,13 @@
  *           c/asinh(c) times denser at the middle of the range than linear,
  *           sqrt(1 + c^2) times sparser at its ends (theta of J^1: its
  *           Lambert horizon at pi/2, doc/tables.md)
+ *   ends:   log1p from both ends, c/2 at lo and c at hi, 0 < c <= 1000:
+ *           s = f log1p(c r)/log1p(c/2) for r <= 1/2,
+ *           1 - s = (1 - f) log1p(2 c (1 - r))/log1p(c) above, f where the
+ *           two slopes meet at r = 1/2 (C^1); nodes 1 + c/2 and 1 + c times
+ *           denser at lo and hi than at the middle (v of the g-sliced tail
+ *           form: HG's peaks of width ~1 - |g| at -pi/2 (g > 0) and, harder,
+ *           at pi/2 (g < 0), doc/tables.md)
  *
  * 3-D tables (g-sliced): a third axis (axis[2]) holds slices, e.g. the HG
  * asymmetry g of H_p and J_p^n tables that serve a phase chosen at run time.
@@ -55,13 +62,15 @@ typedef enum {
     NBT_AXIS_LOG1P_CBRT,
     NBT_AXIS_ATANH,
     NBT_AXIS_ASINH,
+    NBT_AXIS_ENDS,
 } nbt_axis_map;
 
 typedef struct {
     double lo, hi;      /* range, lo < hi */
     nbt_axis_map map;
     double c;           /* log1p strength (LOG1P: c > 0 or -1 < c < 0; LOG1P_CBRT: c > 0);
-                           ASINH: clustering at the middle, 0 < c <= 1000 */
+                           ASINH: clustering at the middle, 0 < c <= 1000;
+                           ENDS: clustering at lo (c/2) and hi (c), 0 < c <= 1000 */
     size_t n;           /* number of nodes, >= 2 */
 } nbt_axis;
 
@@ -71,7 +80,7 @@ double nbt_axis_to_unit(const nbt_axis *a, double x);
 double nbt_axis_from_unit(const nbt_axis *a, double s);
 /* Physical value of node i. */
 double nbt_axis_node(const nbt_axis *a, size_t i);
-/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh", "asinh"; parse returns NBT_EFORMAT
+/* "linear", "sqrt", "log1p", "cos", "log1p_cbrt", "atanh", "asinh", "ends"; parse returns NBT_EFORMAT
  * for other names (so an older reader refuses a file with a newer mapping). */
 const char *nbt_axis_map_name(nbt_axis_map m);
 nbt_status nbt_axis_map_parse(const char *name, nbt_axis_map *m);
