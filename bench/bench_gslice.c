@@ -412,6 +412,23 @@ int main(int argc, char **argv)
         static const size_t JN[][4] = {{33, 33, 33, 1}, {65, 65, 33, 1}, {49, 193, 17, 0}, {65, 193, 33, 0}, {65, 257, 33, 0}};
         for (size_t k = jlast ? sizeof JN / sizeof JN[0] - 1 : 0; k < sizeof JN / sizeof JN[0]; k++)
             surface_part(nrays / 2, JN[k][0], JN[k][1], JN[k][2], (int)JN[k][3]);
+        /* the planner's J^1 + J^20 at 1e-3: each alone, then as one set
+         * sharing G's quadrature (nbt_gslice_build_set) */
+        nbt_gslice_request rq[2] = {{NBT_TABLE_J, 1, TMAX_J, {-0.95, 0.95}, 1e-3, {0, 0, 0}, 0},
+                                    {NBT_TABLE_J, 20, TMAX_J, {-0.95, 0.95}, 1e-3, {0, 0, 0}, 0}};
+        nbt_table *ts[2];
+        double sa[2], ss[2];
+        char err[256];
+        for (int i = 0; i < 2; i++) {
+            nbt_gslice_build(&rq[i], 2, &ts[i], &sa[i], err, sizeof err);
+            nbt_table_free(ts[i]);
+        }
+        nbt_gslice_build_set(rq, 2, 2, ts, ss, err, sizeof err);
+        printf("planned J^1 + J^20 at 1e-3 (%zux%zux%zu): alone %.2f + %.2f = %.2f s; as a set %.2f + %.2f = %.2f s\n",
+               ts[0]->axis[0].n, ts[0]->axis[1].n, ts[0]->axis[2].n, sa[0], sa[1], sa[0] + sa[1], ss[0], ss[1],
+               ss[0] + ss[1]);
+        nbt_table_free(ts[0]);
+        nbt_table_free(ts[1]);
     }
     return 0;
 }

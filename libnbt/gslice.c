@@ -51,10 +51,10 @@ static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts
  * one-channel tables (quad_err, max_abs and, with o->measure_error, max_err
  * set): the one place that knows how a kind and form are built. */
 static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
-                               nbt_table **out)
+                               nbt__jcache *gc, nbt_table **out)
 {
     if (t->kind == NBT_TABLE_J)
-        return nbt__gslice_j_slices(t, g, m, o, out);
+        return nbt__gslice_j_slices(t, g, m, o, gc, out);
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++)
         out[i] = NULL;
@@ -68,10 +68,16 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
     return st;
 }
 
+static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o, nbt__jcache *gc);
+
+static nbt_table_form default_form(const nbt_table *t)
+{
+    return t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN;
+}
+
 nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 {
-    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL
-                                   : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN, o);
+    return fill_form(t, default_form(t), o, NULL);
 }
 
 /* theta bands of a g-sliced J table's error map (theta_err): 16 bands of
@@ -85,6 +91,12 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
 #define THETA_BANDS 16
 
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o)
+{
+    return fill_form(t, form, o, NULL);
+}
+
+/* gc: G rows shared with other J builds (nbt_gslice_build_set), or NULL */
+static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o, nbt__jcache *gc)
 {
     if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H) &&
         !(form == NBT_FORM_LOG_ET && t->kind == NBT_TABLE_J))
@@ -134,7 +146,7 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
         st0 = NBT_ENOMEM;
     for (size_t m = 0; m < ng; m++)
         gs[m] = nbt_axis_node(&t->axis[2], m);
-    nbt_status st = st0 != NBT_OK ? st0 : build_slices(t, gs, ng, o, sl);
+    nbt_status st = st0 != NBT_OK ? st0 : build_slices(t, gs, ng, o, gc, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
         memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
         serr[m] = o->measure_error ? sl[m]->max_err[0] : NAN;
@@ -155,7 +167,7 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     if (st == NBT_OK && o->measure_error) {
         for (size_t m = 0; m + 1 < ng; m++)
             gs[m] = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
-        st = build_slices(t, gs, ng - 1, &om, sl);
+        st = build_slices(t, gs, ng - 1, &om, gc, sl);
     }
     int quad = t->interp2 == 2 && ng >= 3;
     double maxe = 0;
@@ -283,7 +295,7 @@ static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t e
 }
 
 static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, const nbt_axis *a1, size_t ng,
-                           unsigned nthreads, int measure, nbt_table **out)
+                           unsigned nthreads, int measure, nbt__jcache *gc, nbt_table **out)
 {
     nbt_axis a2 = g_axis(r, ng);
     *out = nbt_table_alloc3(r->kind, a0, a1, &a2, 1);
@@ -295,7 +307,7 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
         (*out)->interp2 = ng >= 3 ? 2 : 1;
     }
     nbt_build_opts o = {1e-10, measure, nthreads};
-    nbt_status st = nbt_gslice_fill(*out, &o);
+    nbt_status st = fill_form(*out, default_form(*out), &o, gc);
     if (st != NBT_OK) {
         nbt_table_free(*out);
         *out = NULL;
@@ -349,7 +361,7 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     p0.n = p1.n = 33;
     nbt_table *proxy;
     double tp = now_s();
-    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, &proxy);
+    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, NULL, &proxy);
     tp = now_s() - tp;
     nbt_table_free(proxy);
     if (st != NBT_OK)
@@ -372,15 +384,24 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     return plan_rule(r, nthreads, out, t0);
 }
 
+static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                          char *err, size_t errlen);
+
 nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
                               size_t errlen)
+{
+    return execute(p, nthreads, NULL, out, err, errlen);
+}
+
+static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                          char *err, size_t errlen)
 {
     /* sized by the plan's rule: the recorded max_err does not decide (tail:
      * set by the corner u -> 0, v -> pi/2, where the error map bounds each
      * lookup; log_et: the slices' largest error, set by the horizon at
      * large T; doc/tables.md) */
     const nbt_gslice_request *r = &p->req;
-    nbt_status st = build_at(r, &p->axis[0], &p->axis[1], p->axis[2].n, nthreads, 1, out);
+    nbt_status st = build_at(r, &p->axis[0], &p->axis[1], p->axis[2].n, nthreads, 1, gc, out);
     if (st != NBT_OK)
         return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
     if (r->half && (*out)->form == NBT_FORM_TAIL)
@@ -402,17 +423,47 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
     return NBT_OK;
 }
 
-nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
-                            char *err, size_t errlen)
+static nbt_status build_gc(const nbt_gslice_request *r, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                           double *seconds, char *err, size_t errlen)
 {
     *out = NULL;
     double t0 = now_s();
     nbt_gslice_plan_t p;
     nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
     if (st == NBT_OK)
-        st = nbt_gslice_execute(&p, nthreads, out, err, errlen);
+        st = execute(&p, nthreads, gc, out, err, errlen);
     if (seconds)
         *seconds = now_s() - t0;
+    return st;
+}
+
+nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
+                            char *err, size_t errlen)
+{
+    return build_gc(r, nthreads, NULL, out, seconds, err, errlen);
+}
+
+/* the G rows of a 1e-3 J^1 + J^20 pair (65 T nodes and the measured
+ * midpoints, both g passes, the check): about 12 MB; beyond this a build
+ * computes its rows again */
+#define GSLICE_JCACHE_BYTES ((size_t)256 << 20)
+
+nbt_status nbt_gslice_build_set(const nbt_gslice_request *r, size_t n, unsigned nthreads, nbt_table **out,
+                                double *seconds, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < n; i++)
+        out[i] = NULL;
+    nbt__jcache *gc = nbt__jcache_alloc(GSLICE_JCACHE_BYTES);
+    if (!gc)
+        return failf(err, errlen, NBT_ENOMEM, "g-sliced tables: out of memory");
+    nbt_status st = NBT_OK;
+    for (size_t i = 0; i < n && st == NBT_OK; i++)
+        st = build_gc(&r[i], nthreads, gc, &out[i], seconds ? &seconds[i] : NULL, err, errlen);
+    nbt__jcache_free(gc);
+    for (size_t i = 0; i < n && st != NBT_OK; i++) {
+        nbt_table_free(out[i]);
+        out[i] = NULL;
+    }
     return st;
 }
 

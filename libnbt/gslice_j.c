@@ -25,7 +25,7 @@ double nbt__gslice_j_at(const nbt_table *t, double T, double theta, double g, do
 }
 
 nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
-                                nbt_table **out)
+                                nbt__jcache *gc, nbt_table **out)
 {
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++) {
@@ -45,7 +45,7 @@ nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, c
     }
     /* all slices in one pass (one quadrature per node for every g) */
     if (st == NBT_OK)
-        st = nbt__j_table_build_hg(out, m, g, o);
+        st = nbt__j_table_build_hg(out, m, g, o, gc);
     for (size_t i = 0; i < m && st != NBT_OK; i++) {
         nbt_table_free(out[i]);
         out[i] = NULL;

@@ -161,6 +161,106 @@ static void test_row_bound(const nbt_table *t, int npts)
     nbt_table_free(c);
 }
 
+/* ---- (a) at the edges: a band width that does not divide theta ---- */
+
+/* J^20 on fixed, non-square axes T 17 x theta 50 x g 9 over an asymmetric
+ * g range: 49 theta cells in bands of 4, the last band a single cell.
+ * Points in the last band and in the first, every T row and g cell (both
+ * signs of g), against nbt_j_phase at 1e-8 relative, far below the bounds
+ * (>= 1e-4 here). */
+static void test_last_band(void)
+{
+    nbt_gslice_request rq = {NBT_TABLE_J, 20, 20.0, {-0.9, 0.6}, 0, {17, 50, 9}, 0};
+    nbt_table *t = NULL;
+    char err[256] = "";
+    nbt_status st = nbt_gslice_build(&rq, 2, &t, NULL, err, sizeof err);
+    size_t nb = t ? nbt_table_theta_bands(t) : 0;
+    t_true(st == NBT_OK && t && t->theta_err && t->theta_cells == 4 && nb == 13,
+           "J^20 17x50x9: a theta map of 13 bands of 4 cells, the last of 1 (%s)", err);
+    if (st != NBT_OK || !t || !t->theta_err) {
+        nbt_table_free(t);
+        return;
+    }
+    enum { NE = 1200 };
+    static refjob J;
+    J.t = t;
+    for (int k = 0; k < NE; k++) {
+        /* the last band (theta cell 48) and the first (cells 0 .. 3) */
+        double s1 = k % 2 ? 48.0 / 49.0 + uni() / 49.0 : 4.0 * uni() / 49.0;
+        J.T[k] = nbt_axis_from_unit(&t->axis[0], uni());
+        J.th[k] = nbt_axis_from_unit(&t->axis[1], s1);
+        J.g[k] = nbt_axis_from_unit(&t->axis[2], uni());
+    }
+    J.from = 0;
+    J.to = NE;
+    ref_run(&J);
+    double worst[2] = {0, 0};
+    int above[2] = {0, 0}, gneg = 0;
+    for (int k = 0; k < NE; k++) {
+        double v, et = nbt_table_err_at3(t, 0, J.T[k], J.th[k], J.g[k]);
+        nbt_table_lookup3(t, J.T[k], J.th[k], J.g[k], &v);
+        double L = exp(v - J.T[k]), d = fabs(L - J.ref[k]), bt = L * expm1(et) + J.refe[k];
+        worst[k % 2] = fmax(worst[k % 2], d / bt);
+        above[k % 2] += d > bt;
+        gneg += k % 2 && J.g[k] < 0;
+    }
+    t_true(above[1] == 0 && worst[1] >= 0.1, "J^20 17x50x9, %d points in the last theta band (%d with g < 0): "
+           "|lookup - nbt_j_phase| <= the band's bound (worst %.3f of it)", NE / 2, gneg, worst[1]);
+    t_true(above[0] == 0 && worst[0] >= 0.1, "J^20 17x50x9, %d points in the first theta band: <= the band's bound "
+           "(worst %.3f of it)", NE / 2, worst[0]);
+    nbt_table_free(t);
+}
+
+/* ---- the band measurement against a closed form ---- */
+
+/* f = x^2 hat(y): hat is 1 at y node 15 of 17 and 0 at the others, linear
+ * between, so the lookup is exact in y and its error is the x error
+ * h^2/4 (x^2 on a linear grid of step h, at an x midpoint) times hat(y):
+ * largest on the node row y_15, where bands 2 (cells 10..14) and 3 (the
+ * last, cell 15 alone: 16 cells in bands of 5) meet. Each band's bound must
+ * reach the error at its edge, not only at its cells' centres (half of it). */
+static int x2hat(double x, double y, double *out, void *ctx)
+{
+    (void)ctx;
+    *out = x * x * fmax(0.0, 1.0 - fabs(16.0 * y - 15.0));
+    return 0;
+}
+
+static void test_band_closed_form(void)
+{
+    nbt_axis ax = {0, 1, NBT_AXIS_LINEAR, 0, 9}, ay = {0, 1, NBT_AXIS_LINEAR, 0, 17};
+    nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &ax, &ay, 1);
+    int ok = t && nbt_table_theta_err_alloc(t, 5) == NBT_OK && nbt_table_theta_bands(t) == 4 &&
+             nbt_table_tabulate(t, x2hat, NULL, 1) == NBT_OK;
+    t_true(ok, "x^2 hat(y) on 9 x 17 nodes with a map of 4 theta bands tabulated");
+    if (!ok) {
+        nbt_table_free(t);
+        return;
+    }
+    /* points in cells 14 (band 2) and 15 (band 3), up to their shared edge */
+    double worst[2] = {0, 0}, ex = 0.25 / 64.0; /* h = 1/8 */
+    int above = 0;
+    for (int k = 0; k < 4000; k++) {
+        double x = uni(), y = (14.0 + (k % 2) + uni()) / 16.0, v, f;
+        nbt_table_lookup(t, x, y, &v);
+        x2hat(x, y, &f, NULL);
+        /* 1e-7: the float rounding of values ~1 (2^-24 each), which the
+         * measurement sees too */
+        double b = nbt_table_err_at3(t, 0, x, y, 0);
+        above += fabs(v - f) > b + 1e-7;
+        worst[k % 2] = fmax(worst[k % 2], fabs(v - f) / b);
+    }
+    t_true(above == 0 && worst[0] >= 0.9 && worst[1] >= 0.9,
+           "x^2 hat(y): |lookup - f| <= the band bound at 4000 points in bands 2 and 3 (the last), which it nearly "
+           "reaches (worst %.3f, %.3f of it; bounds %.3e, %.3e, h^2/4 = %.3e)", worst[0], worst[1],
+           nbt_table_err_at3(t, 0, 0.5, 14.5 / 16.0, 0), nbt_table_err_at3(t, 0, 0.5, 15.5 / 16.0, 0), ex);
+    /* far from the hat, bands 0 and 1: f = 0 there, the bound only rounding */
+    t_true(nbt_table_err_at3(t, 0, 0.5, 0.3, 0) <= 1e-7 && nbt_table_err_at3(t, 0, 0.5, 0.55, 0) <= 1e-7,
+           "bands 0 and 1, where f = 0: bounds %.1e, %.1e (a band's bound is its own)",
+           nbt_table_err_at3(t, 0, 0.5, 0.3, 0), nbt_table_err_at3(t, 0, 0.5, 0.55, 0));
+    nbt_table_free(t);
+}
+
 /* ---- (c): the EXR keeps the rows, and a file without them the cells ---- */
 
 static void test_exr(const nbt_table *t)
@@ -283,15 +383,73 @@ static void test_route(const nbt_table *t)
     nbt_table_free(r);
 }
 
+/* ---- a scene's J^1 and J^20 built as one set share G's quadrature ---- */
+
+static int same_doubles(const double *a, const double *b, size_t n)
+{
+    if (!a || !b)
+        return a == b;
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* the set's J^20 (G rows from J^1's build) against J^20 built alone: the
+ * same values and recorded errors to the bit (the rows are the same
+ * quadrature at the same T, g panel nodes and HG components); *j1 gets the
+ * set's J^1 */
+static void test_build_set(nbt_table **j1)
+{
+    nbt_gslice_request r[2] = {{NBT_TABLE_J, 1, 20.0, {-0.95, 0.95}, 1e-2, {0, 0, 0}, 0},
+                               {NBT_TABLE_J, 20, 20.0, {-0.95, 0.95}, 1e-2, {0, 0, 0}, 0}};
+    nbt_table *set[2] = {NULL, NULL}, *alone = NULL;
+    double secs[2] = {0, 0}, s20 = 0;
+    char err[256] = "";
+    nbt_status st = nbt_gslice_build_set(r, 2, 2, set, secs, err, sizeof err);
+    t_true(st == NBT_OK && set[0] && set[1] && set[0]->theta_err, "J^1 + J^20 built as a set (%s)", err);
+    *j1 = set[0];
+    if (st != NBT_OK)
+        return;
+    st = nbt_gslice_build(&r[1], 2, &alone, &s20, err, sizeof err);
+    const nbt_table *a = alone, *b = set[1];
+    int same = st == NBT_OK && a && nbt_table_size(a) == nbt_table_size(b) &&
+               memcmp(a->data, b->data, nbt_table_size(a) * sizeof(float)) == 0 && a->quad_err == b->quad_err &&
+               a->max_err[0] == b->max_err[0] && same_doubles(a->cell_err, b->cell_err, a->axis[2].n - 1) &&
+               same_doubles(a->row_err, b->row_err, nbt_table_row_err_len(a)) &&
+               same_doubles(a->theta_err, b->theta_err, nbt_table_theta_err_len(a));
+    t_true(same, "J^20 %zux%zux%zu from the set (G rows from J^1's build) is J^20 built alone to the bit: values, "
+           "quad_err %.2e, cell, row and theta bounds (%.2f s in the set, %.2f s alone; J^1 %.2f s)", b->axis[0].n,
+           b->axis[1].n, b->axis[2].n, b->quad_err, secs[1], s20, secs[0]);
+    nbt_table_free(alone);
+    nbt_table_free(set[1]);
+    /* two g ranges of the same size and panel layout (|g| <= 0.95 forward
+     * and backward, fixed 17x33x9): their rows differ only by the HG
+     * components' g, which the store must tell apart */
+    nbt_gslice_request q[2] = {{NBT_TABLE_J, 20, 20.0, {-0.95, 0.95}, 0, {17, 33, 9}, 0},
+                               {NBT_TABLE_J, 20, 20.0, {-0.94, 0.95}, 0, {17, 33, 9}, 0}};
+    st = nbt_gslice_build_set(q, 2, 2, set, NULL, err, sizeof err);
+    alone = NULL;
+    if (st == NBT_OK)
+        st = nbt_gslice_build(&q[1], 2, &alone, NULL, err, sizeof err);
+    same = st == NBT_OK && memcmp(alone->data, set[1]->data, nbt_table_size(alone) * sizeof(float)) == 0 &&
+           same_doubles(alone->theta_err, set[1]->theta_err, nbt_table_theta_err_len(alone));
+    t_true(same, "J^20 17x33x9 over g [-0.94, 0.95] after one over [-0.95, 0.95] in a set: the same as built alone (%s)",
+           err);
+    nbt_table_free(alone);
+    nbt_table_free(set[0]);
+    nbt_table_free(set[1]);
+}
+
 int main(void)
 {
-    nbt_table *j1 = planned(1, 1e-2);
+    nbt_table *j1 = NULL;
+    test_build_set(&j1);
     if (j1) {
         test_row_bound(j1, NPTS);
         test_exr(j1);
         test_exr_theta(j1);
     }
     nbt_table_free(j1);
+    test_last_band();
+    test_band_closed_form();
     nbt_table *j3 = planned(1, 1e-3);
     if (j3)
         test_route(j3);
