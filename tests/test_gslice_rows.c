@@ -1,5 +1,7 @@
-/* tests/test_gslice_rows.c: the per-(T row, g cell) error bound of g-sliced
- * J tables (row_err, nbt_table_err_at_row, EXR nbt.row_err.R) against
+/* tests/test_gslice_rows.c: the per-(T row, g cell) and per-(T row, theta
+ * band, g cell) error bounds of g-sliced J tables (row_err, theta_err,
+ * nbt_table_err_at_row, nbt_table_err_at3, EXR nbt.row_err.R,
+ * nbt.theta_err.R) against
  * nbt_j_phase (adaptive quadrature of Hong's J integral for HG(g), an
  * independent code path from the tables' one-pass G M^T fill) and
  * nbt_surface_direct. The tables are the planner's (log_et form, atanh g,
