@@ -219,6 +219,21 @@ static double surface_lookup(const nbt_table *J1, const nbt_table *Jn, double g,
     return direct + geo->kappa_s * geo->I0 / (4.0 * M_PI * geo->dsp) * (geo->kd * v[0] + geo->ks * v[1]);
 }
 
+/* a copy without the theta map (keep_rows) or without rows either: the
+ * bounds older files give */
+static nbt_table *strip_bounds(const nbt_table *t, int keep_rows)
+{
+    nbt_table *c = nbt_table_dup(t);
+    free(c->theta_err);
+    c->theta_err = NULL;
+    c->theta_cells = 0;
+    if (!keep_rows) {
+        free(c->row_err);
+        c->row_err = NULL;
+    }
+    return c;
+}
+
 static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
 {
     nbt_axis a0 = {0, TMAX_J, NBT_AXIS_LOG1P_CBRT, TMAX_J, NT}, a1 = {0, M_PI, NBT_AXIS_LINEAR, 0, N};
@@ -228,14 +243,14 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
         double s1, sn;
         nbt_table *J1 = after ? j_after(1, &a0, &a1, ng, &s1) : j_before(1, &a0, &a1, ng, &s1);
         nbt_table *Jn = after ? j_after(20, &a0, &an, ng, &sn) : j_before(20, &a0, &an, ng, &sn);
-        /* the per-cell bound (what files without nbt.row_err get) on the same tables */
-        nbt_table *C1 = nbt_table_dup(J1), *Cn = nbt_table_dup(Jn);
-        free(C1->row_err);
-        free(Cn->row_err);
-        C1->row_err = Cn->row_err = NULL;
+        /* on the same tables: the per-row bound (files without nbt.theta_err)
+         * and the per-cell one (files without nbt.row_err either) */
+        nbt_table *R1 = strip_bounds(J1, 1), *Rn = strip_bounds(Jn, 1), *C1 = strip_bounds(J1, 0),
+                  *Cn = strip_bounds(Jn, 0);
         double wl = 0, wr = 0, *rel = malloc((size_t)n * sizeof(double)), *bq = malloc((size_t)n * sizeof(double));
-        double tb_row = 0, tb_cell = 0, wtb_row = 0, wtb_cell = 0;
-        int ok = 0, fell = 0, cert = 0, cert_cell = 0;
+        double *tq = malloc((size_t)n * sizeof(double));
+        double tb_row = 0, tb_cell = 0, wtb_row = 0, wtb_cell = 0, wtb_th = 0;
+        int ok = 0, fell = 0, cert = 0, cert_cell = 0, cert_row = 0, within = 0;
         unsigned long long seed = rs;
         rs = 0x51ed2701ull; /* the same geometries for every table */
         for (int i = 0; i < n; i++) {
@@ -246,18 +261,23 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
             nbt_surface_direct(p, &geo, 1e-9, &R, &RE);
             nbt_phase_free(p);
             double Lp = surface_lookup(J1, Jn, g, &geo);
-            double t_b = now(), Ec, Lc;
+            double t_b = now(), Ec, Lc, Er, Lr;
             nbt_surface_table_g(J1, Jn, g, &geo, 0, &L, &E);
             tb_row += now() - t_b;
+            nbt_surface_table_g(R1, Rn, g, &geo, 0, &Lr, &Er);
             t_b = now();
             nbt_surface_table_g(C1, Cn, g, &geo, 0, &Lc, &Ec);
             tb_cell += now() - t_b;
             nbt_surface_table_g(J1, Jn, g, &geo, 1e-9, &Lf, &Ef);
             fell += Lf != L;
             cert += E <= 1e-3 * fabs(L);
+            cert_row += Er <= 1e-3 * fabs(L);
             cert_cell += Ec <= 1e-3 * fabs(L);
-            bq[i] = Ec / E;
-            wtb_row = fmax(wtb_row, fabs(L - R) / E);
+            within += fabs(L - R) <= E + RE;
+            bq[i] = Ec / Er;
+            tq[i] = Er / E;
+            wtb_th = fmax(wtb_th, fabs(L - R) / E);
+            wtb_row = fmax(wtb_row, fabs(L - R) / Er);
             wtb_cell = fmax(wtb_cell, fabs(L - R) / Ec);
             rel[i] = fabs(Lp - R) / fabs(R);
             ok += rel[i] <= 1e-3;
@@ -267,6 +287,7 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
         rs = seed;
         qsort(rel, (size_t)n, sizeof(double), cmpd);
         qsort(bq, (size_t)n, sizeof(double), cmpd);
+        qsort(tq, (size_t)n, sizeof(double), cmpd);
         printf("%-6s J1+J20 %3zux%3zux%2zu x2 %5.2f MB build %5.2f s (J1 %.2f, J20 %.2f) rec J1 %.1e J20 %.1e | "
                "lookup: worst %.1e median %.1e <=1e-3 %3.0f%% | bound <=1e-3 %3.0f%% | route: worst %.1e fallback %3.0f%%\n",
                after ? "after" : "before", NT, N, ng, 8e-6 * (double)nbt_table_size(J1), s1 + sn, s1, sn,
@@ -274,12 +295,17 @@ static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)
                after ? Jn->max_err[0] : Jn->max_err[0] / Jn->max_abs[0], wl, rel[n / 2], 100.0 * ok / n,
                100.0 * cert / n, wr, 100.0 * fell / n);
         if (after)
-            printf("       bound per (T row, g cell) | per g cell: <=1e-3 %3.0f%% | %3.0f%%; true/bound worst %.2f | %.2f; "
-                   "cell/row bound median %.1f (min %.2f, max %.1f); %.2f | %.2f us per route call\n",
-                   100.0 * cert / n, 100.0 * cert_cell / n, wtb_row, wtb_cell, bq[n / 2], bq[0], bq[n - 1],
-                   1e6 * tb_row / n, 1e6 * tb_cell / n);
+            printf("       bound per (T row, theta band, g cell) | (T row, g cell) | g cell: <=1e-3 %3.0f%% | %3.0f%% | "
+                   "%3.0f%%; true/bound worst %.2f | %.2f | %.2f (true within the theta bound at %d of %d); "
+                   "row/theta bound median %.1f (min %.2f, max %.1f); cell/row median %.1f (min %.2f, max %.1f); "
+                   "%.2f | %.2f us per route call (theta | cell)\n",
+                   100.0 * cert / n, 100.0 * cert_row / n, 100.0 * cert_cell / n, wtb_th, wtb_row, wtb_cell, within, n,
+                   tq[n / 2], tq[0], tq[n - 1], bq[n / 2], bq[0], bq[n - 1], 1e6 * tb_row / n, 1e6 * tb_cell / n);
         free(rel);
         free(bq);
+        free(tq);
+        nbt_table_free(R1);
+        nbt_table_free(Rn);
         nbt_table_free(C1);
         nbt_table_free(Cn);
         nbt_table_free(J1);
@@ -293,7 +319,8 @@ int main(int argc, char **argv)
     double tol = argc > 1 ? atof(argv[1]) : 1e-2;
     int nrays = argc > 2 ? atoi(argv[2]) : 200;
     double legmax = argc > 3 ? atof(argv[3]) : 30.0;
-    int only_j = argc > 4 && !strcmp(argv[4], "j"); /* the surface part alone */
+    /* the surface part alone; jlast: its planner's size (65x257x33) alone */
+    int jlast = argc > 4 && !strcmp(argv[4], "jlast"), only_j = jlast || (argc > 4 && !strcmp(argv[4], "j"));
     static const double Gs[] = {0.5, 0.8, 0.9, 0.95};
     printf("# H tables for HG g in [-G, G], u in [0, %g], tol %g (max_err / max |value|), 2 threads;\n"
            "# airlight over %d random rays (d_vp finite and infinite, gamma in (0.02, pi-0.02)) and g,\n"
@@ -302,7 +329,7 @@ int main(int argc, char **argv)
            "# (tail form: 1e-3). 'plain': the former g-sliced H (plain values, trilinear, cos g axis,\n"
            "# the former planner's sizes for tol 1e-2, fill time only); 'tail': the tail form as planned\n"
            "# (its rec is relative to the value: the error map's largest entry, at u -> 0, v -> pi/2).\n"
-           "# Arguments: TOL NRAYS LEGMAX (< 0: no Legendre rows) [nosurface].\n"
+           "# Arguments: TOL NRAYS LEGMAX (< 0: no Legendre rows) [nosurface | j (surface only) | jlast (its 65x257x33 only)].\n"
            "# 'vs-unobstructed': the lookup's error relative to the airlight of the same ray with\n"
            "# d_vp = inf (equal to 'worst' when the worst rays are unobstructed ones: sideways and\n"
            "# backward rays far from the source, whose airlight is a difference of two nearly\n"
@@ -383,8 +410,25 @@ int main(int argc, char **argv)
                TMAX_J, nrays / 2);
         /* T x theta x g: before and after at two sizes, then after only (before costs ~5x) */
         static const size_t JN[][4] = {{33, 33, 33, 1}, {65, 65, 33, 1}, {49, 193, 17, 0}, {65, 193, 33, 0}, {65, 257, 33, 0}};
-        for (size_t k = 0; k < sizeof JN / sizeof JN[0]; k++)
+        for (size_t k = jlast ? sizeof JN / sizeof JN[0] - 1 : 0; k < sizeof JN / sizeof JN[0]; k++)
             surface_part(nrays / 2, JN[k][0], JN[k][1], JN[k][2], (int)JN[k][3]);
+        /* the planner's J^1 + J^20 at 1e-3: each alone, then as one set
+         * sharing G's quadrature (nbt_gslice_build_set) */
+        nbt_gslice_request rq[2] = {{NBT_TABLE_J, 1, TMAX_J, {-0.95, 0.95}, 1e-3, {0, 0, 0}, 0},
+                                    {NBT_TABLE_J, 20, TMAX_J, {-0.95, 0.95}, 1e-3, {0, 0, 0}, 0}};
+        nbt_table *ts[2];
+        double sa[2], ss[2];
+        char err[256];
+        for (int i = 0; i < 2; i++) {
+            nbt_gslice_build(&rq[i], 2, &ts[i], &sa[i], err, sizeof err);
+            nbt_table_free(ts[i]);
+        }
+        nbt_gslice_build_set(rq, 2, 2, ts, ss, err, sizeof err);
+        printf("planned J^1 + J^20 at 1e-3 (%zux%zux%zu): alone %.2f + %.2f = %.2f s; as a set %.2f + %.2f = %.2f s\n",
+               ts[0]->axis[0].n, ts[0]->axis[1].n, ts[0]->axis[2].n, sa[0], sa[1], sa[0] + sa[1], ss[0], ss[1],
+               ss[0] + ss[1]);
+        nbt_table_free(ts[0]);
+        nbt_table_free(ts[1]);
     }
     return 0;
 }

@@ -30,19 +30,16 @@ static int scene_slices(const nbt_scene *s, const char *dir, unsigned threads, i
         rq[n++] = (nbt_gslice_request){NBT_TABLE_J, s->phong[i], xmax, {s->g[0], s->g[1]}, s->tol, {0, 0, 0}, s->half};
     nbt_table *t[2 + NBT_SCENE_MAX_PHONG] = {0};
     char err[512];
+    double secs[2 + NBT_SCENE_MAX_PHONG];
     progress prog;
     progress_init(&prog, "scene", quiet);
-    for (size_t i = 0; i < n; i++) {
-        double secs;
-        if (nbt_gslice_build(&rq[i], threads, &t[i], &secs, err, sizeof err) != NBT_OK) {
-            for (size_t j = 0; j < i; j++)
-                nbt_table_free(t[j]);
-            die("%s", err);
-        }
+    /* one set: the J builds share G's quadrature (it depends on neither n nor theta) */
+    if (nbt_gslice_build_set(rq, n, threads, t, secs, err, sizeof err) != NBT_OK)
+        die("%s", err);
+    for (size_t i = 0; i < n; i++)
         progress_note(&prog, "set %zu/%zu: g-sliced %s%s %zux%zux%zu in %.2f s", i + 1, n,
                       nbt_table_kind_name(rq[i].kind), rq[i].kind == NBT_TABLE_J ? "^n" : "", t[i]->axis[0].n,
-                      t[i]->axis[1].n, t[i]->axis[2].n, secs);
-    }
+                      t[i]->axis[1].n, t[i]->axis[2].n, secs[i]);
     /* every set checked before anything is written */
     int miss = 0;
     for (size_t i = 0; i < n; i++) {

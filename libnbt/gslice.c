@@ -51,10 +51,10 @@ static nbt_status build_slice(const nbt_table *t, double g, const nbt_build_opts
  * one-channel tables (quad_err, max_abs and, with o->measure_error, max_err
  * set): the one place that knows how a kind and form are built. */
 static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
-                               nbt_table **out)
+                               nbt__jcache *gc, nbt_table **out)
 {
     if (t->kind == NBT_TABLE_J)
-        return nbt__gslice_j_slices(t, g, m, o, out);
+        return nbt__gslice_j_slices(t, g, m, o, gc, out);
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++)
         out[i] = NULL;
@@ -68,13 +68,35 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
     return st;
 }
 
-nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
+static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o, nbt__jcache *gc);
+
+static nbt_table_form default_form(const nbt_table *t)
 {
-    return nbt_gslice_fill_form(t, t->kind == NBT_TABLE_H ? NBT_FORM_TAIL
-                                   : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN, o);
+    return t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN;
 }
 
+nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o)
+{
+    return fill_form(t, default_form(t), o, NULL);
+}
+
+/* theta bands of a g-sliced J table's error map (theta_err): 16 bands of
+ * 16 cells at the planner's 257 theta nodes. The error peaks in a few
+ * cells (J^1's horizon, J^n's lobe edge) and is orders smaller elsewhere,
+ * so narrow bands keep the peak out of most of theta. bench/bench_gslice
+ * (J^1 + J^20, 65x257x33, 1000 geometries) certifies 1e-3 at 73, 81, 85,
+ * 88% with 8, 16, 32, 64 bands (the row bound 32%): 16 is the knee, 64 rows
+ * x 16 bands x 32 g cells = 32768 floats (131 kB, 6% of the table's 2.2 MB),
+ * where the whole per-cell map would be as large as the table. */
+#define THETA_BANDS 16
+
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o)
+{
+    return fill_form(t, form, o, NULL);
+}
+
+/* gc: G rows shared with other J builds (nbt_gslice_build_set), or NULL */
+static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o, nbt__jcache *gc)
 {
     if (form != NBT_FORM_PLAIN && !(form == NBT_FORM_TAIL && t->kind == NBT_TABLE_H) &&
         !(form == NBT_FORM_LOG_ET && t->kind == NBT_TABLE_J))
@@ -93,18 +115,22 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     if (t->kind == NBT_TABLE_H)
         t->n = 0;
     free(t->row_err); /* a refill records its own, or none */
-    t->row_err = NULL;
+    free(t->theta_err);
+    t->row_err = t->theta_err = NULL;
+    t->theta_cells = 0;
     if (form == NBT_FORM_TAIL)
         return nbt__tail_fill(t, o);
     t->form = form;
     nbt_status st0 = NBT_OK;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
     double qerr = 0, amax = 0;
-    /* per T row (cell between T nodes i and i + 1): the slices' in-slice
-     * error (srow), the g error at the row's two node columns (grow) */
-    size_t nr = nx - 1;
+    /* per T row (cell between T nodes i and i + 1) and theta band
+     * (THETA_BANDS of them, cpb theta cells each): the slices' in-slice
+     * error (srow), the g error at the nodes of the band's cells in the
+     * row (grow) */
+    size_t nr = nx - 1, cpb = (ny - 1 + THETA_BANDS - 1) / THETA_BANDS, nb = (ny - 1 + cpb - 1) / cpb;
     double *gs = calloc(ng, sizeof *gs), *serr = calloc(ng, sizeof *serr);
-    double *srow = calloc(ng * nr, sizeof *srow), *grow = calloc(nr, sizeof *grow);
+    double *srow = calloc(ng * nb * nr, sizeof *srow), *grow = calloc(nb * nr, sizeof *grow);
     nbt_table **sl = calloc(ng, sizeof *sl);
     if (!gs || !sl || !serr || !srow || !grow) {
         free(gs);
@@ -116,17 +142,17 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     }
     /* the row bound where the slices record their rows (J) */
     int rows = o->measure_error && t->kind == NBT_TABLE_J;
-    if (rows && nbt_table_row_err_alloc(t) != NBT_OK)
+    if (rows && (nbt_table_row_err_alloc(t) != NBT_OK || nbt_table_theta_err_alloc(t, cpb) != NBT_OK))
         st0 = NBT_ENOMEM;
     for (size_t m = 0; m < ng; m++)
         gs[m] = nbt_axis_node(&t->axis[2], m);
-    nbt_status st = st0 != NBT_OK ? st0 : build_slices(t, gs, ng, o, sl);
+    nbt_status st = st0 != NBT_OK ? st0 : build_slices(t, gs, ng, o, gc, sl);
     for (size_t m = 0; m < ng && st == NBT_OK; m++) {
         memcpy(t->data + m * ns, sl[m]->data, ns * sizeof(float));
         serr[m] = o->measure_error ? sl[m]->max_err[0] : NAN;
-        /* a slice without its rows: its slice-wide error in every row */
-        for (size_t i = 0; rows && i < nr; i++)
-            srow[m * nr + i] = sl[m]->row_err && !isnan(sl[m]->row_err[i]) ? sl[m]->row_err[i] : serr[m];
+        /* a slice without its bands: its slice-wide error in every one */
+        for (size_t k = 0; rows && k < nb * nr; k++)
+            srow[m * nb * nr + k] = sl[m]->theta_err && !isnan(sl[m]->theta_err[k]) ? sl[m]->theta_err[k] : serr[m];
         qerr = fmax(qerr, sl[m]->quad_err);
         amax = fmax(amax, sl[m]->max_abs[0]);
     }
@@ -141,17 +167,17 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
     if (st == NBT_OK && o->measure_error) {
         for (size_t m = 0; m + 1 < ng; m++)
             gs[m] = nbt_axis_from_unit(&t->axis[2], ((double)m + 0.5) / (double)(ng - 1));
-        st = build_slices(t, gs, ng - 1, &om, sl);
+        st = build_slices(t, gs, ng - 1, &om, gc, sl);
     }
     int quad = t->interp2 == 2 && ng >= 3;
     double maxe = 0;
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
         double gm = 0, se = 0;
-        for (size_t i = 0; i < nr; i++)
-            grow[i] = 0;
-        double *rerr = rows ? t->row_err + m * nr : NULL;
-        for (size_t i = 0; rows && i < nr; i++)
-            rerr[i] = 0;
+        for (size_t k = 0; k < nb * nr; k++)
+            grow[k] = 0;
+        double *rerr = rows ? t->theta_err + m * nb * nr : NULL;
+        for (size_t k = 0; rows && k < nb * nr; k++)
+            rerr[k] = 0;
         for (size_t c = m; c <= m + 1; c++) {
             /* stencil centre and weights at the midpoint p = m + 1/2 */
             size_t mc = quad ? (c < 1 ? 1 : c > ng - 2 ? ng - 2 : c) : m;
@@ -164,8 +190,8 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
             for (int q = 0; q < 3; q++)
                 if (w[q] != 0.0) {
                     se = fmax(se, serr[m0 + (size_t)q]);
-                    for (size_t i = 0; rows && i < nr; i++)
-                        rerr[i] = fmax(rerr[i], srow[(m0 + (size_t)q) * nr + i]);
+                    for (size_t k = 0; rows && k < nb * nr; k++)
+                        rerr[k] = fmax(rerr[k], srow[(m0 + (size_t)q) * nb * nr + k]);
                 }
             for (size_t k = 0; k < ns; k++) {
                 double v = 0;
@@ -174,12 +200,16 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
                         v += w[q] * (double)t->data[(m0 + (size_t)q) * ns + k];
                 double d = fabs(v - (double)sl[m]->data[k]);
                 gm = fmax(gm, d);
-                /* node column i = k % nx: the rows i - 1 and i meet there */
-                size_t i = k % nx;
-                if (i < nr)
-                    grow[i] = fmax(grow[i], d);
-                if (i >= 1)
-                    grow[i - 1] = fmax(grow[i - 1], d);
+                /* node (i, j) = (k % nx, k / nx): the rows i - 1 and i
+                 * and the theta cells j - 1 and j meet there */
+                size_t i = k % nx, j = k / nx;
+                for (size_t jc = j >= 1 ? j - 1 : 0; jc <= j && jc + 1 < ny; jc++) {
+                    double *gb = grow + jc / cpb * nr;
+                    if (i < nr)
+                        gb[i] = fmax(gb[i], d);
+                    if (i >= 1)
+                        gb[i - 1] = fmax(gb[i - 1], d);
+                }
             }
         }
         qerr = fmax(qerr, sl[m]->quad_err);
@@ -187,19 +217,29 @@ nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_bui
         double wsum = quad ? 1.25 : 1.0;
         t->cell_err[m] = gm + wsum * se;
         maxe = fmax(maxe, t->cell_err[m]);
-        /* the same per row: the g error at its nodes and the in-slice
-         * errors of its slices in that row */
-        for (size_t i = 0; rows && i < nr; i++)
-            rerr[i] = grow[i] + wsum * rerr[i];
+        /* the same per row and band: the g error at its nodes and the
+         * in-slice errors of its slices there; a row's is its bands' max */
+        for (size_t k = 0; rows && k < nb * nr; k++)
+            rerr[k] = grow[k] + wsum * rerr[k];
+        for (size_t i = 0; rows && i < nr; i++) {
+            double r = 0;
+            for (size_t b = 0; b < nb; b++)
+                r = fmax(r, rerr[b * nr + i]);
+            t->row_err[m * nr + i] = r;
+        }
     }
     for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
         t->cell_err[m] += qerr;
         for (size_t i = 0; rows && i < nr; i++)
             t->row_err[m * nr + i] += qerr;
+        for (size_t k = 0; rows && k < nb * nr; k++)
+            t->theta_err[m * nb * nr + k] += qerr;
     }
-    if ((st != NBT_OK || !o->measure_error) && t->row_err) {
+    if (st != NBT_OK || !o->measure_error) {
         free(t->row_err);
-        t->row_err = NULL;
+        free(t->theta_err);
+        t->row_err = t->theta_err = NULL;
+        t->theta_cells = 0;
     }
     for (size_t m = 0; m < ng; m++)
         nbt_table_free(sl[m]);
@@ -259,7 +299,7 @@ static nbt_status check_request(const nbt_gslice_request *r, char *err, size_t e
 }
 
 static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, const nbt_axis *a1, size_t ng,
-                           unsigned nthreads, int measure, nbt_table **out)
+                           unsigned nthreads, int measure, nbt__jcache *gc, nbt_table **out)
 {
     nbt_axis a2 = g_axis(r, ng);
     *out = nbt_table_alloc3(r->kind, a0, a1, &a2, 1);
@@ -271,7 +311,7 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
         (*out)->interp2 = ng >= 3 ? 2 : 1;
     }
     nbt_build_opts o = {1e-10, measure, nthreads};
-    nbt_status st = nbt_gslice_fill(*out, &o);
+    nbt_status st = fill_form(*out, default_form(*out), &o, gc);
     if (st != NBT_OK) {
         nbt_table_free(*out);
         *out = NULL;
@@ -329,7 +369,7 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     p0.n = p1.n = 33;
     nbt_table *proxy;
     double tp = now_s();
-    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, &proxy);
+    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, NULL, &proxy);
     tp = now_s() - tp;
     nbt_table_free(proxy);
     if (st != NBT_OK)
@@ -352,15 +392,24 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     return plan_rule(r, nthreads, out, t0);
 }
 
+static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                          char *err, size_t errlen);
+
 nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt_table **out, char *err,
                               size_t errlen)
+{
+    return execute(p, nthreads, NULL, out, err, errlen);
+}
+
+static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                          char *err, size_t errlen)
 {
     /* sized by the plan's rule: the recorded max_err does not decide (tail:
      * set by the corner u -> 0, v -> pi/2, where the error map bounds each
      * lookup; log_et: the slices' largest error, set by the horizon at
      * large T; doc/tables.md) */
     const nbt_gslice_request *r = &p->req;
-    nbt_status st = build_at(r, &p->axis[0], &p->axis[1], p->axis[2].n, nthreads, 1, out);
+    nbt_status st = build_at(r, &p->axis[0], &p->axis[1], p->axis[2].n, nthreads, 1, gc, out);
     if (st != NBT_OK)
         return failf(err, errlen, st, "g-sliced table: the build failed: %s", nbt_strerror(st));
     if (r->half && (*out)->form == NBT_FORM_TAIL)
@@ -374,23 +423,55 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
             t->cell_err[m] += e;
         for (size_t k = 0; t->row_err && k < nbt_table_row_err_len(t); k++)
             t->row_err[k] += e;
+        for (size_t k = 0; t->theta_err && k < nbt_table_theta_err_len(t); k++)
+            t->theta_err[k] += e;
         t->max_err[0] += e;
     } else if (r->half)
         nbt_table_round_half(*out);
     return NBT_OK;
 }
 
-nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
-                            char *err, size_t errlen)
+static nbt_status build_gc(const nbt_gslice_request *r, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
+                           double *seconds, char *err, size_t errlen)
 {
     *out = NULL;
     double t0 = now_s();
     nbt_gslice_plan_t p;
     nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
     if (st == NBT_OK)
-        st = nbt_gslice_execute(&p, nthreads, out, err, errlen);
+        st = execute(&p, nthreads, gc, out, err, errlen);
     if (seconds)
         *seconds = now_s() - t0;
+    return st;
+}
+
+nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
+                            char *err, size_t errlen)
+{
+    return build_gc(r, nthreads, NULL, out, seconds, err, errlen);
+}
+
+/* the G rows of a 1e-3 J^1 + J^20 pair (65 T nodes and the measured
+ * midpoints, both g passes, the check): about 12 MB; beyond this a build
+ * computes its rows again */
+#define GSLICE_JCACHE_BYTES ((size_t)256 << 20)
+
+nbt_status nbt_gslice_build_set(const nbt_gslice_request *r, size_t n, unsigned nthreads, nbt_table **out,
+                                double *seconds, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < n; i++)
+        out[i] = NULL;
+    nbt__jcache *gc = nbt__jcache_alloc(GSLICE_JCACHE_BYTES);
+    if (!gc)
+        return failf(err, errlen, NBT_ENOMEM, "g-sliced tables: out of memory");
+    nbt_status st = NBT_OK;
+    for (size_t i = 0; i < n && st == NBT_OK; i++)
+        st = build_gc(&r[i], nthreads, gc, &out[i], seconds ? &seconds[i] : NULL, err, errlen);
+    nbt__jcache_free(gc);
+    for (size_t i = 0; i < n && st != NBT_OK; i++) {
+        nbt_table_free(out[i]);
+        out[i] = NULL;
+    }
     return st;
 }
 

@@ -10,9 +10,9 @@
 
 double nbt__gslice_j_at(const nbt_table *t, double T, double theta, double g, double *err)
 {
-    /* the bound of the T row and g cell the lookup interpolates in (older
-     * files: the g cell's) */
-    double v, e = nbt_table_err_at_row(t, 0, T, g);
+    /* the bound of the T row, theta band and g cell the lookup interpolates
+     * in (older files: the row's, or the g cell's) */
+    double v, e = nbt_table_err_at3(t, 0, T, theta, g);
     nbt_table_lookup3(t, T, theta, g, &v);
     if (t->form != NBT_FORM_LOG_ET) {
         *err = e;
@@ -25,7 +25,7 @@ double nbt__gslice_j_at(const nbt_table *t, double T, double theta, double g, do
 }
 
 nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, const nbt_build_opts *o,
-                                nbt_table **out)
+                                nbt__jcache *gc, nbt_table **out)
 {
     nbt_status st = NBT_OK;
     for (size_t i = 0; i < m; i++) {
@@ -37,14 +37,15 @@ nbt_status nbt__gslice_j_slices(const nbt_table *t, const double *g, size_t m, c
         out[i]->k[0] = -1;
         out[i]->n = t->n;
         /* the in-slice error per T row too (nbt_gslice_fill's row bound) */
-        if (o->measure_error && nbt_table_row_err_alloc(out[i]) != NBT_OK)
+        if (o->measure_error && (nbt_table_row_err_alloc(out[i]) != NBT_OK ||
+                                 (t->theta_err && nbt_table_theta_err_alloc(out[i], t->theta_cells) != NBT_OK)))
             st = nbt__fail(NBT_ENOMEM, "g-sliced J table: out of memory");
         out[i]->form = t->form;
         snprintf(out[i]->phase, sizeof out[i]->phase, "hg:%.17g", g[i]);
     }
     /* all slices in one pass (one quadrature per node for every g) */
     if (st == NBT_OK)
-        st = nbt__j_table_build_hg(out, m, g, o);
+        st = nbt__j_table_build_hg(out, m, g, o, gc);
     for (size_t i = 0; i < m && st != NBT_OK; i++) {
         nbt_table_free(out[i]);
         out[i] = NULL;

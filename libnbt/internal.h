@@ -184,20 +184,23 @@ unsigned nbt__nthreads(unsigned requested, size_t n);
 
 /* G rows of J builds, shared between builds (libnbt/jcache.c): a row is
  * G_k(T, g_q) for k < fdim at all Q panel nodes, which depend on T, the
- * panel layout (ngeo, nhi, split; len = Q fdim values) and the quadrature
- * tolerance, not on n or theta. Legendre channels only. get copies a stored
- * row into row and its error bound into *err (1) or returns 0; put stores a
- * copy until max_bytes are held. Both are thread-safe. */
+ * panel layout (ngeo, nhi, split; len = Q fdim values), the quadrature
+ * tolerance and the components (Legendre orders, or HG at hg[0..fdim-1]),
+ * not on n or theta. get copies a stored row into row and its error bounds
+ * into err (1) or returns 0; put stores a copy until max_bytes are held.
+ * Both are thread-safe. Errors: one for Legendre rows (hg NULL), one per
+ * component for HG rows. */
 typedef struct {
     double T, tol;
     size_t len, ngeo, nhi, fdim;
     int split;
+    const double *hg; /* HG components' g (fdim values), or NULL: Legendre */
 } nbt__jkey;
 typedef struct nbt__jcache nbt__jcache;
 nbt__jcache *nbt__jcache_alloc(size_t max_bytes);
 void nbt__jcache_free(nbt__jcache *c);
 int nbt__jcache_get(nbt__jcache *c, const nbt__jkey *k, double *row, double *err);
-void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, double err);
+void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, const double *err);
 /* nbt_j_table_build_set with G rows taken from and added to gc (may be NULL) */
 nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nbt_phase *fixed,
                                      const nbt_build_opts *o, nbt__jcache *gc);

@@ -9,10 +9,14 @@
 #include "internal.h"
 
 typedef struct {
-    nbt__jkey k;
-    double err;
-    double *row; /* k.len values */
+    nbt__jkey k;       /* k.hg: the entry's own copy */
+    double *row;       /* k.len values, then the errors (nerr(&k)) */
 } entry;
+
+static size_t nerr(const nbt__jkey *k)
+{
+    return k->hg ? k->fdim : 1;
+}
 
 struct nbt__jcache {
     pthread_mutex_t mu;
@@ -37,8 +41,10 @@ void nbt__jcache_free(nbt__jcache *c)
 {
     if (!c)
         return;
-    for (size_t i = 0; i < c->cap; i++)
+    for (size_t i = 0; i < c->cap; i++) {
         free(c->e[i].row);
+        free((double *)c->e[i].k.hg);
+    }
     free(c->e);
     pthread_mutex_destroy(&c->mu);
     free(c);
@@ -47,7 +53,8 @@ void nbt__jcache_free(nbt__jcache *c)
 static int same(const nbt__jkey *a, const nbt__jkey *b)
 {
     return memcmp(&a->T, &b->T, sizeof a->T) == 0 && a->tol == b->tol && a->len == b->len && a->ngeo == b->ngeo &&
-           a->nhi == b->nhi && a->split == b->split && a->fdim == b->fdim;
+           a->nhi == b->nhi && a->split == b->split && a->fdim == b->fdim && !a->hg == !b->hg &&
+           (!a->hg || memcmp(a->hg, b->hg, a->fdim * sizeof *a->hg) == 0);
 }
 
 static size_t slot(const nbt__jcache *c, const nbt__jkey *k)
@@ -72,7 +79,7 @@ int nbt__jcache_get(nbt__jcache *c, const nbt__jkey *k, double *row, double *err
         entry *e = &c->e[slot(c, k)];
         if (e->row) {
             memcpy(row, e->row, k->len * sizeof *row);
-            *err = e->err;
+            memcpy(err, e->row + k->len, nerr(k) * sizeof *err);
             hit = 1;
         }
     }
@@ -80,10 +87,10 @@ int nbt__jcache_get(nbt__jcache *c, const nbt__jkey *k, double *row, double *err
     return hit;
 }
 
-void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, double err)
+void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, const double *err)
 {
     pthread_mutex_lock(&c->mu);
-    size_t need = k->len * sizeof *row;
+    size_t need = (k->len + nerr(k)) * sizeof *row, ng = k->hg ? k->fdim * sizeof *k->hg : 0;
     if (c->bytes + need > c->max_bytes) /* full: later rows are computed again */
         goto out;
     if (2 * (c->used + 1) > c->cap) { /* grow: load factor <= 1/2 */
@@ -102,13 +109,18 @@ void nbt__jcache_put(nbt__jcache *c, const nbt__jkey *k, const double *row, doub
     entry *e = &c->e[slot(c, k)];
     if (e->row)
         goto out;
-    if (!(e->row = malloc(need)))
+    double *hg = ng ? malloc(ng) : NULL;
+    if ((ng && !hg) || !(e->row = malloc(need))) {
+        free(hg);
         goto out;
-    memcpy(e->row, row, need);
+    }
+    memcpy(e->row, row, k->len * sizeof *row);
+    memcpy(e->row + k->len, err, nerr(k) * sizeof *err);
     e->k = *k;
-    e->err = err;
+    if (ng)
+        e->k.hg = memcpy(hg, k->hg, ng);
     c->used++;
-    c->bytes += need;
+    c->bytes += need + ng;
 out:
     pthread_mutex_unlock(&c->mu);
 }

@@ -643,22 +643,23 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
     c->M = malloc(ny * P->Q * sizeof(double));
     c->rowerr = calloc(nx * c->fdim, sizeof(double));
-    int share = c->gc && c->sf;
+    int share = c->gc && (c->sf || c->w.hg);
     c->have = share ? calloc(nx, 1) : NULL;
     nbt_status st = NBT_ENOMEM;
     double e = 0;
     if (c->G && c->M && c->rowerr && (!share || c->have)) {
         /* rows another build of the plan computed are copied, the others
          * computed and offered to the later builds (fixed rules: one
-         * a-priori bound for every component of a row) */
+         * a-priori bound for every component of a row; HG slices: each
+         * component's adaptive bound) */
         size_t len = P->Q * c->fdim;
-        nbt__jkey key = {0, c->tol, len, c->ngeo, c->nhi, c->fdim, P == &c->fine};
+        nbt__jkey key = {0, c->tol, len, c->ngeo, c->nhi, c->fdim, P == &c->fine, c->w.hg};
         for (size_t i = 0; share && i < nx; i++) {
             key.T = xs[i];
-            double re = 0;
-            c->have[i] = (unsigned char)nbt__jcache_get(c->gc, &key, c->G + i * len, &re);
-            for (unsigned k = 0; c->have[i] && k < c->fdim; k++)
-                c->rowerr[i * c->fdim + k] = re;
+            double re = 0, *rei = c->rowerr + i * c->fdim;
+            c->have[i] = (unsigned char)nbt__jcache_get(c->gc, &key, c->G + i * len, c->w.hg ? rei : &re);
+            for (unsigned k = 0; c->have[i] && !c->w.hg && k < c->fdim; k++)
+                rei[k] = re;
         }
         st = nbt__parallel_for(nx, c->nt, j_grow, c);
         for (size_t i = 0; share && st == NBT_OK && i < nx; i++)
@@ -667,7 +668,7 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
                 for (unsigned k = 0; k < c->fdim; k++)
                     re = fmax(re, c->rowerr[i * c->fdim + k]);
                 key.T = xs[i];
-                nbt__jcache_put(c->gc, &key, c->G + i * len, re);
+                nbt__jcache_put(c->gc, &key, c->G + i * len, c->w.hg ? c->rowerr + i * c->fdim : &re);
             }
         if (st == NBT_OK)
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
@@ -868,9 +869,10 @@ nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nb
     return j_build(ts, ntab, fixed, NULL, o, gc);
 }
 
-nbt_status nbt__j_table_build_hg(nbt_table *const *ts, size_t m, const double *g, const nbt_build_opts *o)
+nbt_status nbt__j_table_build_hg(nbt_table *const *ts, size_t m, const double *g, const nbt_build_opts *o,
+                                 nbt__jcache *gc)
 {
-    return j_build(ts, m, NULL, g, o, NULL);
+    return j_build(ts, m, NULL, g, o, gc);
 }
 
 nbt_status nbt_j_table_build(nbt_table *t, const nbt_phase *fixed, const nbt_build_opts *o)

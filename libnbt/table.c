@@ -212,7 +212,7 @@ nbt_table *nbt_table_dup(const nbt_table *t)
     *c = *t;
     c->data = d;
     c->cell_err = e;
-    c->row_err = NULL;
+    c->row_err = c->theta_err = NULL;
     memcpy(d, t->data, nbt_table_size(t) * sizeof(float));
     if (e)
         memcpy(e, t->cell_err, (t->axis[2].n - 1) * t->nch * sizeof *e);
@@ -222,6 +222,13 @@ nbt_table *nbt_table_dup(const nbt_table *t)
             return NULL;
         }
         memcpy(c->row_err, t->row_err, nbt_table_row_err_len(t) * sizeof *c->row_err);
+    }
+    if (t->theta_err) {
+        if (nbt_table_theta_err_alloc(c, t->theta_cells) != NBT_OK) {
+            nbt_table_free(c);
+            return NULL;
+        }
+        memcpy(c->theta_err, t->theta_err, nbt_table_theta_err_len(t) * sizeof *c->theta_err);
     }
     return c;
 }
@@ -269,6 +276,52 @@ double nbt_table_err_at_row(const nbt_table *t, size_t c, double x0, double x2)
     return isnan(e) ? nbt_table_err_at(t, c, x2) : e;
 }
 
+size_t nbt_table_theta_bands(const nbt_table *t)
+{
+    size_t nc = t->axis[1].n - 1;
+    return t->theta_cells ? (nc + t->theta_cells - 1) / t->theta_cells : 0;
+}
+
+size_t nbt_table_theta_err_len(const nbt_table *t)
+{
+    return nbt_table_row_err_len(t) * nbt_table_theta_bands(t);
+}
+
+nbt_status nbt_table_theta_err_alloc(nbt_table *t, size_t cells)
+{
+    if (cells < 1 || cells > t->axis[1].n - 1)
+        return NBT_EINVAL;
+    free(t->theta_err);
+    t->theta_err = NULL;
+    t->theta_cells = cells;
+    size_t n = nbt_table_theta_err_len(t);
+    double *r = malloc(n * sizeof *r);
+    if (!r) {
+        t->theta_cells = 0;
+        return NBT_ENOMEM;
+    }
+    for (size_t i = 0; i < n; i++)
+        r[i] = NAN;
+    t->theta_err = r;
+    return NBT_OK;
+}
+
+double nbt_table_err_at3(const nbt_table *t, size_t c, double x0, double x1, double x2)
+{
+    if (!t->theta_err || c >= t->nch)
+        return nbt_table_err_at_row(t, c, x0, x2);
+    size_t i, j, m = 0;
+    double f;
+    /* the cells the lookup interpolates in (nbt_table_lookup3's, clamped) */
+    nbt__axis_cell(&t->axis[0], x0, &i, &f);
+    nbt__axis_cell(&t->axis[1], x1, &j, &f);
+    if (t->axis[2].n > 1)
+        nbt__axis_cell(&t->axis[2], x2, &m, &f);
+    size_t b = j / t->theta_cells, nb = nbt_table_theta_bands(t);
+    double e = t->theta_err[((m * nb + b) * (t->axis[0].n - 1) + i) * t->nch + c];
+    return isnan(e) ? nbt_table_err_at_row(t, c, x0, x2) : e;
+}
+
 nbt_table *nbt_table_alloc(nbt_table_kind kind, const nbt_axis *ax0, const nbt_axis *ax1, size_t nch)
 {
     const nbt_axis one = {0.0, 1.0, NBT_AXIS_LINEAR, 0.0, 1};
@@ -287,6 +340,7 @@ void nbt_table_free(nbt_table *t)
     free(t->data);
     free(t->cell_err);
     free(t->row_err);
+    free(t->theta_err);
     free(t);
 }
 
@@ -557,26 +611,34 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                         DT[(i * ny + j) * nc + c] = t->data[(j * nx + i) * nc + c];
 #define D(i, j, c) DT[((i) * ny + (j)) * nc + (c)]
 #define EX(i, jr, c) F[((i) * fy + (jr)) * C + off + (c)]
-        /* per x row (cell i between x nodes i and i + 1) where the builder
-         * asked for it (row_err allocated): a node row's error belongs to
-         * both cells that meet there */
-        double *rw = t->row_err ? calloc((nx - 1) * nc, sizeof *rw) : NULL;
-        if (t->row_err && !rw) {
+        /* per x row (cell i between x nodes i and i + 1) and y band (cpb
+         * y cells) where the builder asked for it (row_err, theta_err
+         * allocated): a node row's or column's error belongs to both cells
+         * that meet there; row_err is the max over the bands */
+        size_t nb = t->theta_err ? nbt_table_theta_bands(t) : 1, cpb = t->theta_err ? t->theta_cells : ny - 1;
+        int rows = t->row_err || t->theta_err;
+        double *rw = rows ? calloc((nx - 1) * nb * nc, sizeof *rw) : NULL;
+        if (rows && !rw) {
             free(DT);
             st = nbt__fail(NBT_ENOMEM, "table: out of memory");
             break;
         }
-#define RUPD(i, c, v_) do { if (rw && v_ > rw[(i) * nc + (c)]) rw[(i) * nc + (c)] = v_; } while (0)
-#define UPD(i, c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; RUPD(i, c, v_); } while (0)
+        /* row i, y cell j */
+#define RUPD(i, j, c, v_) do { double *r_ = rw ? rw + (((j) / cpb * (nx - 1) + (i)) * nc + (c)) : NULL; \
+                               if (r_ && v_ > *r_) *r_ = v_; } while (0)
+        /* row i, fine y index jr (odd: a y cell's middle, even: a y node) */
+#define RUPDJ(i, jr, c, v_) do { size_t j_ = (jr) / 2; if ((jr) % 2 == 1 || j_ + 1 < ny) RUPD(i, j_, c, v_); \
+                                 if ((jr) % 2 == 0 && j_ >= 1) RUPD(i, j_ - 1, c, v_); } while (0)
+#define UPD(i, jr, c, v) do { double v_ = (v); if (v_ > e[c]) e[c] = v_; RUPDJ(i, jr, c, v_); } while (0)
         double e[NBT_TABLE_MAX_CH] = {0};
         /* node rows, between y nodes */
         for (size_t i = 0; i < nx; i++)
             for (size_t j = 0; j + 1 < ny; j++)
                 for (size_t c = 0; c < nc; c++) {
                     double v = fabs(0.5 * (D(i, j, c) + D(i, j + 1, c)) - EX(i, 2 * j + 1, c));
-                    UPD(i + 1 < nx ? i : i - 1, c, v);
+                    UPD(i + 1 < nx ? i : i - 1, 2 * j + 1, c, v);
                     if (i >= 1 && i + 1 < nx)
-                        RUPD(i - 1, c, v);
+                        RUPD(i - 1, j, c, v);
                 }
         /* rows between x nodes: exact ones */
         for (size_t r = 0; r < nm; r++) {
@@ -586,7 +648,7 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                 for (size_t c = 0; c < nc; c++) {
                     double lk = jr % 2 == 0 ? 0.5 * (D(i, j, c) + D(i + 1, j, c))
                                             : 0.25 * (D(i, j, c) + D(i + 1, j, c) + D(i, j + 1, c) + D(i + 1, j + 1, c));
-                    UPD(i, c, fabs(lk - Fm[(r * fy + jr) * C + off + c]));
+                    UPD(i, jr, c, fabs(lk - Fm[(r * fy + jr) * C + off + c]));
                 }
             }
         }
@@ -616,17 +678,24 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                         a0 = fabs(D(i, j, c) - EX(i, jr, c));
                         a1 = fabs(D(i + 1, j, c) - EX(i + 1, jr, c));
                     }
-                    UPD(i, c, MID_MARGIN * d2 / 8.0 + (a0 > a1 ? a0 : a1));
+                    UPD(i, jr, c, MID_MARGIN * d2 / 8.0 + (a0 > a1 ? a0 : a1));
                 }
             }
         }
         /* what the midpoints cannot see: the quadrature error at nodes */
         for (size_t c = 0; c < nc; c++)
             t->max_err[c] = e[c] + qerr;
-        for (size_t k = 0; rw && k < (nx - 1) * nc; k++)
-            t->row_err[k] = rw[k] + qerr;
+        for (size_t k = 0; t->theta_err && k < (nx - 1) * nb * nc; k++)
+            t->theta_err[k] = rw[k] + qerr;
+        for (size_t k = 0; t->row_err && k < (nx - 1) * nc; k++) {
+            double r = 0;
+            for (size_t b = 0; b < nb; b++)
+                r = fmax(r, rw[b * (nx - 1) * nc + k]);
+            t->row_err[k] = r + qerr;
+        }
         free(rw);
         free(DT);
+#undef RUPDJ
 #undef RUPD
 #undef UPD
 #undef D

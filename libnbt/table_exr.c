@@ -192,6 +192,16 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         rv = write_err_vectors(ctx, part, t->cell_err, t->axis[2].n - 1, t->nch, "cell_err");
     if (rv == EXR_ERR_SUCCESS && t->row_err)
         rv = write_err_vectors(ctx, part, t->row_err, nbt_table_row_err_len(t) / t->nch, t->nch, "row_err");
+    /* the theta map with its band width: a reader cannot take another layout */
+    if (rv == EXR_ERR_SUCCESS && t->theta_err)
+        rv = exr_attr_set_int(ctx, part, "nbt.theta_err.cells", (int32_t)t->theta_cells);
+    if (rv == EXR_ERR_SUCCESS && t->theta_err)
+        rv = exr_attr_set_string(ctx, part, "nbt.theta_err.layout",
+                                 "theta_err[(m * B + b) * (axis0.n - 1) + i] bounds the lookup for axis0 between "
+                                 "nodes i and i + 1, axis1 in cells b C .. (b + 1) C - 1 (C = nbt.theta_err.cells, "
+                                 "B = ceil((axis1.n - 1) / C), the last band may hold fewer), axis2 in cell m");
+    if (rv == EXR_ERR_SUCCESS && t->theta_err)
+        rv = write_err_vectors(ctx, part, t->theta_err, nbt_table_theta_err_len(t) / t->nch, t->nch, "theta_err");
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.version", nbt_version());
     if (rv == EXR_ERR_SUCCESS)
@@ -404,6 +414,39 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
                 goto done;
             }
             t->row_err[k * nc + c] = re[k];
+        }
+    }
+    for (size_t c = 0; c < nc; c++) {
+        int32_t ne, cells = 0;
+        const float *re;
+        snprintf(an, sizeof an, "nbt.theta_err.%s", CH[c]);
+        if (exr_attr_get_float_vector(ctx, 0, an, &ne, &re) != EXR_ERR_SUCCESS)
+            continue;
+        if (!t->theta_err) {
+            exr_attr_get_int(ctx, 0, "nbt.theta_err.cells", &cells);
+            if (cells < 1 || (size_t)cells > ax[1].n - 1) {
+                st = rd_fail(err, errlen, path, "nbt.theta_err needs nbt.theta_err.cells, theta cells per band, "
+                                                "1 .. axis1.n - 1");
+                goto done;
+            }
+            if (nbt_table_theta_err_alloc(t, (size_t)cells) != NBT_OK) {
+                st = NBT_ENOMEM;
+                snprintf(err, errlen, "out of memory");
+                goto done;
+            }
+        }
+        size_t nr = nbt_table_theta_err_len(t) / nc;
+        if ((size_t)ne != nr) {
+            st = rd_fail(err, errlen, path, "an nbt.theta_err vector does not have one value per x0 row, theta band "
+                                            "and g cell");
+            goto done;
+        }
+        for (size_t k = 0; k < nr; k++) {
+            if (!(re[k] >= 0.0f && re[k] <= FLT_MAX)) {
+                st = rd_fail(err, errlen, path, "an nbt.theta_err value is negative or not finite (accepted: >= 0)");
+                goto done;
+            }
+            t->theta_err[k * nc + c] = re[k];
         }
     }
     size_t nx = ax[0].n, ny = ax[1].n * ax[2].n, bpe = half ? 2 : 4;

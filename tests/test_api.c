@@ -174,17 +174,18 @@ static void test_jcache(void)
     nbt__jcache *c = nbt__jcache_alloc(1u << 20);
     int ok = c != NULL, hits = 0;
     for (int i = 0; ok && i < 700; i++) {
-        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2};
+        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2, NULL};
         double row[3] = {k.T, -k.T, i};
-        nbt__jcache_put(c, &k, row, 0.5 * i);
+        double e = 0.5 * i;
+        nbt__jcache_put(c, &k, row, &e);
     }
     for (int i = 0; ok && i < 700; i++) {
-        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2};
+        nbt__jkey k = {0.37 + 0.013 * i, 1e-9, 3, 4, 2, 1, i % 2, NULL};
         double row[3] = {0}, e = -1;
         if (nbt__jcache_get(c, &k, row, &e))
             hits += row[0] == k.T && row[1] == -k.T && row[2] == i && e == 0.5 * i;
     }
-    nbt__jkey other = {0.37, 1e-9, 3, 4, 2, 1, 1}; /* key 0 with another split: not stored */
+    nbt__jkey other = {0.37, 1e-9, 3, 4, 2, 1, 1, NULL}; /* key 0 with another split: not stored */
     double row[3], e;
     t_true(ok && hits == 700 && !nbt__jcache_get(c, &other, row, &e),
            "G-row store: %d of 700 rows found with their values after growing to 2048 slots; an unstored key missed",

@@ -98,6 +98,13 @@ nbt_status nbt_gslice_execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt
 /* Plan and execute; seconds (may be NULL): total time, proxies included. */
 nbt_status nbt_gslice_build(const nbt_gslice_request *r, unsigned nthreads, nbt_table **out, double *seconds,
                             char *err, size_t errlen);
+/* nbt_gslice_build for r[0..n-1] (a scene's J^1 and J^n: the same T and g
+ * axes), the J builds sharing the quadrature of G(T, g) over the HG
+ * components, which depends on neither n nor theta: each table the same as
+ * built alone. out[i] and seconds[i] (seconds may be NULL) per table; on
+ * failure all out[] are NULL and err says why, as nbt_gslice_build's. */
+nbt_status nbt_gslice_build_set(const nbt_gslice_request *r, size_t n, unsigned nthreads, nbt_table **out,
+                                double *seconds, char *err, size_t errlen);
 
 /* Which basis serves a g range: Legendre packs (nbt/plan.h) or g slices. */
 typedef enum { NBT_BASIS_AUTO = 0, NBT_BASIS_LEGENDRE, NBT_BASIS_SLICES } nbt_basis;

@@ -141,12 +141,25 @@ typedef struct {
                               values, row_err[(m * (axis[0].n - 1) + i) * nch + c] bounds |lookup3 - exact|
                               of channel c for x0 between nodes i and i + 1 and x2 in cell m (a 2-D table:
                               m = 0, its bilinear error), any x1; NaN: not recorded there */
+    size_t theta_cells;    /* x1 cells per band of theta_err (its bands: nbt_table_theta_bands) */
+    double *theta_err;     /* per x0 row, x1 band and x2 cell, or NULL (row_err applies):
+                              nbt_table_theta_err_len(t) values, theta_err[((m * bands + b) * (axis[0].n - 1)
+                              + i) * nch + c] bounds |lookup3 - exact| of channel c for x0 between nodes i
+                              and i + 1, x1 in cells b theta_cells .. (b + 1) theta_cells - 1 (the last band
+                              may hold fewer) and x2 in cell m; NaN: not recorded there */
 } nbt_table;
 
 /* Values in row_err: max(axis[2].n - 1, 1) (axis[0].n - 1) nch. */
 size_t nbt_table_row_err_len(const nbt_table *t);
 /* Allocates t->row_err (all NaN, replacing any); NBT_OK or NBT_ENOMEM. */
 nbt_status nbt_table_row_err_alloc(nbt_table *t);
+/* Bands of theta_err: ceil((axis[1].n - 1) / theta_cells). */
+size_t nbt_table_theta_bands(const nbt_table *t);
+/* Values in theta_err: max(axis[2].n - 1, 1) bands (axis[0].n - 1) nch. */
+size_t nbt_table_theta_err_len(const nbt_table *t);
+/* Allocates t->theta_err (all NaN, replacing any) for bands of `cells` x1
+ * cells (1 .. axis[1].n - 1); NBT_OK, NBT_EINVAL or NBT_ENOMEM. */
+nbt_status nbt_table_theta_err_alloc(nbt_table *t, size_t cells);
 
 /* Allocates the data for the axes' sizes; axes and channels must be set.
  * Returns NULL on bad sizes or no memory. alloc: a 2-D table (axis[2] gets
@@ -186,6 +199,10 @@ double nbt_table_err_at(const nbt_table *t, size_t c, double x2);
  * interpolates between, clamped) and x2 cell where recorded, else
  * nbt_table_err_at. */
 double nbt_table_err_at_row(const nbt_table *t, size_t c, double x0, double x2);
+/* The same at (x0, x1, x2): theta_err of the x0 row, the band of the x1
+ * cell the lookup interpolates in (clamped) and the x2 cell where recorded,
+ * else nbt_table_err_at_row. */
+double nbt_table_err_at3(const nbt_table *t, size_t c, double x0, double x1, double x2);
 
 /* Round all values to IEEE half precision (as a HALF texture would hold them). */
 void nbt_table_round_half(nbt_table *t);

@@ -154,7 +154,7 @@ class TableStruct(ctypes.Structure):  # nbt_table
                 ("phase", ctypes.c_char * 128), ("quad_tol", c_double), ("quad_err", c_double),
                 ("max_err", c_double * 4), ("max_abs", c_double * 4), ("half", c_int), ("form", c_int),
                 ("interp2", c_int), ("cell_err", c_double_p), ("data", c_float_p),
-                ("row_err", c_double_p)]
+                ("row_err", c_double_p), ("theta_cells", c_size_t), ("theta_err", c_double_p)]
 
 
 BEAM_MAX_LOBES = 16
