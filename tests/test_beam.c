@@ -45,6 +45,58 @@ static double rmoment(nbt_quad_ws *ws, rint_ctx *c, int power)
     return r;
 }
 
+/* zeta(z) through three layers of unequal density (0.5, 2, 0.25 from z = 0,
+ * 1.2, 2), by hand: inside the first, the middle and the last (unbounded)
+ * layer, and 0 above the surface */
+static void test_zeta_layers(void)
+{
+    const double z[3] = {0, 1.2, 2.0}, rho[3] = {0.5, 2.0, 0.25};
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.7, 0.05);
+    m.nlayers = 3, m.z = z, m.rho = rho;
+    t_rel(nbt_beam_zeta(&m, 0.7), 0.5 * 0.7, 1e-15, "zeta in the first layer");
+    t_rel(nbt_beam_zeta(&m, 1.6), 0.5 * 1.2 + 2.0 * 0.4, 1e-15, "zeta in the middle layer");
+    t_rel(nbt_beam_zeta(&m, 3.1), 0.5 * 1.2 + 2.0 * 0.8 + 0.25 * 1.1, 1e-15, "zeta in the last layer");
+    t_true(nbt_beam_zeta(&m, -1) == 0, "zeta above the surface = 0");
+}
+
+/* The corrected kernel (nbt_kernel_corrected, nbt-gen kernel --correction and
+ * the CORRECTED screen kernel): alpha and beta are the moment kernel's times
+ * exp(sum alpha_i t_i) and exp(sum beta_i t_i), t = (1, x, x^2, a, a x, b, b x)
+ * with x = ln(sigma_t zeta(z)), a the albedo, b = ln B_mix, all written here.
+ * sigma_t = 1.7 (a tau without sigma_t shows), two lobes (B_mix = 0.05),
+ * two layers (zeta = 0.5 1.2 + 2 1.5 = 3.6), and different coefficients in
+ * alpha and beta and per term (a swap or a wrong monomial shows). Only the
+ * exponentials' rounding separates the two sides: 1e-13. */
+static void test_kernel_corrected(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.7, 0.02);
+    m.nlobes = 2, m.w[0] = 0.25, m.B[0] = 0.02, m.w[1] = 0.75, m.B[1] = 0.06;
+    const double z[2] = {0, 1.2}, rho[2] = {0.5, 2.0};
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    const double tau = 1.7 * 3.6, a = 0.7, x = log(tau), b = log(0.05);
+    const double want_t[7] = {1, x, x * x, a, a * x, b, b * x};
+    double t[NBT_KERNEL_CORR_TERMS];
+    nbt_kernel_correction_terms(tau, a, 0.05, t);
+    double worst = 0;
+    for (int i = 0; i < 7; i++)
+        worst = fmax(worst, fabs(t[i] - want_t[i]));
+    t_true(worst < 1e-14, "correction terms at tau 6.12, albedo 0.7, B 0.05 = (1, x, x^2, a, a x, b, b x): worst %.2g", worst);
+    nbt_kernel_correction c = {{0.1, -0.05, 0.02, 0.3, -0.07, 0.04, 0.011}, {-0.2, 0.06, -0.01, 0.15, 0.03, -0.05, 0.02}};
+    double la = 0, lb = 0;
+    for (int i = 0; i < 7; i++) {
+        la += c.alpha[i] * want_t[i];
+        lb += c.beta[i] * want_t[i];
+    }
+    double a0, b0, a1, b1, M0, M2, am, bm;
+    nbt_status s0 = nbt_kernel_corrected(NULL, &m, 2.7, &a0, &b0);
+    nbt_status s1 = nbt_kernel_corrected(&c, &m, 2.7, &a1, &b1);
+    nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, 2.7, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, &am, &bm);
+    t_true(s0 == NBT_OK && s1 == NBT_OK && a0 == am && b0 == bm, "no correction: the moment kernel (eq. 28/29)");
+    t_rel(a1 / a0, exp(la), 1e-13, "corrected alpha / moment alpha = exp(sum alpha_i t_i) = %.15g", exp(la));
+    t_rel(b1 / b0, exp(lb), 1e-13, "corrected beta / moment beta = exp(sum beta_i t_i) = %.15g", exp(lb));
+}
+
 int main(void)
 {
     double M0, M2, e, a, b;
@@ -163,6 +215,8 @@ int main(void)
     bad.z = zb;
     bad.rho = rb;
     t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "non-increasing layers rejected");
+    test_zeta_layers();
+    test_kernel_corrected();
     nbt_quad_ws_free(ws);
     return t_done();
 }
