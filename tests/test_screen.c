@@ -729,6 +729,59 @@ static void test_edge_band(void)
     t_rel(mt.rel_rms, sqrt((0.3 * 0.3 + 0.5 * 0.5) / all2), 1e-12, "rel RMS by hand");
 }
 
+/* ---- a caller's kernels per channel (nbt_screen_kernel_custom, _rgb,
+ * _channels, _eval_ch) and the slot scales ----
+ * Channel c's kernel is written here: T = e^{-k_c D}, one erfc atom of mass
+ * k_c D and scale 0.1 k_c D, with k = (0.3, 0.7, 1.9): each channel must
+ * come back with its own numbers (a channel read from another, or the grey
+ * path taken, shows), exactly (the same arithmetic on both sides). */
+static nbt_status chan_fn(double D, nbt_screen_kern *o, void *ctx)
+{
+    double k = *(const double *)ctx;
+    o->T = exp(-k * D);
+    o->n = 1;
+    o->shape[0] = NBT_ATOM_ERFC;
+    o->mass[0] = k * D;
+    o->scale[0] = 0.1 * k * D;
+    return NBT_OK;
+}
+
+static void test_custom_rgb(void)
+{
+    static double kc[3] = {0.3, 0.7, 1.9};
+    nbt_screen_kernel *k = nbt_screen_kernel_rgb(nbt_screen_kernel_custom(chan_fn, &kc[0]),
+                                                 nbt_screen_kernel_custom(chan_fn, &kc[1]),
+                                                 nbt_screen_kernel_custom(chan_fn, &kc[2]));
+    t_true(k && nbt_screen_kernel_channels(k) == 3, "RGB of three custom kernels: 3 channels");
+    if (!k)
+        return;
+    int ok = 1;
+    for (unsigned c = 0; c < 3; c++) {
+        nbt_screen_kern o;
+        nbt_status st = nbt_screen_kernel_eval_ch(k, c, 2.5, &o);
+        ok &= st == NBT_OK && o.n == 1 && o.shape[0] == NBT_ATOM_ERFC && o.T == exp(-kc[c] * 2.5) &&
+              o.mass[0] == kc[c] * 2.5 && o.scale[0] == 0.1 * kc[c] * 2.5;
+        nbt_screen_kern sky;
+        ok &= nbt_screen_kernel_eval_ch(k, c, NBT_SCREEN_SKY, &sky) == NBT_OK && sky.T == 0 && sky.n == 0;
+    }
+    t_true(ok, "eval_ch: each channel at D = 2.5 is its own kernel's T, mass and scale; sky: T = 0, no atoms");
+    nbt_screen_kern o;
+    t_true(nbt_screen_kernel_eval(k, 2.5, &o) == NBT_OK && o.mass[0] == kc[0] * 2.5, "eval = channel 0");
+    t_true(nbt_screen_kernel_eval_ch(k, 3, 2.5, &o) == NBT_EINVAL, "channel 3 refused");
+    nbt_screen_kernel *g = nbt_screen_kernel_custom(chan_fn, &kc[1]);
+    t_true(g && nbt_screen_kernel_channels(g) == 1 && nbt_screen_kernel_eval_ch(g, 2, 2.5, &o) == NBT_OK &&
+               o.mass[0] == kc[1] * 2.5,
+           "a grey custom kernel: 1 channel, the same in channel 2");
+    nbt_screen_kernel_free(g);
+    nbt_screen_kernel_free(k);
+    /* s_m = 2^(m/2): odd m of both signs, the ends of the slot grid */
+    const int ms[4] = {-3, 5, NBT_SCREEN_SLOT_LO, NBT_SCREEN_SLOT_HI};
+    double worst = 0;
+    for (int i = 0; i < 4; i++)
+        worst = fmax(worst, fabs(nbt_screen_slot_scale(ms[i]) / pow(sqrt(2.0), ms[i]) - 1));
+    t_true(worst < 1e-14, "slot scales 2^(m/2) at m = -3, 5, -34, 22 (worst rel %.2g)", worst);
+}
+
 int main(void)
 {
     test_pixel_integrals();
@@ -739,5 +792,6 @@ int main(void)
     test_medium_height();
     test_grid_linear();
     test_edge_band();
+    test_custom_rgb();
     return t_done();
 }
