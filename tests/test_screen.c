@@ -539,6 +539,14 @@ static void test_medium(void)
     t_abs(nbt_grid_density(out, g), 0, 0, "grid: zero outside the box");
     double o2[3] = {0.3, 1.0, -5.0}, dz[3] = {0, 0, 1};
     t_rel(nbt_grid_exit(g, o2, dz), 5.0 + 2.0 + 0.75, 1e-14, "grid: exit distance along z");
+    /* oblique rays with negative components (the box is (-1.25, 0.25, 1.75) .. (0.75, 1.75, 2.75)):
+     * from inside along the unit (-0.6, -0.64, 0.48), out through y = 0.25 at (0.25 - 0.6)/-0.64;
+     * from outside along -x, in at x = 0.75 and out at x = -1.25, t = 3.25; a ray past the box: 0 */
+    double o3[3] = {0.5, 0.6, 1.9}, d3[3] = {-0.6, -0.64, 0.48}, o4[3] = {2.0, 1.0, 2.2}, d4[3] = {-1, 0, 0},
+           d5[3] = {0, 1, 0};
+    t_rel(nbt_grid_exit(g, o3, d3), 0.35 / 0.64, 1e-14, "grid: exit of an oblique ray through the -y face");
+    t_rel(nbt_grid_exit(g, o4, d4), 3.25, 1e-14, "grid: a ray along -x from outside leaves at x = -1.25");
+    t_true(nbt_grid_exit(g, o4, d5) == 0, "grid: a ray that misses the box: 0");
     char err2[256], path[64];
     snprintf(path, sizeof path, "/tmp/nbt-test-grid-%ld.raw", (long)getpid());
     nbt_grid *g2 = NULL;
