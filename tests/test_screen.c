@@ -790,6 +790,57 @@ static void test_custom_rgb(void)
     t_true(worst < 1e-14, "slot scales 2^(m/2) at m = -3, 5, -34, 22 (worst rel %.2g)", worst);
 }
 
+/* ---- fitting a shape to radial masses (nbt_screen_shape_fit) ----
+ * Exact data from 1.7 erfc atom of scale 2 (slot 2) and 0.4 Gaussian atom of
+ * scale 2^-1.5 (slot -3), binned on 31 geometric edges 0.02 .. 60, the atoms'
+ * masses written here: Gaussian e^{-a^2/2} outside a, erfc e^{-a^2/2} -
+ * sqrt(2 pi) a G(a). The grid holds more atoms than bins, so the atoms need
+ * not come back; what must is the data: the fitted shape's bin masses,
+ * recomputed here with the documented slot scales 2^(m/2): the data are
+ * exact and the grid holds the true atoms, so the fit reproduces them to
+ * rounding (1.6e-13 seen); 1e-6 relative to (mass + 1e-4 total, the fit's
+ * per-bin weight floor), and the total to 1e-6 (its documented accuracy). */
+static double tail_erfc(double a)
+{
+    return isinf(a) ? 0 : exp(-0.5 * a * a) - sqrt(2 * M_PI) * a * G(a);
+}
+static double tail_gauss(double a)
+{
+    return isinf(a) ? 0 : exp(-0.5 * a * a);
+}
+static double shape_bin(const double *er, const double *ga, double lo, double hi)
+{
+    double m = 0;
+    for (int k = 0; k < NBT_SCREEN_NSLOTS; k++) {
+        double sc = pow(2.0, 0.5 * (k + NBT_SCREEN_SLOT_LO));
+        m += er[k] * (tail_erfc(lo / sc) - tail_erfc(hi / sc)) + ga[k] * (tail_gauss(lo / sc) - tail_gauss(hi / sc));
+    }
+    return m;
+}
+
+static void test_shape_fit(void)
+{
+    enum { NE = 31 };
+    double e[NE], mass[NE + 1], er[NBT_SCREEN_NSLOTS] = {0}, ga[NBT_SCREEN_NSLOTS] = {0};
+    for (int i = 0; i < NE; i++)
+        e[i] = 0.02 * pow(3000.0, i / (NE - 1.0));
+    er[2 - NBT_SCREEN_SLOT_LO] = 1.7;
+    ga[-3 - NBT_SCREEN_SLOT_LO] = 0.4;
+    for (int b = 0; b <= NE; b++)
+        mass[b] = shape_bin(er, ga, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+    nbt_screen_shape sh;
+    double mis = -1;
+    t_true(nbt_screen_shape_fit(NE, e, mass, NULL, 1, &sh, &mis) == NBT_OK, "shape fit to exact masses");
+    double worst = 0, tot = shape_bin(sh.erfc, sh.gauss, 0, INFINITY);
+    for (int b = 0; b <= NE; b++) {
+        double f = shape_bin(sh.erfc, sh.gauss, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+        worst = fmax(worst, fabs(f - mass[b]) / (mass[b] + 1e-4 * 2.1));
+    }
+    t_true(worst < 1e-6, "shape fit: every bin's mass back within 1e-6 of (mass + 1e-4 total): worst %.2g", worst);
+    t_rel(tot, 2.1, 1e-6, "shape fit keeps the total 2.1");
+    t_true(mis >= 0 && mis < 1e-6, "shape fit: misfit %.2g", mis);
+}
+
 int main(void)
 {
     test_pixel_integrals();
@@ -801,5 +852,6 @@ int main(void)
     test_grid_linear();
     test_edge_band();
     test_custom_rgb();
+    test_shape_fit();
     return t_done();
 }
