@@ -97,6 +97,29 @@ static void test_kernel_corrected(void)
     t_rel(b1 / b0, exp(lb), 1e-13, "corrected beta / moment beta = exp(sum beta_i t_i) = %.15g", exp(lb));
 }
 
+/* Eq. 26 written here (doc/beam.md, A = sigma_s B):
+ *   M2 = 4 e^{-sa z} [e^{-az}(A z^2/a - 2B/a^2) + 2B/a^2 - 2Bz/a + (B - A/a) z^2 + A z^3], a = sigma_s,
+ * at sigma_t = 1.7, albedo 0.6, two lobes (B = B_mix = 0.05): the loop above
+ * has sigma_t = 1, where sigma_s = albedo hides a sigma_t left out. Both
+ * branches: z = 2.385 (a z = 2.4, the closed form) and z = 0.2 (a z = 0.2,
+ * the library's series; here the closed form loses about 3 digits to
+ * cancellation, so 1e-10). */
+static void test_eq26(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.6, 0.02);
+    m.nlobes = 2, m.w[0] = 0.25, m.B[0] = 0.02, m.w[1] = 0.75, m.B[1] = 0.06;
+    const double a = 0.6 * 1.7, sa = 1.7 - a, B = 0.05, A = a * B, zs[2] = {2.385, 0.2};
+    for (int i = 0; i < 2; i++) {
+        double z = zs[i], M0, M2;
+        double want = 4 * exp(-sa * z) *
+                      (exp(-a * z) * (A * z * z / a - 2 * B / (a * a)) + 2 * B / (a * a) - 2 * B * z / a +
+                       (B - A / a) * z * z + A * z * z * z);
+        nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+        t_rel(M2, want, 1e-10, "eq. 26 at sigma_t 1.7, albedo 0.6, B_mix 0.05, z %g: M2 = %.15g", z, want);
+        t_rel(M0, exp(-sa * z) * (1 - exp(-a * z)), 1e-14, "eq. 25 at sigma_t 1.7, z %g", z);
+    }
+}
+
 int main(void)
 {
     double M0, M2, e, a, b;
@@ -216,6 +239,7 @@ int main(void)
     bad.rho = rb;
     t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "non-increasing layers rejected");
     test_zeta_layers();
+    test_eq26();
     test_kernel_corrected();
     nbt_quad_ws_free(ws);
     return t_done();
