@@ -223,6 +223,16 @@ static void test_kernels(void)
     t_true(nbt_skernel_parse("lineint", &kk) == NBT_OK && kk == NBT_SKERNEL_LINEINT &&
                nbt_skernel_parse("bogus", &kk) == NBT_EINVAL,
            "kernel names parse");
+    /* every kind's documented name (nbt/screen.h), and parse inverts name */
+    static const char *const kn_names[8] = {"moment", "smallangle", "corrected", "single",
+                                            "lineint", "elek", "fitted", "first"};
+    int names_ok = 1;
+    for (int i = 0; i < 8; i++) {
+        nbt_skernel_kind ki = (nbt_skernel_kind)-1;
+        names_ok &= !strcmp(nbt_skernel_name((nbt_skernel_kind)i), kn_names[i]) &&
+                    nbt_skernel_parse(kn_names[i], &ki) == NBT_OK && ki == (nbt_skernel_kind)i;
+    }
+    t_true(names_ok, "kernel kinds named moment .. first in enum order; parse inverts name");
 }
 
 /* ---- operators ---- */
