@@ -45,6 +45,81 @@ static double rmoment(nbt_quad_ws *ws, rint_ctx *c, int power)
     return r;
 }
 
+/* zeta(z) through three layers of unequal density (0.5, 2, 0.25 from z = 0,
+ * 1.2, 2), by hand: inside the first, the middle and the last (unbounded)
+ * layer, and 0 above the surface */
+static void test_zeta_layers(void)
+{
+    const double z[3] = {0, 1.2, 2.0}, rho[3] = {0.5, 2.0, 0.25};
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.7, 0.05);
+    m.nlayers = 3, m.z = z, m.rho = rho;
+    t_rel(nbt_beam_zeta(&m, 0.7), 0.5 * 0.7, 1e-15, "zeta in the first layer");
+    t_rel(nbt_beam_zeta(&m, 1.6), 0.5 * 1.2 + 2.0 * 0.4, 1e-15, "zeta in the middle layer");
+    t_rel(nbt_beam_zeta(&m, 3.1), 0.5 * 1.2 + 2.0 * 0.8 + 0.25 * 1.1, 1e-15, "zeta in the last layer");
+    t_true(nbt_beam_zeta(&m, -1) == 0, "zeta above the surface = 0");
+}
+
+/* The corrected kernel (nbt_kernel_corrected, nbt-gen kernel --correction and
+ * the CORRECTED screen kernel): alpha and beta are the moment kernel's times
+ * exp(sum alpha_i t_i) and exp(sum beta_i t_i), t = (1, x, x^2, a, a x, b, b x)
+ * with x = ln(sigma_t zeta(z)), a the albedo, b = ln B_mix, all written here.
+ * sigma_t = 1.7 (a tau without sigma_t shows), two lobes (B_mix = 0.05),
+ * two layers (zeta = 0.5 1.2 + 2 1.5 = 3.6), and different coefficients in
+ * alpha and beta and per term (a swap or a wrong monomial shows). Only the
+ * exponentials' rounding separates the two sides: 1e-13. */
+static void test_kernel_corrected(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.7, 0.02);
+    m.nlobes = 2, m.w[0] = 0.25, m.B[0] = 0.02, m.w[1] = 0.75, m.B[1] = 0.06;
+    const double z[2] = {0, 1.2}, rho[2] = {0.5, 2.0};
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    const double tau = 1.7 * 3.6, a = 0.7, x = log(tau), b = log(0.05);
+    const double want_t[7] = {1, x, x * x, a, a * x, b, b * x};
+    double t[NBT_KERNEL_CORR_TERMS];
+    nbt_kernel_correction_terms(tau, a, 0.05, t);
+    double worst = 0;
+    for (int i = 0; i < 7; i++)
+        worst = fmax(worst, fabs(t[i] - want_t[i]));
+    t_true(worst < 1e-14, "correction terms at tau 6.12, albedo 0.7, B 0.05 = (1, x, x^2, a, a x, b, b x): worst %.2g", worst);
+    nbt_kernel_correction c = {{0.1, -0.05, 0.02, 0.3, -0.07, 0.04, 0.011}, {-0.2, 0.06, -0.01, 0.15, 0.03, -0.05, 0.02}};
+    double la = 0, lb = 0;
+    for (int i = 0; i < 7; i++) {
+        la += c.alpha[i] * want_t[i];
+        lb += c.beta[i] * want_t[i];
+    }
+    double a0, b0, a1, b1, M0, M2, am, bm;
+    nbt_status s0 = nbt_kernel_corrected(NULL, &m, 2.7, &a0, &b0);
+    nbt_status s1 = nbt_kernel_corrected(&c, &m, 2.7, &a1, &b1);
+    nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, 2.7, &M0, &M2, NULL);
+    nbt_beam_kernel_params(M0, M2, &am, &bm);
+    t_true(s0 == NBT_OK && s1 == NBT_OK && a0 == am && b0 == bm, "no correction: the moment kernel (eq. 28/29)");
+    t_rel(a1 / a0, exp(la), 1e-13, "corrected alpha / moment alpha = exp(sum alpha_i t_i) = %.15g", exp(la));
+    t_rel(b1 / b0, exp(lb), 1e-13, "corrected beta / moment beta = exp(sum beta_i t_i) = %.15g", exp(lb));
+}
+
+/* Eq. 26 written here (doc/beam.md, A = sigma_s B):
+ *   M2 = 4 e^{-sa z} [e^{-az}(A z^2/a - 2B/a^2) + 2B/a^2 - 2Bz/a + (B - A/a) z^2 + A z^3], a = sigma_s,
+ * at sigma_t = 1.7, albedo 0.6, two lobes (B = B_mix = 0.05): the loop above
+ * has sigma_t = 1, where sigma_s = albedo hides a sigma_t left out. Both
+ * branches: z = 2.385 (a z = 2.4, the closed form) and z = 0.2 (a z = 0.2,
+ * the library's series; here the closed form loses about 3 digits to
+ * cancellation, so 1e-10). */
+static void test_eq26(void)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.6, 0.02);
+    m.nlobes = 2, m.w[0] = 0.25, m.B[0] = 0.02, m.w[1] = 0.75, m.B[1] = 0.06;
+    const double a = 0.6 * 1.7, sa = 1.7 - a, B = 0.05, A = a * B, zs[2] = {2.385, 0.2};
+    for (int i = 0; i < 2; i++) {
+        double z = zs[i], M0, M2;
+        double want = 4 * exp(-sa * z) *
+                      (exp(-a * z) * (A * z * z / a - 2 * B / (a * a)) + 2 * B / (a * a) - 2 * B * z / a +
+                       (B - A / a) * z * z + A * z * z * z);
+        nbt_beam_moments(&m, NBT_BEAM_ISHIMARU, z, &M0, &M2, NULL);
+        t_rel(M2, want, 1e-10, "eq. 26 at sigma_t 1.7, albedo 0.6, B_mix 0.05, z %g: M2 = %.15g", z, want);
+        t_rel(M0, exp(-sa * z) * (1 - exp(-a * z)), 1e-14, "eq. 25 at sigma_t 1.7, z %g", z);
+    }
+}
+
 int main(void)
 {
     double M0, M2, e, a, b;
@@ -185,6 +260,9 @@ int main(void)
         r3[i] = NAN;
         t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_EDOM, "NaN layer %d rejected", i);
     }
+    test_zeta_layers();
+    test_eq26();
+    test_kernel_corrected();
     nbt_quad_ws_free(ws);
     return t_done();
 }

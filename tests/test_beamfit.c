@@ -87,6 +87,35 @@ static double rms_vs_mc(const nbt_beam_fit *f, int inf, double albedo, double B,
     return sqrt(num / den);
 }
 
+/* The equivalent depth and width scale of a layered medium
+ * (nbt_beam_fit_equivalent, used by nbt_beam_fit_psi, nbt-fit model and
+ * nbt-gen eval): two layers of unequal density 0.5 and 2 (interface 1.2),
+ * at z = 2.7: zeta = 0.5 1.2 + 2 1.5 = 3.6, and lambda^2 = M2(z) / M2_hom(zeta)
+ * of the small-angle random walk, whose e^{-sigma_a zeta} and 4 B sigma_s
+ * cancel: lambda^2 = int_0^z rho(y) (z - y)^2 dy / (zeta^3 / 3)
+ *                  = [0.5 (2.7^3 - 1.5^3) + 2 1.5^3] / 3.6^3
+ * (eq. 29's M2 would give another value; the constant density the test above
+ * uses cannot tell them apart). Both sides are closed forms: 1e-12. Then the
+ * layered Psi is the homogeneous model at (zeta, r/lambda) over lambda^2. */
+static void test_fit_equivalent(const nbt_beam_fit *f)
+{
+    nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.8, 0.05);
+    double zeta, lam, want = sqrt((0.5 * (pow(2.7, 3) - pow(1.5, 3)) + 2 * pow(1.5, 3)) / pow(3.6, 3));
+    t_true(nbt_beam_fit_equivalent(&m, 2.7, &zeta, &lam) == NBT_OK && zeta == 2.7 && lam == 1,
+           "homogeneous: zeta = z, lambda = 1");
+    const double z[2] = {0, 1.2}, rho[2] = {0.5, 2.0};
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    t_true(nbt_beam_fit_equivalent(&m, 2.7, &zeta, &lam) == NBT_OK, "two layers: equivalent depth");
+    t_rel(zeta, 3.6, 1e-14, "two layers: zeta = 3.6");
+    t_rel(lam, want, 1e-12, "two layers: lambda = %.15g (random walk second moments)", want);
+    nbt_beam_medium h = nbt_beam_homogeneous(1.7, 0.8, 0.05);
+    double pl, ph;
+    nbt_beam_fit_psi(f, 0, &m, 2.7, 0.61, &pl);
+    nbt_beam_fit_psi(f, 0, &h, 3.6, 0.61 / want, &ph);
+    t_rel(pl, ph / (want * want), 1e-12, "two layers: Psi(z, r) = Psi_hom(zeta, r/lambda)/lambda^2");
+    t_true(nbt_beam_fit_equivalent(&m, 0, &zeta, &lam) == NBT_EDOM, "z = 0 refused");
+}
+
 int main(void)
 {
     const nbt_beam_fit *f = nbt_beam_fit_default();
@@ -228,5 +257,6 @@ int main(void)
                    g ? "infinite" : "half-space", pts[i][0], 2 * sqrt(pts[i][1]) * 180 / M_PI, r, noise);
         }
     nbt_quad_ws_free(ws);
+    test_fit_equivalent(f);
     return t_done();
 }

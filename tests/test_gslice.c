@@ -561,6 +561,18 @@ static void test_basis_legendre_out_of_reach(void)
 
 int main(void)
 {
+    /* the bases' documented names (nbt/gslice.h), parse inverts name, others refused */
+    {
+        static const char *const bn[3] = {"auto", "legendre", "slices"};
+        int ok = 1;
+        for (int i = 0; i < 3; i++) {
+            nbt_basis b = (nbt_basis)-1;
+            ok &= !strcmp(nbt_basis_name((nbt_basis)i), bn[i]) && nbt_basis_parse(bn[i], &b) == NBT_OK &&
+                  b == (nbt_basis)i;
+        }
+        nbt_basis b;
+        t_true(ok && nbt_basis_parse("slice", &b) == NBT_EINVAL, "basis names auto, legendre, slices; 'slice' refused");
+    }
     nbt_table *H = small_table(NBT_TABLE_H, 0, 97, 97, 9, -0.4, 0.5);
     nbt_table *J = small_table(NBT_TABLE_J, 1, 33, 33, 9, -0.5, 0.7);
     t_true(nbt_table_is_gslice(H) && nbt_table_is_gslice(J), "fill marks the tables g-sliced");

@@ -223,6 +223,16 @@ static void test_kernels(void)
     t_true(nbt_skernel_parse("lineint", &kk) == NBT_OK && kk == NBT_SKERNEL_LINEINT &&
                nbt_skernel_parse("bogus", &kk) == NBT_EINVAL,
            "kernel names parse");
+    /* every kind's documented name (nbt/screen.h), and parse inverts name */
+    static const char *const kn_names[8] = {"moment", "smallangle", "corrected", "single",
+                                            "lineint", "elek", "fitted", "first"};
+    int names_ok = 1;
+    for (int i = 0; i < 8; i++) {
+        nbt_skernel_kind ki = (nbt_skernel_kind)-1;
+        names_ok &= !strcmp(nbt_skernel_name((nbt_skernel_kind)i), kn_names[i]) &&
+                    nbt_skernel_parse(kn_names[i], &ki) == NBT_OK && ki == (nbt_skernel_kind)i;
+    }
+    t_true(names_ok, "kernel kinds named moment .. first in enum order; parse inverts name");
 }
 
 /* ---- operators ---- */
@@ -539,6 +549,14 @@ static void test_medium(void)
     t_abs(nbt_grid_density(out, g), 0, 0, "grid: zero outside the box");
     double o2[3] = {0.3, 1.0, -5.0}, dz[3] = {0, 0, 1};
     t_rel(nbt_grid_exit(g, o2, dz), 5.0 + 2.0 + 0.75, 1e-14, "grid: exit distance along z");
+    /* oblique rays with negative components (the box is (-1.25, 0.25, 1.75) .. (0.75, 1.75, 2.75)):
+     * from inside along the unit (-0.6, -0.64, 0.48), out through y = 0.25 at (0.25 - 0.6)/-0.64;
+     * from outside along -x, in at x = 0.75 and out at x = -1.25, t = 3.25; a ray past the box: 0 */
+    double o3[3] = {0.5, 0.6, 1.9}, d3[3] = {-0.6, -0.64, 0.48}, o4[3] = {2.0, 1.0, 2.2}, d4[3] = {-1, 0, 0},
+           d5[3] = {0, 1, 0};
+    t_rel(nbt_grid_exit(g, o3, d3), 0.35 / 0.64, 1e-14, "grid: exit of an oblique ray through the -y face");
+    t_rel(nbt_grid_exit(g, o4, d4), 3.25, 1e-14, "grid: a ray along -x from outside leaves at x = -1.25");
+    t_true(nbt_grid_exit(g, o4, d5) == 0, "grid: a ray that misses the box: 0");
     char err2[256], path[64];
     snprintf(path, sizeof path, "/tmp/nbt-test-grid-%ld.raw", (long)getpid());
     nbt_grid *g2 = NULL;
@@ -729,6 +747,110 @@ static void test_edge_band(void)
     t_rel(mt.rel_rms, sqrt((0.3 * 0.3 + 0.5 * 0.5) / all2), 1e-12, "rel RMS by hand");
 }
 
+/* ---- a caller's kernels per channel (nbt_screen_kernel_custom, _rgb,
+ * _channels, _eval_ch) and the slot scales ----
+ * Channel c's kernel is written here: T = e^{-k_c D}, one erfc atom of mass
+ * k_c D and scale 0.1 k_c D, with k = (0.3, 0.7, 1.9): each channel must
+ * come back with its own numbers (a channel read from another, or the grey
+ * path taken, shows), exactly (the same arithmetic on both sides). */
+static nbt_status chan_fn(double D, nbt_screen_kern *o, void *ctx)
+{
+    double k = *(const double *)ctx;
+    o->T = exp(-k * D);
+    o->n = 1;
+    o->shape[0] = NBT_ATOM_ERFC;
+    o->mass[0] = k * D;
+    o->scale[0] = 0.1 * k * D;
+    return NBT_OK;
+}
+
+static void test_custom_rgb(void)
+{
+    static double kc[3] = {0.3, 0.7, 1.9};
+    nbt_screen_kernel *k = nbt_screen_kernel_rgb(nbt_screen_kernel_custom(chan_fn, &kc[0]),
+                                                 nbt_screen_kernel_custom(chan_fn, &kc[1]),
+                                                 nbt_screen_kernel_custom(chan_fn, &kc[2]));
+    t_true(k && nbt_screen_kernel_channels(k) == 3, "RGB of three custom kernels: 3 channels");
+    if (!k)
+        return;
+    int ok = 1;
+    for (unsigned c = 0; c < 3; c++) {
+        nbt_screen_kern o;
+        nbt_status st = nbt_screen_kernel_eval_ch(k, c, 2.5, &o);
+        ok &= st == NBT_OK && o.n == 1 && o.shape[0] == NBT_ATOM_ERFC && o.T == exp(-kc[c] * 2.5) &&
+              o.mass[0] == kc[c] * 2.5 && o.scale[0] == 0.1 * kc[c] * 2.5;
+        nbt_screen_kern sky;
+        ok &= nbt_screen_kernel_eval_ch(k, c, NBT_SCREEN_SKY, &sky) == NBT_OK && sky.T == 0 && sky.n == 0;
+    }
+    t_true(ok, "eval_ch: each channel at D = 2.5 is its own kernel's T, mass and scale; sky: T = 0, no atoms");
+    nbt_screen_kern o;
+    t_true(nbt_screen_kernel_eval(k, 2.5, &o) == NBT_OK && o.mass[0] == kc[0] * 2.5, "eval = channel 0");
+    t_true(nbt_screen_kernel_eval_ch(k, 3, 2.5, &o) == NBT_EINVAL, "channel 3 refused");
+    nbt_screen_kernel *g = nbt_screen_kernel_custom(chan_fn, &kc[1]);
+    t_true(g && nbt_screen_kernel_channels(g) == 1 && nbt_screen_kernel_eval_ch(g, 2, 2.5, &o) == NBT_OK &&
+               o.mass[0] == kc[1] * 2.5,
+           "a grey custom kernel: 1 channel, the same in channel 2");
+    nbt_screen_kernel_free(g);
+    nbt_screen_kernel_free(k);
+    /* s_m = 2^(m/2): odd m of both signs, the ends of the slot grid */
+    const int ms[4] = {-3, 5, NBT_SCREEN_SLOT_LO, NBT_SCREEN_SLOT_HI};
+    double worst = 0;
+    for (int i = 0; i < 4; i++)
+        worst = fmax(worst, fabs(nbt_screen_slot_scale(ms[i]) / pow(sqrt(2.0), ms[i]) - 1));
+    t_true(worst < 1e-14, "slot scales 2^(m/2) at m = -3, 5, -34, 22 (worst rel %.2g)", worst);
+}
+
+/* ---- fitting a shape to radial masses (nbt_screen_shape_fit) ----
+ * Exact data from 1.7 erfc atom of scale 2 (slot 2) and 0.4 Gaussian atom of
+ * scale 2^-1.5 (slot -3), binned on 31 geometric edges 0.02 .. 60, the atoms'
+ * masses written here: Gaussian e^{-a^2/2} outside a, erfc e^{-a^2/2} -
+ * sqrt(2 pi) a G(a). The grid holds more atoms than bins, so the atoms need
+ * not come back; what must is the data: the fitted shape's bin masses,
+ * recomputed here with the documented slot scales 2^(m/2): the data are
+ * exact and the grid holds the true atoms, so the fit reproduces them to
+ * rounding (1.6e-13 seen); 1e-6 relative to (mass + 1e-4 total, the fit's
+ * per-bin weight floor), and the total to 1e-6 (its documented accuracy). */
+static double tail_erfc(double a)
+{
+    return isinf(a) ? 0 : exp(-0.5 * a * a) - sqrt(2 * M_PI) * a * G(a);
+}
+static double tail_gauss(double a)
+{
+    return isinf(a) ? 0 : exp(-0.5 * a * a);
+}
+static double shape_bin(const double *er, const double *ga, double lo, double hi)
+{
+    double m = 0;
+    for (int k = 0; k < NBT_SCREEN_NSLOTS; k++) {
+        double sc = pow(2.0, 0.5 * (k + NBT_SCREEN_SLOT_LO));
+        m += er[k] * (tail_erfc(lo / sc) - tail_erfc(hi / sc)) + ga[k] * (tail_gauss(lo / sc) - tail_gauss(hi / sc));
+    }
+    return m;
+}
+
+static void test_shape_fit(void)
+{
+    enum { NE = 31 };
+    double e[NE], mass[NE + 1], er[NBT_SCREEN_NSLOTS] = {0}, ga[NBT_SCREEN_NSLOTS] = {0};
+    for (int i = 0; i < NE; i++)
+        e[i] = 0.02 * pow(3000.0, i / (NE - 1.0));
+    er[2 - NBT_SCREEN_SLOT_LO] = 1.7;
+    ga[-3 - NBT_SCREEN_SLOT_LO] = 0.4;
+    for (int b = 0; b <= NE; b++)
+        mass[b] = shape_bin(er, ga, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+    nbt_screen_shape sh;
+    double mis = -1;
+    t_true(nbt_screen_shape_fit(NE, e, mass, NULL, 1, &sh, &mis) == NBT_OK, "shape fit to exact masses");
+    double worst = 0, tot = shape_bin(sh.erfc, sh.gauss, 0, INFINITY);
+    for (int b = 0; b <= NE; b++) {
+        double f = shape_bin(sh.erfc, sh.gauss, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+        worst = fmax(worst, fabs(f - mass[b]) / (mass[b] + 1e-4 * 2.1));
+    }
+    t_true(worst < 1e-6, "shape fit: every bin's mass back within 1e-6 of (mass + 1e-4 total): worst %.2g", worst);
+    t_rel(tot, 2.1, 1e-6, "shape fit keeps the total 2.1");
+    t_true(mis >= 0 && mis < 1e-6, "shape fit: misfit %.2g", mis);
+}
+
 int main(void)
 {
     test_pixel_integrals();
@@ -739,5 +861,7 @@ int main(void)
     test_medium_height();
     test_grid_linear();
     test_edge_band();
+    test_custom_rgb();
+    test_shape_fit();
     return t_done();
 }

@@ -129,6 +129,74 @@ static int fail_fn(double x0, double x1, double *out, void *ctx)
     return 1;
 }
 
+/* (0.5, x0, -2 x1): the largest |value| sits in the last channel */
+static int lin3_fn(double x0, double x1, double *out, void *ctx)
+{
+    (void)ctx;
+    out[0] = 0.5;
+    out[1] = x0;
+    out[2] = -2 * x1;
+    return 0;
+}
+
+/* The axis maps at an interior point against the header's formulas written
+ * here (the round trip above cannot see a bug made in both directions), the
+ * recorded max |value| of a non-square 3-channel table, and the documented
+ * names. r = 0.3 and s = 0.3 are not symmetric points of any map. */
+static void test_maps_closed_forms(void)
+{
+    const double r = 0.3;
+    struct {
+        nbt_axis a;
+        double s;
+    } m[6] = {{{-1.5, 2.385, NBT_AXIS_LINEAR, 0, 9}, r},
+              {{0, 10, NBT_AXIS_SQRT, 0, 9}, sqrt(r)},
+              {{0, 10, NBT_AXIS_LOG1P, 100, 9}, log(1 + 100 * r) / log(101.0)},
+              {{0, 3, NBT_AXIS_LOG1P, -0.99, 9}, log(1 - 0.99 * r) / log(0.01)},
+              {{-M_PI_2, M_PI_2, NBT_AXIS_COS, 0, 9}, acos(1 - 2 * r) / M_PI},
+              {{-0.95, 0.9, NBT_AXIS_ATANH, 0, 7}, 0}};
+    /* atanh: x = lo + r (hi - lo) = -0.395, s = (atanh x - atanh lo)/(atanh hi - atanh lo) */
+    m[5].s = (atanh(-0.395) - atanh(-0.95)) / (atanh(0.9) - atanh(-0.95));
+    for (int i = 0; i < 6; i++) {
+        const nbt_axis *a = &m[i].a;
+        double x = a->lo + r * (a->hi - a->lo);
+        t_rel(nbt_axis_to_unit(a, x), m[i].s, 1e-13, "%s(c=%g) at r = 0.3: s = %.15g", nbt_axis_map_name(a->map), a->c,
+              m[i].s);
+        t_rel(nbt_axis_from_unit(a, m[i].s), x, 1e-13, "%s(c=%g): from_unit(%.6g) = %.15g", nbt_axis_map_name(a->map),
+              a->c, m[i].s, x);
+    }
+    /* node 2 of 7 of the linear axis (-1.5 .. 2.385): lo + (2/6)(hi - lo) */
+    t_rel(nbt_axis_node(&(nbt_axis){-1.5, 2.385, NBT_AXIS_LINEAR, 0, 7}, 2), -1.5 + 3.885 / 3, 1e-15, "linear node 2 of 7");
+
+    nbt_axis a0 = {-1.5, 2.385, NBT_AXIS_LINEAR, 0, 7}, a1 = {0, 3, NBT_AXIS_LINEAR, 0, 5};
+    nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &a0, &a1, 3);
+    t_true(t && nbt_table_tabulate(t, lin3_fn, NULL, 1) == NBT_OK, "tabulate (0.5, x0, -2 x1) on 7 x 5");
+    if (t) {
+        /* linear in each cell: the largest |value| is at the nodes: 0.5, 2.385, 2 3 = 6
+         * (0.5 and 6 exact in float; 2.385 to float rounding, 1e-6) */
+        t_true(t->max_abs[0] == 0.5 && fabs(t->max_abs[1] - 2.385) < 1e-6 && t->max_abs[2] == 6,
+               "max |value| per channel (0.5, 2.385, 6): (%g, %g, %g)", t->max_abs[0], t->max_abs[1], t->max_abs[2]);
+        t_true(nbt_table_max_abs(t) == 6, "nbt_table_max_abs over the channels = 6 (the last): %g", nbt_table_max_abs(t));
+        nbt_table_free(t);
+    }
+    /* names as nbt/table.h documents them, and parse inverts name */
+    static const char *const forms[3] = {"plain", "tail", "log_et"};
+    int ok = 1;
+    for (int f = 0; f < 3; f++) {
+        nbt_table_form g = (nbt_table_form)-1;
+        ok &= !strcmp(nbt_table_form_name((nbt_table_form)f), forms[f]) && nbt_table_form_parse(forms[f], &g) == NBT_OK &&
+              g == (nbt_table_form)f;
+    }
+    nbt_table_form g;
+    t_true(ok && nbt_table_form_parse("log", &g) == NBT_EFORMAT, "forms plain, tail, log_et; 'log' refused");
+    static const char *const ax[4][3] = {{"u", "v", "g"}, {"T", "theta", "g"}, {"r/z", "z", "slice"}, {"tau", "albedo", "slice"}};
+    ok = 1;
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            ok &= !strcmp(nbt_table_axis_name((nbt_table_kind)k, i), ax[k][i]);
+    t_true(ok, "axis names of H, J, PSI, KERNEL as documented");
+}
+
 int main(void)
 {
     /* ---- axis maps ---- */
@@ -203,6 +271,8 @@ int main(void)
                    nbt_table_alloc(NBT_TABLE_H, &badn, &maps[4], 1) == NULL,
                "asinh with c <= 0 or NaN rejected");
     }
+
+    test_maps_closed_forms();
 
     /* ---- lookup = hand bilinear, on a table of arbitrary values ---- */
     nbt_table *t = nbt_table_alloc(NBT_TABLE_J, &maps[2], &maps[3], 3);
