@@ -13,6 +13,7 @@
 #include <string.h>
 #include <time.h>
 #include <nbt/nbt.h>
+#include "../tests/table_roundtrip.h"
 
 static double now(void)
 {
@@ -217,21 +218,6 @@ static double surface_lookup(const nbt_table *J1, const nbt_table *Jn, double g,
     double direct = geo->I0 * exp(-T) / (geo->dsp * geo->dsp) *
                     (geo->kd * fmax(cos(geo->theta_s), 0.0) + geo->ks * pow(fmax(cos(geo->theta_r), 0.0), geo->n));
     return direct + geo->kappa_s * geo->I0 / (4.0 * M_PI * geo->dsp) * (geo->kd * v[0] + geo->ks * v[1]);
-}
-
-/* a copy without the theta map (keep_rows) or without rows either: the
- * bounds older files give */
-static nbt_table *strip_bounds(const nbt_table *t, int keep_rows)
-{
-    nbt_table *c = nbt_table_dup(t);
-    free(c->theta_err);
-    c->theta_err = NULL;
-    c->theta_cells = 0;
-    if (!keep_rows) {
-        free(c->row_err);
-        c->row_err = NULL;
-    }
-    return c;
 }
 
 static void surface_part(int n, size_t NT, size_t N, size_t ng, int with_before)

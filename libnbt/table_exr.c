@@ -259,6 +259,21 @@ static nbt_status rd_fail(char *err, size_t n, const char *path, const char *wha
     return NBT_EFORMAT;
 }
 
+/* an error vector's n values into channel c of dst (nc channels), each >= 0 and finite */
+static nbt_status copy_err_vector(const float *v, size_t n, double *dst, size_t nc, size_t c, const char *what,
+                                  const char *path, char *err, size_t errlen)
+{
+    for (size_t k = 0; k < n; k++) {
+        if (!(v[k] >= 0.0f && v[k] <= FLT_MAX)) {
+            char msg[96];
+            snprintf(msg, sizeof msg, "%s is negative or not finite (accepted: >= 0)", what);
+            return rd_fail(err, errlen, path, msg);
+        }
+        dst[k * nc + c] = v[k];
+    }
+    return NBT_OK;
+}
+
 nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size_t errlen)
 {
     *out = NULL;
@@ -408,13 +423,8 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
             snprintf(err, errlen, "out of memory");
             goto done;
         }
-        for (size_t k = 0; k < nr; k++) {
-            if (!(re[k] >= 0.0f && re[k] <= FLT_MAX)) {
-                st = rd_fail(err, errlen, path, "an nbt.row_err value is negative or not finite (accepted: >= 0)");
-                goto done;
-            }
-            t->row_err[k * nc + c] = re[k];
-        }
+        if ((st = copy_err_vector(re, nr, t->row_err, nc, c, "an nbt.row_err value", path, err, errlen)) != NBT_OK)
+            goto done;
     }
     for (size_t c = 0; c < nc; c++) {
         int32_t ne, cells = 0;
@@ -441,13 +451,8 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
                                             "and g cell");
             goto done;
         }
-        for (size_t k = 0; k < nr; k++) {
-            if (!(re[k] >= 0.0f && re[k] <= FLT_MAX)) {
-                st = rd_fail(err, errlen, path, "an nbt.theta_err value is negative or not finite (accepted: >= 0)");
-                goto done;
-            }
-            t->theta_err[k * nc + c] = re[k];
-        }
+        if ((st = copy_err_vector(re, nr, t->theta_err, nc, c, "an nbt.theta_err value", path, err, errlen)) != NBT_OK)
+            goto done;
     }
     size_t nx = ax[0].n, ny = ax[1].n * ax[2].n, bpe = half ? 2 : 4;
     pix = malloc(nx * ny * nc * bpe);

@@ -30,21 +30,7 @@ static int cmpd(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* the table without its theta map (the per-row bound files written before
- * it give) and, keep_rows 0, without its rows (the per-g-cell bound) */
-static nbt_table *strip(const nbt_table *t, int keep_rows)
-{
-    nbt_table *c = nbt_table_dup(t);
-    free(c->theta_err);
-    c->theta_err = NULL;
-    c->theta_cells = 0;
-    if (!keep_rows) {
-        free(c->row_err);
-        c->row_err = NULL;
-    }
-    return c;
-}
-#define cells_only(t) strip(t, 0)
+#define cells_only(t) strip_bounds(t, 0)
 
 static nbt_table *planned(int n, double tol)
 {
@@ -312,7 +298,7 @@ static void test_exr_theta(const nbt_table *t)
            "(rounded up, within one float ulp)", n, t->theta_cells);
     nbt_table_free(b);
     /* a file written before the theta map: the rows' bound */
-    nbt_table *r = strip(t, 1);
+    nbt_table *r = strip_bounds(t, 1);
     b = exr_round_trip(r);
     double T = nbt_axis_from_unit(&t->axis[0], 0.97), th = nbt_axis_from_unit(&t->axis[1], 0.49);
     double g = nbt_axis_from_unit(&t->axis[2], 0.02);
@@ -352,7 +338,7 @@ static void test_exr_theta(const nbt_table *t)
 
 static void test_route(const nbt_table *t)
 {
-    nbt_table *c = cells_only(t), *r = strip(t, 1);
+    nbt_table *c = cells_only(t), *r = strip_bounds(t, 1);
     int n = 24, cert = 0, cert_row = 0, cert_cell = 0, fell = 0;
     double worst = 0;
     for (int k = 0; k < n; k++) {
