@@ -831,24 +831,39 @@ static double shape_bin(const double *er, const double *ga, double lo, double hi
 static void test_shape_fit(void)
 {
     enum { NE = 31 };
-    double e[NE], mass[NE + 1], er[NBT_SCREEN_NSLOTS] = {0}, ga[NBT_SCREEN_NSLOTS] = {0};
+    double e[NE], mass[NE + 1];
     for (int i = 0; i < NE; i++)
         e[i] = 0.02 * pow(3000.0, i / (NE - 1.0));
-    er[2 - NBT_SCREEN_SLOT_LO] = 1.7;
-    ga[-3 - NBT_SCREEN_SLOT_LO] = 0.4;
+    /* every slot (step 1): erfc at slot 2, Gaussian at slot -3; whole octaves
+     * (step 2, even slots only): erfc at slot 2, Gaussian at slot -4 */
+    for (int step = 1; step <= 2; step++) {
+        double er[NBT_SCREEN_NSLOTS] = {0}, ga[NBT_SCREEN_NSLOTS] = {0};
+        er[2 - NBT_SCREEN_SLOT_LO] = 1.7;
+        ga[(step == 1 ? -3 : -4) - NBT_SCREEN_SLOT_LO] = 0.4;
+        for (int b = 0; b <= NE; b++)
+            mass[b] = shape_bin(er, ga, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+        nbt_screen_shape sh;
+        double mis = -1;
+        t_true(nbt_screen_shape_fit(NE, e, mass, NULL, step, &sh, &mis) == NBT_OK, "shape fit to exact masses, slot step %d",
+               step);
+        double worst = 0, tot = shape_bin(sh.erfc, sh.gauss, 0, INFINITY);
+        for (int b = 0; b <= NE; b++) {
+            double f = shape_bin(sh.erfc, sh.gauss, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+            worst = fmax(worst, fabs(f - mass[b]) / (mass[b] + 1e-4 * 2.1));
+        }
+        t_true(worst < 1e-6, "shape fit, slot step %d: every bin's mass back within 1e-6 of (mass + 1e-4 total): worst %.2g",
+               step, worst);
+        t_rel(tot, 2.1, 1e-6, "shape fit, slot step %d, keeps the total 2.1", step);
+        t_true(mis >= 0 && mis < 1e-6, "shape fit, slot step %d: misfit %.2g", step, mis);
+    }
+    /* no mass at all: the empty shape, and a misfit of 0 (sum |fit - mass| / sum mass taken as 0) */
     for (int b = 0; b <= NE; b++)
-        mass[b] = shape_bin(er, ga, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
+        mass[b] = 0;
     nbt_screen_shape sh;
     double mis = -1;
-    t_true(nbt_screen_shape_fit(NE, e, mass, NULL, 1, &sh, &mis) == NBT_OK, "shape fit to exact masses");
-    double worst = 0, tot = shape_bin(sh.erfc, sh.gauss, 0, INFINITY);
-    for (int b = 0; b <= NE; b++) {
-        double f = shape_bin(sh.erfc, sh.gauss, b ? e[b - 1] : 0, b < NE ? e[b] : INFINITY);
-        worst = fmax(worst, fabs(f - mass[b]) / (mass[b] + 1e-4 * 2.1));
-    }
-    t_true(worst < 1e-6, "shape fit: every bin's mass back within 1e-6 of (mass + 1e-4 total): worst %.2g", worst);
-    t_rel(tot, 2.1, 1e-6, "shape fit keeps the total 2.1");
-    t_true(mis >= 0 && mis < 1e-6, "shape fit: misfit %.2g", mis);
+    nbt_status st = nbt_screen_shape_fit(NE, e, mass, NULL, 1, &sh, &mis);
+    t_true(st == NBT_OK && mis == 0 && shape_bin(sh.erfc, sh.gauss, 0, INFINITY) == 0,
+           "shape fit of zero masses: the empty shape, misfit 0 (%g)", mis);
 }
 
 int main(void)

@@ -407,49 +407,8 @@ static void test_mc_albedos(void)
     nbt_phase_free(hg);
 }
 
-/* nbt_screen_shape_fit on masses made in closed form from two Gaussian atoms
- * on whole octaves (scales 2 and 8, weights 0.3 and 0.7: each ring's mass is
- * exp(-a0^2/2) - exp(-a1^2/2) in units of the atom's scale): the fit finds
- * both atoms (the basis holds them, so NNLS has an exact solution) and its
- * misfit is ~0; all-zero masses give the empty shape with misfit 0. */
-static void test_shape_fit(void)
-{
-    enum { NE = 24 };
-    double e[NE], mass[NE + 1], prev = 0;
-    const double sc[2] = {2, 8}, wt[2] = {0.3, 0.7};
-    for (int i = 0; i < NE; i++)
-        e[i] = 0.3 * pow(2, 0.5 * i); /* 0.3 .. 1228: both atoms inside */
-    for (int b = 0; b <= NE; b++) {
-        double r1 = b < NE ? e[b] : INFINITY, m = 0;
-        for (int j = 0; j < 2; j++)
-            m += wt[j] * (exp(-prev * prev / (2 * sc[j] * sc[j])) - (isinf(r1) ? 0 : exp(-r1 * r1 / (2 * sc[j] * sc[j]))));
-        mass[b] = m;
-        prev = r1;
-    }
-    nbt_screen_shape sh;
-    double mis = -1;
-    t_true(nbt_screen_shape_fit(NE, e, mass, NULL, 2, &sh, &mis) == NBT_OK, "shape fit of two Gaussian atoms runs");
-    /* slot m has scale 2^(m/2): scale 2 is m = 2, scale 8 is m = 6 */
-    double other = 0;
-    for (int k = 0; k < NBT_SCREEN_NSLOTS; k++)
-        if (k + NBT_SCREEN_SLOT_LO != 2 && k + NBT_SCREEN_SLOT_LO != 6)
-            other += sh.gauss[k];
-    for (int k = 0; k < NBT_SCREEN_NSLOTS; k++)
-        other += sh.erfc[k];
-    t_rel(sh.gauss[2 - NBT_SCREEN_SLOT_LO], 0.3, 1e-5, "shape fit: the scale-2 atom's weight");
-    t_rel(sh.gauss[6 - NBT_SCREEN_SLOT_LO], 0.7, 1e-5, "shape fit: the scale-8 atom's weight");
-    t_true(other < 1e-5 && mis >= 0 && mis < 1e-5, "shape fit: no other atom (%g), misfit %g", other, mis);
-    for (int b = 0; b <= NE; b++)
-        mass[b] = 0;
-    mis = -1;
-    nbt_status st = nbt_screen_shape_fit(NE, e, mass, NULL, 1, &sh, &mis);
-    t_true(st == NBT_OK && mis == 0 && sh.gauss[0] == 0 && sh.erfc[NBT_SCREEN_NSLOTS - 1] == 0,
-           "shape fit of zero masses: the empty shape, misfit 0 (%g)", mis);
-}
-
 int main(void)
 {
-    test_shape_fit();
     test_first_order();
     test_first_order_mc();
     test_mc_albedos();
