@@ -496,4 +496,10 @@ P2=hg2:g1=0.8,g2=-0.3,w=0.85
 awk '/^(inside|entering) / { n++; if ($5 != 0 || $7 != 0 || $8 != 0) bad = 1 } END { exit bad || n != 4 }' "$tmp/smz" && ok ||
   bad "screenmodel --check: zero counted mass, bias and relL1 0: $(cat "$tmp/smz")"
 
+# a list must increase at every step, not only against the one before last: 0.1,0.5,0.3 falls at its third
+# entry (0.3 > 0.1 but < 0.5); with three entries a check against v[n - 2] would let it through
+expect_usage "screenmodel --tau 0.1,0.5,0.3 (not increasing)" "--tau: '0.1,0.5,0.3' is not accepted: expected increasing" \
+  "$NBT_FIT" screenmodel -o "$tmp/smbad.txt" --g 0.7 --albedo 0.95 --tau 0.1,0.5,0.3 --photons 1000
+[ ! -e "$tmp/smbad.txt" ] && ok || bad "a refused --tau list left $tmp/smbad.txt"
+
 finish
