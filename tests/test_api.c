@@ -163,6 +163,23 @@ static void test_sample_ends(void)
     }
     t_true(worst < 1e-12, "Rayleigh sampled mu: CDF(mu) = u at u = 0.01 .. 0.999 (worst %.2g)", worst);
     nbt_phase_free(r);
+    /* a coarse tabulated phase (3 nodes, both segments sloped, unequal widths): the sampled mu inverts
+     * the CDF A(mu)/A(1), A the integral of the piecewise-linear p from -1 (trapezoids, done here) */
+    const double tm[3] = {-1, 0.2, 1}, tp[3] = {0.1, 0.3, 1.5};
+    nbt_phase *tb = nbt_phase_tabulated(3, tm, tp);
+    double A1 = 0.5 * (tp[0] + tp[1]) * (tm[1] - tm[0]) + 0.5 * (tp[1] + tp[2]) * (tm[2] - tm[1]);
+    worst = 0;
+    for (int i = 0; tb && i < 5; i++) {
+        double u = (double[]){0.01, 0.2, 0.5, 0.77, 0.999}[i], mu = nbt__phase_sample_mu(tb, draw_fixed, &u), A = 0;
+        for (int s = 0; s < 2; s++) {
+            double b = fmin(fmax(mu, tm[s]), tm[s + 1]), pb = tp[s] + (tp[s + 1] - tp[s]) * (b - tm[s]) / (tm[s + 1] - tm[s]);
+            A += 0.5 * (tp[s] + pb) * (b - tm[s]);
+        }
+        worst = fmax(worst, fabs(A / A1 - u));
+    }
+    t_true(tb && worst < 1e-12, "tabulated phase (3 nodes) sampled mu: CDF(mu) = u at u = 0.01 .. 0.999 (worst %.2g)",
+           worst);
+    nbt_phase_free(tb);
 }
 
 /* the store of G rows shared by a plan's J builds (internal): 700 rows put,
