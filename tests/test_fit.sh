@@ -169,8 +169,14 @@ else
     awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/app" && ok || bad "the correction helps on a held-out run: $(cat "$tmp/app")"
   # phase --against: the widths' common factor that makes the moment kernel match the counts
   "$NBT_FIT" phase --target gauss:B=0.0685 --terms 1 --against "$tmp/k2.exr" -o "$tmp/ag.sog" >"$tmp/ag" 2>&1 &&
-    awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
+    awk '/^against/ { b = $5; a = $10 } END { exit !(a + 0 <= b + 0 && a + 0 > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
+  # its starting RMS is the moment kernel of the fitted lobe (gauss:B=0.0685 fits itself with one lobe, L2
+  # error ~1e-12) against k2.exr: the number nbt-fit kernel prints as the moment kernel's RMS on the same
+  # counts (a different command path, medium from the EXR); both print 4 digits. The factor must move it.
+  awk -v k="$(awk '/^RMS/ { print $4 }' "$tmp/kgrms")" '/^against/ { b = $5; a = $10; f = $14 }
+    END { exit !(k != "" && b == k && a + 0 < b + 0 && f != 1) }' "$tmp/ag" && ok ||
+    bad "--against starts from the moment kernel's RMS of nbt-fit kernel ($(cat "$tmp/kgrms")): $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
   # an EXR whose header (nbt.phase "mc albedo=A sigma_t=S ...", plain text) names only one of the two:
   # the same bytes with one key renamed (same length, so the file stays valid) are refused too
