@@ -11,6 +11,7 @@
 #include <nbt/nbt.h>
 #include <nbt/grid.h>
 #include "internal.h" /* the G-row store */
+#include "gslice_tail.h" /* the tail form's error map */
 #include "testutil.h"
 
 /* The documented camera: the image plane at unit distance along fwd,
@@ -182,6 +183,29 @@ static void test_sample_ends(void)
     nbt_phase_free(tb);
 }
 
+/* the g-sliced tail table's error map (channel 1) at a point: the largest of the 8 nodes around its
+ * cell. A 4 x 3 x 3 table on linear axes with scattered values (node k: frac(0.618034 k + 0.1)); the
+ * point (0.5, 0.2, 0.7) lies in cell (1, 0, 1), away from every end */
+static void test_tail_err_at(void)
+{
+    nbt_axis a0 = {0, 1, NBT_AXIS_LINEAR, 0, 4}, a1 = {0, 1, NBT_AXIS_LINEAR, 0, 3}, a2 = {0, 1, NBT_AXIS_LINEAR, 0, 3};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &a2, 2);
+    double want = 0, got = -1;
+    if (t) {
+        for (size_t k = 0; k < 4 * 3 * 3; k++) {
+            t->data[2 * k] = 1.0f;
+            t->data[2 * k + 1] = (float)fmod(0.618034 * (double)k + 0.1, 1.0);
+        }
+        for (size_t m = 1; m <= 2; m++)
+            for (size_t j = 0; j <= 1; j++)
+                for (size_t i = 1; i <= 2; i++)
+                    want = fmax(want, t->data[((m * 3 + j) * 4 + i) * 2 + 1]);
+        got = nbt__tail_err_at(t, 0.5, 0.2, 0.7);
+    }
+    t_true(got == want, "tail error map at (0.5, 0.2, 0.7): %.9g = max of its cell's 8 nodes %.9g", got, want);
+    nbt_table_free(t);
+}
+
 /* the store of G rows shared by a plan's J builds (internal): 700 rows put,
  * the table grown from 256 to 2048 slots on the way, and every row found
  * again with its own values (a row moved to the wrong slot on growth is
@@ -234,6 +258,7 @@ int main(void)
     test_atom_zero_width();
     test_nnls();
     test_sample_ends();
+    test_tail_err_at();
     test_jcache();
     test_messages();
     return t_done();

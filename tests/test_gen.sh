@@ -474,6 +474,13 @@ fi
 "$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet --allow-tol-miss >"$tmp/gs.out" 2>&1 &&
   [ -s "$tmp/gs.exr" ] && [ -s "$tmp/gs.png" ] && grep -q "^# basis slices: requested" "$tmp/gs.out" && ok ||
   bad "airlight --basis slices: $(cat "$tmp/gs.out")"
+# its predicted time: a 33x33x3 proxy build timed and scaled by the node count (33x49x9 here: ~4x the proxy),
+# so within a factor of 100 of the build itself (+ 5 s for a loaded machine's scheduling); a time scaled the
+# wrong way is off by (33 x 33 x 3)^2 ~ 1e7
+"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gsp.exr" --allow-tol-miss >"$tmp/gsp.out" 2>"$tmp/gsp.err"
+awk -v b="$(sed -n 's/^# g-sliced: .* built in \([0-9.]*\) s .*/\1/p' "$tmp/gsp.out")" \
+  '/: g-sliced 33x49x9: predicted / { p = $NF == "s" ? $(NF - 1) : "" } END { exit !(b != "" && p != "" && p + 0 > 0 && p + 0 <= 100 * b + 5) }' \
+  "$tmp/gsp.err" && ok || bad "g-sliced predicted time vs the build's: $(cat "$tmp/gsp.out" "$tmp/gsp.err")"
 "$NBT_GEN" info "$tmp/gs.exr" --at 0.7,0.3,0.21 >"$tmp/gs.info"
 grep -q "^axis2 *g atanh \[-0.4" "$tmp/gs.info" && grep -q "^form *tail" "$tmp/gs.info" &&
   grep -q "^g interp *quadratic" "$tmp/gs.info" && ok || bad "info names the g axis and the tail form: $(cat "$tmp/gs.info")"
