@@ -508,4 +508,15 @@ expect_usage "screenmodel --tau 0.1,0.5,0.3 (not increasing)" "--tau: '0.1,0.5,0
   "$NBT_FIT" screenmodel -o "$tmp/smbad.txt" --g 0.7 --albedo 0.95 --tau 0.1,0.5,0.3 --photons 1000
 [ ! -e "$tmp/smbad.txt" ] && ok || bad "a refused --tau list left $tmp/smbad.txt"
 
+# the run description stored in an mc EXR (nbt.run, 128 bytes with its terminator) is cut at 127
+# characters: these options make it longer (a table phase under a 120-character directory, a 10-digit seed,
+# infinite, order_max, weighted), and the stored line is its first 127 characters
+ld="$tmp/$(printf 'd%.0s' $(seq 1 120))"; mkdir -p "$ld" && printf -- '-1 0.3\n1 1.2\n' >"$ld/p.txt"
+"$NBT_FIT" mc --albedo 0.912345 --sigma-t 1.23456 --phase "table:$ld/p.txt" --photons 20000 --seed 2147483647 --infinite \
+  --order-max 3 --estimator weighted --z-planes 1:2:2 -o "$tmp/lrun.exr" --quiet >/dev/null 2>&1
+"$NBT_GEN" info "$tmp/lrun.exr" 2>/dev/null | sed -n 's/^run  *//p' >"$tmp/lrun"
+awk 'NR == 1 { r = $0 } END { exit !(NR == 1 && length(r) == 127 && index(r, "mc albedo=0.912345 sigma_t=1.23456 phase=table:") == 1 &&
+  r ~ / seed=[0-9]+$/ && index(" seed=2147483647", substr(r, index(r, " seed="))) == 1) }' "$tmp/lrun" && ok ||
+  bad "mc EXR: a long run description cut at 127 characters: $(cat "$tmp/lrun")"
+
 finish
