@@ -260,6 +260,12 @@ grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad
   ok || bad "h.png: the panel title above its panel"
 l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
 awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
+# the panel's top pixel row (96) is the table at its top pixel centre, like every other row: its brightest
+# pixel within 3 luma units of the next row's (adjacent rows are 1/288 of the v range apart: 97 and 98
+# differ by 0.3 units on this table; an unset coordinate for the first row made it 114 against 215)
+t0=$("$PNGCHECK" --max-luma 124 96 384 1 "$tmp/h.png"); t1=$("$PNGCHECK" --max-luma 124 97 384 1 "$tmp/h.png")
+awk -v a="$t0" -v b="$t1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 100 && d <= 3) }' && ok ||
+  bad "h.png: the panel's top row (max luma $t0) continues the next ($t1)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
 # end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
 grep -q '^nbt-gen: airlight: planned 1 table set(s) in .* s, predicted build time .* s, writing 0 MB .* s$' "$tmp/herr" &&
