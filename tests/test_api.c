@@ -11,6 +11,7 @@
 #include <nbt/nbt.h>
 #include <nbt/grid.h>
 #include "internal.h" /* the G-row store */
+#include "gslice_tail.h" /* the tail form's error map */
 #include "testutil.h"
 
 /* The documented camera: the image plane at unit distance along fwd,
@@ -163,6 +164,46 @@ static void test_sample_ends(void)
     }
     t_true(worst < 1e-12, "Rayleigh sampled mu: CDF(mu) = u at u = 0.01 .. 0.999 (worst %.2g)", worst);
     nbt_phase_free(r);
+    /* a coarse tabulated phase (3 nodes, both segments sloped, unequal widths): the sampled mu inverts
+     * the CDF A(mu)/A(1), A the integral of the piecewise-linear p from -1 (trapezoids, done here) */
+    const double tm[3] = {-1, 0.2, 1}, tp[3] = {0.1, 0.3, 1.5};
+    nbt_phase *tb = nbt_phase_tabulated(3, tm, tp);
+    double A1 = 0.5 * (tp[0] + tp[1]) * (tm[1] - tm[0]) + 0.5 * (tp[1] + tp[2]) * (tm[2] - tm[1]);
+    worst = 0;
+    for (int i = 0; tb && i < 5; i++) {
+        double u = (double[]){0.01, 0.2, 0.5, 0.77, 0.999}[i], mu = nbt__phase_sample_mu(tb, draw_fixed, &u), A = 0;
+        for (int s = 0; s < 2; s++) {
+            double b = fmin(fmax(mu, tm[s]), tm[s + 1]), pb = tp[s] + (tp[s + 1] - tp[s]) * (b - tm[s]) / (tm[s + 1] - tm[s]);
+            A += 0.5 * (tp[s] + pb) * (b - tm[s]);
+        }
+        worst = fmax(worst, fabs(A / A1 - u));
+    }
+    t_true(tb && worst < 1e-12, "tabulated phase (3 nodes) sampled mu: CDF(mu) = u at u = 0.01 .. 0.999 (worst %.2g)",
+           worst);
+    nbt_phase_free(tb);
+}
+
+/* the g-sliced tail table's error map (channel 1) at a point: the largest of the 8 nodes around its
+ * cell. A 4 x 3 x 3 table on linear axes with scattered values (node k: frac(0.618034 k + 0.1)); the
+ * point (0.5, 0.2, 0.7) lies in cell (1, 0, 1), away from every end */
+static void test_tail_err_at(void)
+{
+    nbt_axis a0 = {0, 1, NBT_AXIS_LINEAR, 0, 4}, a1 = {0, 1, NBT_AXIS_LINEAR, 0, 3}, a2 = {0, 1, NBT_AXIS_LINEAR, 0, 3};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &a2, 2);
+    double want = 0, got = -1;
+    if (t) {
+        for (size_t k = 0; k < 4 * 3 * 3; k++) {
+            t->data[2 * k] = 1.0f;
+            t->data[2 * k + 1] = (float)fmod(0.618034 * (double)k + 0.1, 1.0);
+        }
+        for (size_t m = 1; m <= 2; m++)
+            for (size_t j = 0; j <= 1; j++)
+                for (size_t i = 1; i <= 2; i++)
+                    want = fmax(want, t->data[((m * 3 + j) * 4 + i) * 2 + 1]);
+        got = nbt__tail_err_at(t, 0.5, 0.2, 0.7);
+    }
+    t_true(got == want, "tail error map at (0.5, 0.2, 0.7): %.9g = max of its cell's 8 nodes %.9g", got, want);
+    nbt_table_free(t);
 }
 
 /* the store of G rows shared by a plan's J builds (internal): 700 rows put,
@@ -217,6 +258,7 @@ int main(void)
     test_atom_zero_width();
     test_nnls();
     test_sample_ends();
+    test_tail_err_at();
     test_jcache();
     test_messages();
     return t_done();

@@ -198,6 +198,14 @@ int main(void)
     nbt_beam_psi(&lay, NBT_PSI_SINGLE, 2.385, 0.3, &psl, NULL);
     nbt_beam_psi(&hh, NBT_PSI_SINGLE, 2.385, 0.3, &psh, NULL);
     t_rel(psl, psh, 1e-8, "single scattering: layered quadrature = closed form");
+    /* the quadrature's error estimate is scaled like Psi itself (the prefactor sigma_s e^-zeta times the
+     * integral's error): asked for 1e-10 relative, it lies in [0, 1e-8 Psi] and covers the true error
+     * against the closed form up to 1e-12 Psi of rounding */
+    double pse = -1;
+    nbt_beam_psi(&lay, NBT_PSI_SINGLE, 2.385, 0.3, &psl, &pse);
+    t_true(pse >= 0 && pse <= 1e-8 * psl && fabs(psl - psh) <= pse + 1e-12 * psh,
+           "layered single scattering: error estimate %.3g in [0, 1e-8 Psi] covers |Psi - closed form| = %.3g", pse,
+           fabs(psl - psh));
     /* a density callback: constant 1 = homogeneous; a smooth profile against
      * the random walk's integral done here independently */
     nbt_beam_medium cb = hh;

@@ -169,8 +169,14 @@ else
     awk '/^RMS/ { exit !($6 + 0 < $4 + 0) }' "$tmp/app" && ok || bad "the correction helps on a held-out run: $(cat "$tmp/app")"
   # phase --against: the widths' common factor that makes the moment kernel match the counts
   "$NBT_FIT" phase --target gauss:B=0.0685 --terms 1 --against "$tmp/k2.exr" -o "$tmp/ag.sog" >"$tmp/ag" 2>&1 &&
-    awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
+    awk '/^against/ { b = $5; a = $10 } END { exit !(a + 0 <= b + 0 && a + 0 > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
+  # its starting RMS is the moment kernel of the fitted lobe (gauss:B=0.0685 fits itself with one lobe, L2
+  # error ~1e-12) against k2.exr: the number nbt-fit kernel prints as the moment kernel's RMS on the same
+  # counts (a different command path, medium from the EXR); both print 4 digits. The factor must move it.
+  awk -v k="$(awk '/^RMS/ { print $4 }' "$tmp/kgrms")" '/^against/ { b = $5; a = $10; f = $14 }
+    END { exit !(k != "" && b == k && a + 0 < b + 0 && f != 1) }' "$tmp/ag" && ok ||
+    bad "--against starts from the moment kernel's RMS of nbt-fit kernel ($(cat "$tmp/kgrms")): $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
   # an EXR whose header (nbt.phase "mc albedo=A sigma_t=S ...", plain text) names only one of the two:
   # the same bytes with one key renamed (same length, so the file stays valid) are refused too
@@ -495,5 +501,22 @@ P2=hg2:g1=0.8,g2=-0.3,w=0.85
   2>/dev/null >"$tmp/smz"
 awk '/^(inside|entering) / { n++; if ($5 != 0 || $7 != 0 || $8 != 0) bad = 1 } END { exit bad || n != 4 }' "$tmp/smz" && ok ||
   bad "screenmodel --check: zero counted mass, bias and relL1 0: $(cat "$tmp/smz")"
+
+# a list must increase at every step, not only against the one before last: 0.1,0.5,0.3 falls at its third
+# entry (0.3 > 0.1 but < 0.5); with three entries a check against v[n - 2] would let it through
+expect_usage "screenmodel --tau 0.1,0.5,0.3 (not increasing)" "--tau: '0.1,0.5,0.3' is not accepted: expected increasing" \
+  "$NBT_FIT" screenmodel -o "$tmp/smbad.txt" --g 0.7 --albedo 0.95 --tau 0.1,0.5,0.3 --photons 1000
+[ ! -e "$tmp/smbad.txt" ] && ok || bad "a refused --tau list left $tmp/smbad.txt"
+
+# the run description stored in an mc EXR (nbt.run, 128 bytes with its terminator) is cut at 127
+# characters: these options make it longer (a table phase under a 120-character directory, a 10-digit seed,
+# infinite, order_max, weighted), and the stored line is its first 127 characters
+ld="$tmp/$(printf 'd%.0s' $(seq 1 120))"; mkdir -p "$ld" && printf -- '-1 0.3\n1 1.2\n' >"$ld/p.txt"
+"$NBT_FIT" mc --albedo 0.912345 --sigma-t 1.23456 --phase "table:$ld/p.txt" --photons 20000 --seed 2147483647 --infinite \
+  --order-max 3 --estimator weighted --z-planes 1:2:2 -o "$tmp/lrun.exr" --quiet >/dev/null 2>&1
+"$NBT_GEN" info "$tmp/lrun.exr" 2>/dev/null | sed -n 's/^run  *//p' >"$tmp/lrun"
+awk 'NR == 1 { r = $0 } END { exit !(NR == 1 && length(r) == 127 && index(r, "mc albedo=0.912345 sigma_t=1.23456 phase=table:") == 1 &&
+  r ~ / seed=[0-9]+$/ && index(" seed=2147483647", substr(r, index(r, " seed="))) == 1) }' "$tmp/lrun" && ok ||
+  bad "mc EXR: a long run description cut at 127 characters: $(cat "$tmp/lrun")"
 
 finish

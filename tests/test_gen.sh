@@ -260,6 +260,12 @@ grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad
   ok || bad "h.png: the panel title above its panel"
 l0=$("$PNGCHECK" --max-luma 124 96 384 288 "$tmp/h.png"); l3=$("$PNGCHECK" --max-luma 1396 96 384 288 "$tmp/h.png")
 awk -v a="$l0" -v b="$l3" 'BEGIN { exit !(a > 200 && b < 100) }' && ok || bad "h.png: one colour scale (max luma k=0 $l0, k=3 $l3)"
+# the panel's top pixel row (96) is the table at its top pixel centre, like every other row: its brightest
+# pixel within 3 luma units of the next row's (adjacent rows are 1/288 of the v range apart: 97 and 98
+# differ by 0.3 units on this table; an unset coordinate for the first row made it 114 against 215)
+t0=$("$PNGCHECK" --max-luma 124 96 384 1 "$tmp/h.png"); t1=$("$PNGCHECK" --max-luma 124 97 384 1 "$tmp/h.png")
+awk -v a="$t0" -v b="$t1" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 100 && d <= 3) }' && ok ||
+  bad "h.png: the panel's top row (max luma $t0) continues the next ($t1)"
 # progress (stderr not a terminal): a line at the set's start with its predicted time, one at its
 # end with the measured time, no carriage returns; --quiet: nothing; the files and stdout the same
 grep -q '^nbt-gen: airlight: planned 1 table set(s) in .* s, predicted build time .* s, writing 0 MB .* s$' "$tmp/herr" &&
@@ -474,6 +480,13 @@ fi
 "$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gs.exr" --quiet --allow-tol-miss >"$tmp/gs.out" 2>&1 &&
   [ -s "$tmp/gs.exr" ] && [ -s "$tmp/gs.png" ] && grep -q "^# basis slices: requested" "$tmp/gs.out" && ok ||
   bad "airlight --basis slices: $(cat "$tmp/gs.out")"
+# its predicted time: a 33x33x3 proxy build timed and scaled by the node count (33x49x9 here: ~4x the proxy),
+# so within a factor of 100 of the build itself (+ 5 s for a loaded machine's scheduling); a time scaled the
+# wrong way is off by (33 x 33 x 3)^2 ~ 1e7
+"$NBT_GEN" airlight --g -0.4:0.5 --basis slices --tol 2e-2 --max 4 -o "$tmp/gsp.exr" --allow-tol-miss >"$tmp/gsp.out" 2>"$tmp/gsp.err"
+awk -v b="$(sed -n 's/^# g-sliced: .* built in \([0-9.]*\) s .*/\1/p' "$tmp/gsp.out")" \
+  '/: g-sliced 33x49x9: predicted / { p = $NF == "s" ? $(NF - 1) : "" } END { exit !(b != "" && p != "" && p + 0 > 0 && p + 0 <= 100 * b + 5) }' \
+  "$tmp/gsp.err" && ok || bad "g-sliced predicted time vs the build's: $(cat "$tmp/gsp.out" "$tmp/gsp.err")"
 "$NBT_GEN" info "$tmp/gs.exr" --at 0.7,0.3,0.21 >"$tmp/gs.info"
 grep -q "^axis2 *g atanh \[-0.4" "$tmp/gs.info" && grep -q "^form *tail" "$tmp/gs.info" &&
   grep -q "^g interp *quadratic" "$tmp/gs.info" && ok || bad "info names the g axis and the tail form: $(cat "$tmp/gs.info")"

@@ -187,6 +187,14 @@ if "$S" "$tmp/blocks.exr" -o "$tmp/glhom.exr" $M0 --method shinya --no-png 2>/de
   set -- $("$S" "$tmp/blocks.exr" -o "$tmp/glhet.exr" $M0 --method shinya --density "$tmp/c1.raw" --step 0.05 --no-png \
     --compare "$tmp/glhom.exr" 2>/dev/null)
   awk -v a="$2" 'BEGIN { exit !(a < 1e-4) }' && ok || bad "GL shinya: constant grid = homogeneous medium: $*"
+  # and the transmittance layer: the march's T of the constant grid per pixel against exp(-sigma_t D) of the
+  # homogeneous run (measured equal to 9 digits; 1e-5 for float rounding), over the frame and in its first
+  # 8x8 pixels (pixel 0 is where a T read from the previous pixel would come from outside the array)
+  th=$("$MK" "$tmp/glhom.exr" mean T | sed -n 's/^T.R //p'); te=$("$MK" "$tmp/glhet.exr" mean T | sed -n 's/^T.R //p')
+  th8=$("$MK" "$tmp/glhom.exr" mean T 0 0 8 8 | sed -n 's/^T.R //p'); te8=$("$MK" "$tmp/glhet.exr" mean T 0 0 8 8 | sed -n 's/^T.R //p')
+  awk -v a="$te" -v b="$th" -v c="$te8" -v d="$th8" 'BEGIN { x = a - b; y = c - d; if (x < 0) x = -x; if (y < 0) y = -y
+    exit !(b > 0.1 && d > 0.1 && x <= 1e-5 * b && y <= 1e-5 * d) }' && ok ||
+    bad "GL shinya: T of the constant grid $te ($te8 in 8x8) = homogeneous $th ($th8)"
   rm -f "$tmp/glhom.exr" "$tmp/glhet.exr"
 fi
 set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het2.exr" $M --density "$tmp/c1.raw" --step 0.5 --no-png \

@@ -308,6 +308,41 @@ static void test_model_cubic(void)
     nbt_screen_model_free(m);
 }
 
+/* ---- three nodes on an axis: the log mass quadratic through them (exact for quadratic data; the
+ * documented rule is linear only on two nodes) ---- */
+static double quad_logm(double a, double tau)
+{
+    double x = -log1p(-a), y = log(tau);
+    return -1.0 + 0.3 * x - 0.07 * x * x + 0.5 * y - 0.09 * y * y;
+}
+
+static void test_model_three_nodes(void)
+{
+    const double g[] = {0.9}, alb[] = {0.5, 0.8, 0.95}, tau[] = {0.25, 1.0, 4.0};
+    nbt_screen_model *m = nbt_screen_model_alloc(NULL, 1, g, 3, alb, 3, tau);
+    for (int geo = 0; m && geo < 2; geo++)
+        for (size_t ia = 0; ia < 3; ia++)
+            for (size_t it = 0; it < 3; it++) {
+                nbt_screen_shape s;
+                memset(&s, 0, sizeof s);
+                s.erfc[12] = exp(quad_logm(alb[ia], tau[it]));
+                nbt_screen_model_set(m, (nbt_screen_geometry)geo, 0, ia, it, &s);
+            }
+    nbt_phase *p = nbt_phase_hg(0.9);
+    /* asymmetric points in both intervals of each axis; linear there would miss by
+     * 0.07 (x - x0)(x1 - x) + 0.09 (y - y0)(y1 - y), ~5e-2 in the log at the first point */
+    const double pts[][2] = {{0.7, 0.4}, {0.9, 2.5}};
+    for (size_t j = 0; m && j < 2; j++) {
+        nbt_screen_shape o;
+        nbt_screen_model_eval(m, p, NBT_SCREEN_ENTERING, pts[j][0], pts[j][1], &o, NULL);
+        t_rel(nbt_screen_shape_mass(&o, 0, INFINITY), exp(quad_logm(pts[j][0], pts[j][1])), 1e-12,
+              "model on 3 x 3 nodes: log mass quadratic at albedo %g, tau %g", pts[j][0], pts[j][1]);
+    }
+    t_true(m != NULL, "a 3 x 3 model allocated");
+    nbt_phase_free(p);
+    nbt_screen_model_free(m);
+}
+
 /* ---- beyond the deepest depth the log mass goes on along its slope between
  * the last two depths: data with the same log mass ln 0.02 - 0.3 tau at every
  * (g, albedo) node continue exactly as 0.02 e^{-0.3 tau}, at a point between
@@ -416,6 +451,7 @@ int main(void)
     test_rgb();
     test_model();
     test_model_cubic();
+    test_model_three_nodes();
     test_model_deep();
     test_fitted();
     return t_done();
