@@ -171,6 +171,11 @@ else
   "$NBT_FIT" phase --target gauss:B=0.0685 --terms 1 --against "$tmp/k2.exr" -o "$tmp/ag.sog" >"$tmp/ag" 2>&1 &&
     awk '/^against/ { b = $5; a = $8 } END { exit !(a + 0 <= b + 0 && a > 0) }' "$tmp/ag" && [ -s "$tmp/ag.sog" ] && ok ||
     bad "--against improves the moment kernel: $(cat "$tmp/ag")"
+  # its status: one moment-kernel lobe misses these counts by RMS ~0.1 while 3e5 photons leave ~1% noise
+  # per bin, so chi^2/dof ~ (0.1 / 0.01)^2 ~ 100, far above the 0.001 limit (~1.8 at 47 dof): misfit
+  grep -q '^against .* status misfit$' "$tmp/ag" &&
+    awk '/chi\^2\/dof = / { for (i = 1; i < NF; i++) if ($i == "=" && $(i - 1) == "chi^2/dof") v = $(i + 1) + 0 } END { exit !(v > 20) }' "$tmp/ag" && ok ||
+    bad "--against judges the moment kernel a misfit at chi^2/dof > 20: $(cat "$tmp/ag")"
   expect_usage "--against a CSV without medium" "does not name its medium" "$NBT_FIT" phase --target iso --terms 1 --against "$tmp/k1.csv"
   # an EXR whose header (nbt.phase "mc albedo=A sigma_t=S ...", plain text) names only one of the two:
   # the same bytes with one key renamed (same length, so the file stays valid) are refused too
