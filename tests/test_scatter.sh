@@ -38,6 +38,19 @@ awk -v a="$2" 'BEGIN { exit !(a > 0.02) }' && ok || bad "ref-b differs from ref-
 # planar depth (Blender's Z): a continuous ray distance, brute force; a preview is written
 "$S" "$tmp/step.exr" -o "$tmp/step-out.exr" $M 2>"$tmp/log" && [ -s "$tmp/step-out.png" ] && ok || bad "step, planar depth"
 grep -q "brute force" "$tmp/log" && ok || bad "planar depth: brute force"
+# the off-screen fraction per pixel (layer offscreen.X) is mirror-symmetric: the step scene mirrored left to right
+# gives, in its 3 left columns, what the original has in its 3 right columns (same kernels, float round-off;
+# the step makes the two sides differ: 0.49 vs 0.42), and the other way round
+"$MK" "$tmp/fstep.exr" flip "$tmp/step.exr" && "$S" "$tmp/fstep.exr" -o "$tmp/fstep-out.exr" $M --no-png 2>/dev/null || bad "step mirrored"
+a=$("$MK" "$tmp/step-out.exr" mean offscreen 61 0 64 48) b=$("$MK" "$tmp/fstep-out.exr" mean offscreen 0 0 3 48)
+c=$("$MK" "$tmp/step-out.exr" mean offscreen 0 0 3 48) d=$("$MK" "$tmp/fstep-out.exr" mean offscreen 61 0 64 48)
+awk -v a="${a#* }" -v b="${b#* }" -v c="${c#* }" -v d="${d#* }" 'BEGIN { exit !(a > 0.3 && c > 0.3 && (a - b) ^ 2 < (1e-6 * a) ^ 2 &&
+  (c - d) ^ 2 < (1e-6 * c) ^ 2 && (a - c) ^ 2 > 0.01 ^ 2) }' && ok || bad "offscreen.X mirror-symmetric at the right and left edges: $a $b $c $d"
+# the warning's "more overscan would leave": growing the window by 15% and 50% of the width per side can only
+# lower each pixel's outside fraction, and 50% (32 px, several kernel widths here) leaves under 1%
+sed -n 's/.*on average \([0-9.]*\)%.* would leave \([0-9.]*\)%, 50% would leave \([0-9.]*\)%.*/\1 \2 \3/p' "$tmp/log" >"$tmp/lv"
+awk 'NF == 3 { n++; if (!($3 < $2 && $2 < $1 && $3 < 1)) bad = 1 } END { exit bad || n != 1 }' "$tmp/lv" && ok ||
+  bad "overscan advice: mean > 15% grown > 50% grown, < 1%: $(cat "$tmp/log")"
 # the frame is the direct part plus the scattered one, channel by channel: RGB = T.RGB input + S.RGB
 # (float round-off; an index or channel slip shows at the step's edge and in the tinted halves)
 set -- $("$MK" "$tmp/step-out.exr" composite "$tmp/step.exr")
@@ -181,6 +194,12 @@ set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het.exr" $M --density "$tmp/c1.raw" --s
   --compare "$tmp/hom.exr" 2>"$tmp/log")
 awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid = homogeneous medium: $*"
 grep -q "halving the step" "$tmp/log" && ok || bad "the march reports its error estimate"
+# the camera rolled 90 degrees (up = +x, view along -z: view x up = (0, -1, 0), non-zero): a constant grid
+# looks the same from any roll, so this too is the homogeneous medium to the march's 3e-5
+set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het-roll.exr" $M --density "$tmp/c1.raw" --step 0.05 --up 1,0,0 --no-png \
+  --compare "$tmp/hom.exr" 2>/dev/null)
+awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid, camera rolled (--up 1,0,0) = homogeneous medium: $*"
+rm -f "$tmp/het-roll.exr"
 # the per-pixel kernels through a GL method (shinya): the constant grid = the homogeneous medium by the
 # same method (measured relL1 6e-6: both float GL; a kernel width read from the neighbour pixel: 9e-3)
 if "$S" "$tmp/blocks.exr" -o "$tmp/glhom.exr" $M0 --method shinya --no-png 2>/dev/null; then
