@@ -198,7 +198,8 @@ grep -q "halving the step" "$tmp/log" && ok || bad "the march reports its error 
 # looks the same from any roll, so this too is the homogeneous medium to the march's 3e-5
 set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het-roll.exr" $M --density "$tmp/c1.raw" --step 0.05 --up 1,0,0 --no-png \
   --compare "$tmp/hom.exr" 2>/dev/null)
-awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid, camera rolled (--up 1,0,0) = homogeneous medium: $*"
+[ "$1" = relL1 ] && awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok ||
+  bad "constant grid, camera rolled (--up 1,0,0) = homogeneous medium: $*"
 rm -f "$tmp/het-roll.exr"
 # the per-pixel kernels through a GL method (shinya): the constant grid = the homogeneous medium by the
 # same method (measured relL1 6e-6: both float GL; a kernel width read from the neighbour pixel: 9e-3)
