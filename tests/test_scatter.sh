@@ -136,7 +136,7 @@ gl() { ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0 "$@"; }
 if "$S" --help | grep -q "On GL"; then
   set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M --depth ray --method shinya --no-png --compare "$tmp/ref.exr" \
     2>"$tmp/log")
-  awk -v a="$2" 'BEGIN { exit !(a < 3e-3) }' && ok || bad "GL shinya vs ref-a: $* $(cat "$tmp/log")"
+  [ "$1" = relL1 ] && awk -v a="$2" 'BEGIN { exit !(a < 3e-3) }' && ok || bad "GL shinya vs ref-a: $* $(cat "$tmp/log")"
   grep -q "GPU time" "$tmp/log" && ok || bad "GL methods report their GPU time"
   set -- $(gl "$S" "$tmp/layers.exr" -o "$tmp/gl.exr" $M0 --depth ray --no-png --compare "$tmp/ref.exr" 2>"$tmp/log")
   grep -q "^nbt-scatter: nbt " "$tmp/log" && awk -v a="$2" -v b="$8" 'BEGIN { exit !(a < 0.05 && b < 0.02 && b > -0.02) }' \
@@ -192,7 +192,7 @@ fi
 "$S" "$tmp/blocks.exr" -o "$tmp/hom.exr" $M --layers 0 --no-png --extend 0 2>/dev/null || bad "blocks, homogeneous"
 set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het.exr" $M --density "$tmp/c1.raw" --step 0.05 --no-png \
   --compare "$tmp/hom.exr" 2>"$tmp/log")
-awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid = homogeneous medium: $*"
+[ "$1" = relL1 ] && awk -v a="$2" 'BEGIN { exit !(a < 3e-5) }' && ok || bad "constant grid = homogeneous medium: $*"
 grep -q "halving the step" "$tmp/log" && ok || bad "the march reports its error estimate"
 # the camera rolled 90 degrees (up = +x, view along -z: view x up = (0, -1, 0), non-zero): a constant grid
 # looks the same from any roll, so this too is the homogeneous medium to the march's 3e-5
@@ -206,7 +206,7 @@ rm -f "$tmp/het-roll.exr"
 if "$S" "$tmp/blocks.exr" -o "$tmp/glhom.exr" $M0 --method shinya --no-png 2>/dev/null; then
   set -- $("$S" "$tmp/blocks.exr" -o "$tmp/glhet.exr" $M0 --method shinya --density "$tmp/c1.raw" --step 0.05 --no-png \
     --compare "$tmp/glhom.exr" 2>/dev/null)
-  awk -v a="$2" 'BEGIN { exit !(a < 1e-4) }' && ok || bad "GL shinya: constant grid = homogeneous medium: $*"
+  [ "$1" = relL1 ] && awk -v a="$2" 'BEGIN { exit !(a < 1e-4) }' && ok || bad "GL shinya: constant grid = homogeneous medium: $*"
   rm -f "$tmp/glhom.exr" "$tmp/glhet.exr"
 fi
 set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het2.exr" $M --density "$tmp/c1.raw" --step 0.5 --no-png \
@@ -216,7 +216,7 @@ awk -v a="$2" 'BEGIN { exit !(a > 3e-5 && a < 3e-3) }' && ok || bad "a coarser s
 if "$MK" "$tmp/c1.vdb" grid 1 2>/dev/null; then
   set -- $("$S" "$tmp/blocks.exr" -o "$tmp/het3.exr" $M --density "$tmp/c1.vdb" --step 0.05 --no-png \
     --compare "$tmp/het.exr" 2>/dev/null)
-  awk -v a="$2" 'BEGIN { exit !(a < 1e-6) }' && ok || bad ".vdb grid = raw grid: $*"
+  [ "$1" = relL1 ] && awk -v a="$2" 'BEGIN { exit !(a < 1e-6) }' && ok || bad ".vdb grid = raw grid: $*"
   expect_usage "no such vdb grid" "temperature" "$S" "$tmp/blocks.exr" -o "$tmp/out.exr" $M --density "$tmp/c1.vdb" \
     --grid temperature
 else
