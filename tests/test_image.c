@@ -803,6 +803,8 @@ static exr_result_t overscan_attrs(exr_context_t ctx, int p)
         pv.width = 3, pv.height = 2, pv.rgba = px;
         rv = exr_attr_set_preview(ctx, p, "preview", &pv);
     }
+    if (rv == EXR_ERR_SUCCESS) /* cube (1), not the zero that a byte beside it would read as */
+        rv = exr_attr_set_envmap(ctx, p, "envmap", EXR_ENVMAP_CUBE);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_set_pixel_aspect_ratio(ctx, p, 1.25f);
     if (rv == EXR_ERR_SUCCESS)
@@ -862,6 +864,8 @@ static void check_header(const char *path, const char *what, const exr_attr_box2
     exr_attr_get_string_vector(ctx, 0, "test.sv", &nsv, sv);
     exr_get_pixel_aspect_ratio(ctx, 0, &par);
     exr_get_screen_window_width(ctx, 0, &sww);
+    exr_envmap_t em = EXR_ENVMAP_LATLONG;
+    exr_result_t emr = exr_attr_get_envmap(ctx, 0, "envmap", &em);
     t_true(s && !strcmp(s, owner), "%s: string attribute owner = \"%s\" (got %s)", what, owner, s ? s : "none");
     t_true(iv == -12345 && f == 0.6789f, "%s: int and float attributes copied (%d, %.9g)", what, iv, (double)f);
     t_true(m.m[0] == -0.875f && m.m[6] == -0.125f && m.m[15] == 1.0f, "%s: m44f attribute copied", what);
@@ -870,6 +874,8 @@ static void check_header(const char *path, const char *what, const exr_attr_box2
            "%s: string vector attribute copied", what);
     t_true(par == 1.25f && sww == 0.75f, "%s: pixelAspectRatio and screenWindowWidth kept (%g, %g)", what, (double)par,
            (double)sww);
+    t_true(emr == EXR_ERR_SUCCESS && em == EXR_ENVMAP_CUBE, "%s: envmap attribute kept as cube (%d, read %d)", what,
+           (int)em, (int)emr);
     exr_attr_preview_t pv;
     memset(&pv, 0, sizeof pv);
     int pok = exr_attr_get_preview(ctx, 0, "preview", &pv) == EXR_ERR_SUCCESS && pv.width == 3 && pv.height == 2 && pv.rgba;
@@ -940,9 +946,9 @@ static void test_overscan(void)
     for (size_t i = 0; i < nbt_image_attr_count(im); i++)
         if (!strcmp(nbt_image_attr_name(im, i, &tn), "worldToCamera"))
             has_m44 = !strcmp(tn, "m44f");
-    t_true(nbt_image_attr_count(im) == 10, "overscan: 10 attributes kept (%zu)", nbt_image_attr_count(im));
+    t_true(nbt_image_attr_count(im) == 11, "overscan: 11 attributes kept (%zu)", nbt_image_attr_count(im));
     t_true(has_m44 && nbt_image_attr_string(im, "owner") && !strcmp(nbt_image_attr_string(im, "owner"), "nbt test") &&
-               !nbt_image_attr_string(im, "test.count") && !nbt_image_attr_name(im, 10, NULL),
+               !nbt_image_attr_string(im, "test.count") && !nbt_image_attr_name(im, 11, NULL),
            "overscan: attribute names, types, string value");
 
     /* the caller's layers over the data window: S (3), offscreen (1) */
@@ -1054,7 +1060,7 @@ static void test_overscan(void)
     /* a new image given the input's metadata */
     nbt_image *c = nbt_image_alloc((size_t)w, (size_t)h, 0), *c2 = nbt_image_alloc(3, 3, 0);
     t_true(c && nbt_image_copy_meta(c, im) == NBT_OK && c->x0 == X0 && c->nchannels == 3 &&
-               nbt_image_attr_count(c) == 10 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
+               nbt_image_attr_count(c) == 11 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
            "copy_meta: same size copied, other size refused");
     if (c) {
         memcpy(c->rgb, im->rgb, n * 3 * sizeof(float));

@@ -412,6 +412,33 @@ static void test_all_orders(void)
     world_free(&r);
 }
 
+/* ---- all orders under a uniform sky: a conservative ball of radius R
+ * around the camera lit by sky radiance Ls from every direction is in
+ * equilibrium, L = Ls everywhere inside it (extinction sigma Ls is balanced by
+ * in-scattering sigma Ls for any phase function), so the scattered part seen
+ * at the centre is Ls (1 - exp(-sigma R)) in every direction ---- */
+static void test_sky_ball(void)
+{
+    /* every pixel sky (no patch to hit): each path ends on the sky; a 7 x 3
+     * world off-centre, so the pixel's direction is oblique */
+    world r = world_alloc(7, 3, 0.2, 2.4, 1.3);
+    world_fill(&r, INFINITY, (const float[3]){0, 0, 0});
+    nbt_phase *p = nbt_phase_hg(0.6);
+    const double R = 1.5;
+    nbt_screen_path_medium m = {.sigma_t = {1.0, 0.4, 2.0}, .albedo = {1, 1, 1}, .phase = p, .radius = R,
+                                .sky = {0.5, 1.0, 2.0}};
+    nbt_screen_path_opts o = {.spp = 20000, .seed = 5, .nthreads = 0};
+    double S[3], se[3];
+    path_pixel(&r, &m, &o, 5, 0, S, se);
+    for (int ch = 0; ch < 3; ch++) {
+        double want = m.sky[ch] * -expm1(-m.sigma_t[ch] * R);
+        t_abs(S[ch], want, 4.5 * se[ch], "uniform sky %g on a conservative ball sigma R = %g, channel %d: %.5g +- %.2g vs Ls (1 - exp(-sigma R)) = %.5g",
+              m.sky[ch], m.sigma_t[ch] * R, ch, S[ch], se[ch], want);
+    }
+    nbt_phase_free(p);
+    world_free(&r);
+}
+
 /* ---- 4. a lamp on a stepped wall: with and without next-event estimation;
  * determinism over threads and seeds ---- */
 static world lamp_scene(void)
@@ -555,6 +582,7 @@ int main(void)
     test_first_lamp();
     test_first_two_lamps();
     test_all_orders();
+    test_sky_ball();
     test_nee();
     test_noise();
     return t_done();
