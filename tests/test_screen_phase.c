@@ -279,18 +279,26 @@ static double cubic_logm(double a, double tau)
     return -1.0 + 0.3 * x - 0.05 * x * x + 0.004 * x * x * x + 0.5 * y - 0.08 * y * y + 0.01 * y * y * y;
 }
 
+/* every node of both geometries of a one-g model: one erfc atom (slot 12) of
+ * mass exp(logm(albedo, tau)) */
+static void fill_one_atom(nbt_screen_model *m, const double *alb, size_t na, const double *tau, size_t nt,
+                          double (*logm)(double, double))
+{
+    for (int geo = 0; m && geo < 2; geo++)
+        for (size_t ia = 0; ia < na; ia++)
+            for (size_t it = 0; it < nt; it++) {
+                nbt_screen_shape s;
+                memset(&s, 0, sizeof s);
+                s.erfc[12] = exp(logm(alb[ia], tau[it]));
+                nbt_screen_model_set(m, (nbt_screen_geometry)geo, 0, ia, it, &s);
+            }
+}
+
 static void test_model_cubic(void)
 {
     const double g[] = {0.9}, alb[] = {0.5, 0.8, 0.95, 0.99, 0.999}, tau[] = {0.25, 1.0, 4.0, 16.0};
     nbt_screen_model *m = nbt_screen_model_alloc(NULL, 1, g, 5, alb, 4, tau);
-    for (int geo = 0; geo < 2; geo++)
-        for (size_t ia = 0; ia < 5; ia++)
-            for (size_t it = 0; it < 4; it++) {
-                nbt_screen_shape s;
-                memset(&s, 0, sizeof s);
-                s.erfc[12] = exp(cubic_logm(alb[ia], tau[it]));
-                nbt_screen_model_set(m, (nbt_screen_geometry)geo, 0, ia, it, &s);
-            }
+    fill_one_atom(m, alb, 5, tau, 4, cubic_logm);
     nbt_phase *p = nbt_phase_hg(0.9);
     /* asymmetric points: an inner interval (cubic on four nodes) and an end interval (quadratic on three) */
     const double pts[][2] = {{0.9, 2.5}, {0.97, 0.4}, {0.6, 9.0}, {0.995, 11.0}};
@@ -320,14 +328,7 @@ static void test_model_three_nodes(void)
 {
     const double g[] = {0.9}, alb[] = {0.5, 0.8, 0.95}, tau[] = {0.25, 1.0, 4.0};
     nbt_screen_model *m = nbt_screen_model_alloc(NULL, 1, g, 3, alb, 3, tau);
-    for (int geo = 0; m && geo < 2; geo++)
-        for (size_t ia = 0; ia < 3; ia++)
-            for (size_t it = 0; it < 3; it++) {
-                nbt_screen_shape s;
-                memset(&s, 0, sizeof s);
-                s.erfc[12] = exp(quad_logm(alb[ia], tau[it]));
-                nbt_screen_model_set(m, (nbt_screen_geometry)geo, 0, ia, it, &s);
-            }
+    fill_one_atom(m, alb, 3, tau, 3, quad_logm);
     nbt_phase *p = nbt_phase_hg(0.9);
     /* asymmetric points in both intervals of each axis; linear there would miss by
      * 0.07 (x - x0)(x1 - x) + 0.09 (y - y0)(y1 - y), ~5e-2 in the log at the first point */
