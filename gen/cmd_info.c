@@ -50,7 +50,7 @@ int cmd_info(int argc, char **argv)
     int has_c = 0, is_asinh = 0;
     for (int a = 0; a < 2; a++) {
         nbt_axis_map m = t->axis[a].map;
-        int withc = m == NBT_AXIS_LOG1P || m == NBT_AXIS_LOG1P_CBRT || m == NBT_AXIS_ASINH || m == NBT_AXIS_ENDS;
+        int withc = axis_map_has_c(m);
         has_c |= withc;
         is_asinh |= m == NBT_AXIS_ASINH || m == NBT_AXIS_ENDS;
         printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(m), withc ? "(c)" : "",

@@ -60,10 +60,14 @@ nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_l
     return st;
 }
 
+int axis_map_has_c(nbt_axis_map m)
+{
+    return m == NBT_AXIS_LOG1P || m == NBT_AXIS_LOG1P_CBRT || m == NBT_AXIS_ASINH || m == NBT_AXIS_ENDS;
+}
+
 static void axis_desc(const nbt_axis *a, const char *name, char *buf, size_t n)
 {
-    if (a->map == NBT_AXIS_LOG1P || a->map == NBT_AXIS_LOG1P_CBRT || a->map == NBT_AXIS_ASINH ||
-        a->map == NBT_AXIS_ENDS)
+    if (axis_map_has_c(a->map))
         snprintf(buf, n, "%s:%s(c=%g)[%g,%g]", name, nbt_axis_map_name(a->map), a->c, a->lo, a->hi);
     else
         snprintf(buf, n, "%s:%s[%g,%g]", name, nbt_axis_map_name(a->map), a->lo, a->hi);

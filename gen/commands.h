@@ -48,6 +48,10 @@ double plan_announce(const nbt_plan *plan, progress *p);
 nbt_status build_set(const nbt_plan *plan, size_t i, progress *p, double *pred_left, nbt_tableset *ts, char *err,
                      size_t errlen);
 
+/* Whether an axis map has a strength c (log1p, log1p_cbrt, asinh, ends): the
+ * tools print it beside the map's name. */
+int axis_map_has_c(nbt_axis_map m);
+
 /* The planner's Legendre budget as two '#' lines on stdout. */
 void print_legendre(const nbt_plan_legendre *l, double gmax);
 

@@ -70,6 +70,18 @@ static nbt_status build_slices(const nbt_table *t, const double *g, size_t m, co
 
 static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o, nbt__jcache *gc);
 
+/* e added to every recorded bound of a one-channel g-sliced table: per g
+ * cell, per (T row, g cell) and per (T row, theta band, g cell) */
+static void add_to_bounds(nbt_table *t, double e)
+{
+    for (size_t m = 0; m + 1 < t->axis[2].n; m++)
+        t->cell_err[m] += e;
+    for (size_t k = 0; t->row_err && k < nbt_table_row_err_len(t); k++)
+        t->row_err[k] += e;
+    for (size_t k = 0; t->theta_err && k < nbt_table_theta_err_len(t); k++)
+        t->theta_err[k] += e;
+}
+
 static nbt_table_form default_form(const nbt_table *t)
 {
     return t->kind == NBT_TABLE_H ? NBT_FORM_TAIL : t->form == NBT_FORM_LOG_ET ? NBT_FORM_LOG_ET : NBT_FORM_PLAIN;
@@ -221,20 +233,11 @@ static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_o
          * in-slice errors of its slices there; a row's is its bands' max */
         for (size_t k = 0; rows && k < nb * nr; k++)
             rerr[k] = grow[k] + wsum * rerr[k];
-        for (size_t i = 0; rows && i < nr; i++) {
-            double r = 0;
-            for (size_t b = 0; b < nb; b++)
-                r = fmax(r, rerr[b * nr + i]);
-            t->row_err[m * nr + i] = r;
-        }
+        if (rows)
+            nbt__band_max(rerr, nb, nr, t->row_err + m * nr);
     }
-    for (size_t m = 0; m + 1 < ng && st == NBT_OK && o->measure_error; m++) {
-        t->cell_err[m] += qerr;
-        for (size_t i = 0; rows && i < nr; i++)
-            t->row_err[m * nr + i] += qerr;
-        for (size_t k = 0; rows && k < nb * nr; k++)
-            t->theta_err[m * nb * nr + k] += qerr;
-    }
+    if (st == NBT_OK && o->measure_error)
+        add_to_bounds(t, qerr);
     if (st != NBT_OK || !o->measure_error) {
         free(t->row_err);
         free(t->theta_err);
@@ -419,12 +422,7 @@ static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jc
          * lookup's weight sum, is an error in ln J, i.e. relative */
         nbt_table *t = *out;
         double e = nbt__lookup_weight_sum(t) * nbt__table_round_half_change(t, 0);
-        for (size_t m = 0; m + 1 < t->axis[2].n; m++)
-            t->cell_err[m] += e;
-        for (size_t k = 0; t->row_err && k < nbt_table_row_err_len(t); k++)
-            t->row_err[k] += e;
-        for (size_t k = 0; t->theta_err && k < nbt_table_theta_err_len(t); k++)
-            t->theta_err[k] += e;
+        add_to_bounds(t, e);
         t->max_err[0] += e;
     } else if (r->half)
         nbt_table_round_half(*out);

@@ -49,6 +49,11 @@ static inline double nbt__lookup_weight_sum(const nbt_table *t)
 /* nbt_table_round_half, returning the largest change of channel c. */
 double nbt__table_round_half_change(nbt_table *t, size_t c);
 
+/* The error per row from the error per (band, row): rows[k] = max over
+ * b < nb of bands[b * nk + k], k < nk (the layout of theta_err within a g
+ * cell, whose rows are row_err's). */
+void nbt__band_max(const double *bands, size_t nb, size_t nk, double *rows);
+
 /* Texel position p = s (n - 1) of x on axis a, split into the cell i0
  * (clamped to [0, n - 2]) and the weight f = p - i0, as a sampler does. */
 void nbt__axis_cell(const nbt_axis *a, double x, size_t *i0, double *f);

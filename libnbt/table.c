@@ -249,14 +249,30 @@ size_t nbt_table_row_err_len(const nbt_table *t)
     return (t->axis[2].n > 1 ? t->axis[2].n - 1 : 1) * (t->axis[0].n - 1) * t->nch;
 }
 
+/* n values, all NaN (not recorded), or NULL */
+static double *nan_filled(size_t n)
+{
+    double *r = malloc(n * sizeof *r);
+    for (size_t i = 0; r && i < n; i++)
+        r[i] = NAN;
+    return r;
+}
+
+void nbt__band_max(const double *bands, size_t nb, size_t nk, double *rows)
+{
+    for (size_t k = 0; k < nk; k++) {
+        double r = 0;
+        for (size_t b = 0; b < nb; b++)
+            r = fmax(r, bands[b * nk + k]);
+        rows[k] = r;
+    }
+}
+
 nbt_status nbt_table_row_err_alloc(nbt_table *t)
 {
-    size_t n = nbt_table_row_err_len(t);
-    double *r = malloc(n * sizeof *r);
+    double *r = nan_filled(nbt_table_row_err_len(t));
     if (!r)
         return NBT_ENOMEM;
-    for (size_t i = 0; i < n; i++)
-        r[i] = NAN;
     free(t->row_err);
     t->row_err = r;
     return NBT_OK;
@@ -294,15 +310,10 @@ nbt_status nbt_table_theta_err_alloc(nbt_table *t, size_t cells)
     free(t->theta_err);
     t->theta_err = NULL;
     t->theta_cells = cells;
-    size_t n = nbt_table_theta_err_len(t);
-    double *r = malloc(n * sizeof *r);
-    if (!r) {
+    if (!(t->theta_err = nan_filled(nbt_table_theta_err_len(t)))) {
         t->theta_cells = 0;
         return NBT_ENOMEM;
     }
-    for (size_t i = 0; i < n; i++)
-        r[i] = NAN;
-    t->theta_err = r;
     return NBT_OK;
 }
 
@@ -687,11 +698,10 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
             t->max_err[c] = e[c] + qerr;
         for (size_t k = 0; t->theta_err && k < (nx - 1) * nb * nc; k++)
             t->theta_err[k] = rw[k] + qerr;
-        for (size_t k = 0; t->row_err && k < (nx - 1) * nc; k++) {
-            double r = 0;
-            for (size_t b = 0; b < nb; b++)
-                r = fmax(r, rw[b * (nx - 1) * nc + k]);
-            t->row_err[k] = r + qerr;
+        if (t->row_err) {
+            nbt__band_max(rw, nb, (nx - 1) * nc, t->row_err);
+            for (size_t k = 0; k < (nx - 1) * nc; k++)
+                t->row_err[k] += qerr;
         }
         free(rw);
         free(DT);
