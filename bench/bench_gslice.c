@@ -406,10 +406,16 @@ int main(int argc, char **argv)
         double sa[2], ss[2];
         char err[256];
         for (int i = 0; i < 2; i++) {
-            nbt_gslice_build(&rq[i], 2, &ts[i], &sa[i], err, sizeof err);
+            if (nbt_gslice_build(&rq[i], 2, &ts[i], &sa[i], err, sizeof err) != NBT_OK) {
+                fprintf(stderr, "bench_gslice: %s\n", err);
+                return 1;
+            }
             nbt_table_free(ts[i]);
         }
-        nbt_gslice_build_set(rq, 2, 2, ts, ss, err, sizeof err);
+        if (nbt_gslice_build_set(rq, 2, 2, ts, ss, err, sizeof err) != NBT_OK) {
+            fprintf(stderr, "bench_gslice: %s\n", err);
+            return 1;
+        }
         printf("planned J^1 + J^20 at 1e-3 (%zux%zux%zu): alone %.2f + %.2f = %.2f s; as a set %.2f + %.2f = %.2f s\n",
                ts[0]->axis[0].n, ts[0]->axis[1].n, ts[0]->axis[2].n, sa[0], sa[1], sa[0] + sa[1], ss[0], ss[1],
                ss[0] + ss[1]);

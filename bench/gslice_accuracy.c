@@ -7,13 +7,14 @@
  * the nearest slice, which leaves only the table's (u, v) error: the
  * difference between the passes is the interpolation in g (quadratic).
  *
- * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP [misses]]]]]
+ * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP [misses|- [VMAP[:c]]]]]]]
  *   N_UV nodes on u (log1p_cbrt, c = 10, [0, 10]) and v (cos), default 257;
  *   NUxNV (65x257, say) sets the two apart;
  *   N_G slices on g in [-0.95, 0.95], default 33; RAYS default 2000;
  *   MAP the g mapping (atanh, linear, sqrt, cos, ...; default atanh);
  *   misses: print every ray above 1e-3 (CPU lookup, g anywhere) with its
- *   table coordinates (u, theta_0, theta_d, g).
+ *   table coordinates (u, theta_0, theta_d, g) ('-': do not);
+ *   VMAP[:c] the v mapping and its strength (ends:16, the planner's), default cos.
  * Rays: kappa_t = 0.2, kappa_s = 0.18, d_sv log-uniform in [0.5, 40], gamma
  * uniform in [0.02, pi - 0.02], d_vp infinite for 30%, else d_sv times a
  * log-uniform factor in [0.05, 3]; g uniform in [-0.95, 0.95] for half the
