@@ -46,9 +46,9 @@ mkdir "$tmp/tables"
 "$tmp/build/plan_example" "$tmp/tables" >"$tmp/out" 2>"$tmp/err" && ok || bad "plan_example failed: $(cat "$tmp/err")"
 target=$(sed -n 's/.*per-table target \([0-9.e+-]*\) .*/\1/p' "$tmp/out")
 for s in H J1; do
-  line=$(grep "^$s " "$tmp/out")
-  [ -n "$line" ] || { bad "plan_example printed no $s set"; continue; }
-  set -- $line
+  # set, packs, size, mapping, v mapping, target, amplification, |, measured error, ratio
+  fwords "$s:10" "$tmp/out"; [ -n "$w" ] || continue
+  set -- $w
   awk -v e="$9" -v t="$target" 'BEGIN { exit !(e > 0 && e <= t) }' && ok || bad "$s: measured $9 vs target $target"
   ls "$tmp/tables"/${s}_k0-*.exr >/dev/null 2>&1 && ok || bad "$s: no table file"
 done

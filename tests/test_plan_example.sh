@@ -7,9 +7,9 @@
 # one line per set (H and J1), each with a measured error below the target
 target=$(sed -n 's/.*per-table target \([0-9.e+-]*\) .*/\1/p' "$tmp/out")
 for s in H J1; do
-  line=$(grep "^$s " "$tmp/out")
-  [ -n "$line" ] || { bad "plan_example printed no $s set"; continue; }
-  set -- $line
+  # set, packs, size, mapping, v mapping, target, amplification, |, measured error, ratio
+  fwords "$s:10" "$tmp/out"; [ -n "$w" ] || continue
+  set -- $w
   size=$3; err=$9
   awk -v e="$err" -v t="$target" 'BEGIN { exit !(e > 0 && e <= t) }' && ok || bad "$s: measured $err vs target $target"
   # the file holds what the plan says: size and kind
