@@ -156,6 +156,37 @@ else
   FILENAME == fit { n++; A[$1 + 0] = $2; B[$1 + 0] = $3; R[$1 + 0] = $7; next }
   { z = $1 + 0; w = 3.14159265358979 * ($2 + $3); m = mean(A[z], B[z], $2, $3); num[z] += w * w * (m - $4) ^ 2; den[z] += w * w * $4 * $4 }
   END { for (z in R) { r = sqrt(num[z] / den[z]); d = r - R[z]; if (d * d > (1e-4 * R[z]) ^ 2) bad = 1 }; exit bad || n != 4 }' "$tmp/kfit.csv" "$tmp/k1.csv" && ok || bad "kernel CSV: rms_after recomputed from alpha, beta and the counts"
+  # --weight rms: the standard errors are the sandwich of doc/fit.md with the RMS metric's fixed weights
+  # w_k = 2 pi r_c (their scale cancels): Cov = H^-1 [sum w^4 se_k^2 g g^T] H^-1, H = sum w^2 g g^T, g = dm_k/d(alpha,
+  # beta). Recomputed here from the counts and the fitted alpha, beta by another route: m_k by Simpson (64 panels)
+  # over the annulus, dm/dbeta by a central difference (step 1e-5 beta: ~1e-10 relative), erfc from its series
+  # and continued fraction; measured agreement 1e-10, so 1e-6. (A bin weighted as lo + the next bin's hi: 12-24% off.)
+  "$NBT_FIT" kernel "$tmp/k1.csv" --albedo 0.7 --sigma-t 1 --B 0.0685 --weight rms -o "$tmp/krw.csv" 2>"$tmp/krw.err" ||
+    bad "kernel --weight rms: $(cat "$tmp/krw.err")"
+  awk -v fit="$tmp/krw.csv" '
+  function erfc(y,   t, s, K, n) { # the series of erf below 2, the continued fraction of erfc above
+    if (y < 2) { t = y; s = y; for (n = 1; n < 60; n++) { t *= -y * y / n; s += t / (2 * n + 1) }; return 1 - 2 / sqrt(3.141592653589793) * s }
+    K = y; for (n = 80; n >= 1; n--) K = y + (n / 2) / K; return exp(-y * y) / (sqrt(3.141592653589793) * K) }
+  function G(x) { return 0.5 * erfc(x / sqrt(2)) }
+  function m(a, b, lo, hi,   h, s, i) { h = (hi - lo) / 64; s = G(lo / b) + G(hi / b)
+    for (i = 1; i < 64; i++) s += (i % 2 ? 4 : 2) * G((lo + i * h) / b)
+    return 2 * a * s * h / 3 / (hi * hi - lo * lo) }
+  BEGIN { FS = "," }
+  FNR == 1 { next }
+  FILENAME == fit { if ($NF == "ok" || $NF == "misfit") { A[$1 + 0] = $2; B[$1 + 0] = $3; SA[$1 + 0] = $4; SB[$1 + 0] = $5; n++ }; next }
+  ($1 + 0) in A { z = $1 + 0; a = A[z]; b = B[z]; if (!($5 > 0)) bad = 1
+    w = 3.14159265358979 * ($2 + $3); ga = m(a, b, $2, $3) / a; db = 1e-5 * b
+    gb = (m(a, b + db, $2, $3) - m(a, b - db, $2, $3)) / (2 * db)
+    h11[z] += w * w * ga * ga; h12[z] += w * w * ga * gb; h22[z] += w * w * gb * gb
+    v = w ^ 4 * $5 * $5; b11[z] += v * ga * ga; b12[z] += v * ga * gb; b22[z] += v * gb * gb }
+  END { for (z in A) { d = h11[z] * h22[z] - h12[z] * h12[z]; i11 = h22[z] / d; i12 = -h12[z] / d; i22 = h11[z] / d
+      c11 = i11 * (b11[z] * i11 + b12[z] * i12) + i12 * (b12[z] * i11 + b22[z] * i12)
+      c22 = i12 * (b11[z] * i12 + b12[z] * i22) + i22 * (b12[z] * i12 + b22[z] * i22)
+      ea = sqrt(c11) / SA[z] - 1; eb = sqrt(c22) / SB[z] - 1
+      printf "z %g: alpha_stderr %.9g (sandwich %.9g), beta_stderr %.9g (%.9g)\n", z, SA[z], sqrt(c11), SB[z], sqrt(c22)
+      if (!(ea * ea <= 1e-12 && eb * eb <= 1e-12)) bad = 1 }
+    exit bad || n != 4 }' "$tmp/krw.csv" "$tmp/k1.csv" >"$tmp/krw.chk" && ok ||
+    bad "kernel --weight rms: standard errors = the sandwich with weights 2 pi r: $(cat "$tmp/krw.chk" "$tmp/krw.csv")"
   "$NBT_FIT" kernel "$tmp/k2.exr" --shape erfc+gauss -o "$tmp/kg.csv" 2>"$tmp/kgrms" && ok || bad "erfc+gauss on EXR input (medium from metadata): $(cat "$tmp/kgrms")"
   fwords RMS:13 "$tmp/kgrms"; set -- $w
   [ "$3 $5" = "moment fitted" ] && awk -v a="$6" -v b="$4" 'BEGIN { exit !(a < 0.5 * b && a < 0.06) }' && ok || bad "erfc+gauss within 6%: $(cat "$tmp/kgrms")"
