@@ -20,7 +20,10 @@
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
  * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15.
  * mkexr IN.exr noise B and mkexr IN.exr zsq OTHER.exr check a path-traced
- * output's Sse layer (below). Any other name: the grey render alone. */
+ * output's Sse layer (below). mkexr OUT.exr halo SUM: a frame with a pixel of R + G + B = SUM against
+ * --compare's lamp threshold; capband, capband-ext: a frame for nbt-scatter's mirrored-lamp cap, and
+ * the same frame with that continuation written out as overscan (both below).
+ * Any other name: the grey render alone. */
 #include <config.h>
 #include <math.h>
 #include <stdio.h>
@@ -284,6 +287,63 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s\n", err);
         nbt_image_free(o);
         nbt_image_free(in);
+        return rc;
+    }
+    if (argc == 4 && !strcmp(argv[2], "halo")) {
+        /* 16x12 at depth 4: grey 0.5 in rows 0..7, 2.0 in rows 8..11 (the frame's bottom third), and one pixel
+         * (5, 3) of R = SUM (G = B = 0). --compare's lamps are pixels whose R + G + B exceeds 10 x the frame's
+         * mean of R + G + B, (190.5 + SUM + 384) / 192 here: SUM above 31.57 is a lamp, SUM below is not */
+        nbt_image *im = nbt_image_alloc(16, 12, 1);
+        if (!im)
+            return 1;
+        for (size_t i = 0; i < 16 * 12; i++) {
+            im->rgb[3 * i] = im->rgb[3 * i + 1] = im->rgb[3 * i + 2] = i < 8 * 16 ? 0.5f : 2.0f;
+            im->z[i] = 4.0f;
+        }
+        im->rgb[3 * (3 * 16 + 5)] = (float)atof(argv[3]);
+        im->rgb[3 * (3 * 16 + 5) + 1] = im->rgb[3 * (3 * 16 + 5) + 2] = 0.0f;
+        int rc = nbt_image_write_exr_ex(im, argv[1], NULL, err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(im);
+        return rc;
+    }
+    if (argc == 3 && (!strcmp(argv[2], "capband") || !strcmp(argv[2], "capband-ext"))) {
+        /* capband: 40x30 at depth 4 whose 8-pixel border band (864 pixels) has R + G + B = 1 in its left 8
+         * columns (R = 1) and right 8 columns (G = 1), 480 pixels, and 0.3 (grey 0.1, as inside) in the other 384:
+         * its median is 1, so nbt-scatter's cap on the mirrored border (4 x the band's median of R + G + B) is 4.
+         * Two lamps on the left edge: (0, 5) with R = 3, under the cap, and (0, 20) with R = 100, over it.
+         * capband-ext: the same frame as a render with 10 px of overscan per side (--extend 0.25 of 40) that
+         * holds the continuation explicitly: the mirror image (the edge pixel repeated: -1 -> 0, 40 -> 39),
+         * with the mirrored R = 100 lamp at the cap, R = 4 (R = 3 mirrored as it is; P = 10 reaches the mirror
+         * images of both lamps across the left edge, of (0, 20) across the bottom edge and the corner too, and of
+         * (0, 5) across the top edge). */
+        int ext = argv[2][7] == '-', P = ext ? 10 : 0, W = 40 + 2 * P, H = 30 + 2 * P;
+        nbt_image *im = nbt_image_alloc((size_t)W, (size_t)H, 1);
+        if (!im)
+            return 1;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                int sx = x - P, sy = y - P, cx = sx < 0 ? -1 - sx : sx >= 40 ? 79 - sx : sx,
+                    cy = sy < 0 ? -1 - sy : sy >= 30 ? 59 - sy : sy;
+                float *c = im->rgb + 3 * ((size_t)y * (size_t)W + (size_t)x);
+                c[0] = c[1] = c[2] = 0.1f;
+                if (cx < 8)
+                    c[0] = 1.0f, c[1] = c[2] = 0.0f;
+                else if (cx >= 32)
+                    c[1] = 1.0f, c[0] = c[2] = 0.0f;
+                if (cx == 0 && cy == 5)
+                    c[0] = 3.0f;
+                if (cx == 0 && cy == 20) /* mirrored across the left and bottom edges and the corner */
+                    c[0] = sx < 0 || sy >= 30 ? 4.0f : 100.0f;
+                im->z[(size_t)y * (size_t)W + (size_t)x] = 4.0f;
+            }
+        im->x0 = -P, im->y0 = -P;
+        im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 39, im->display.max_y = 29;
+        int rc = nbt_image_write_exr_ex(im, argv[1], NULL, err, sizeof err) != NBT_OK;
+        if (rc)
+            fprintf(stderr, "%s\n", err);
+        nbt_image_free(im);
         return rc;
     }
     if (argc != 3)

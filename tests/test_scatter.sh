@@ -100,6 +100,32 @@ words relL1:14 "$S" "$tmp/lampsv.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-pn
 h2=${w##* }
 awk -v a="$h0" -v b="$h2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 0.1 && d <= 1e-5 * a) }' && ok ||
   bad "--compare halo of the lamps scene $h0 = of it upside down $h2"
+# --compare's lamps are pixels whose R + G + B exceeds 10 x the frame's mean R + G + B (30 x the mean of all
+# RGB values). mkexr halo SUM: grey 0.5 over the top two thirds, 2.0 over the bottom third, one pixel of
+# R + G + B = SUM, so the threshold is (190.5 + SUM + 384) / 19.2: SUM 30 lies 5% under it (no lamp: halo 0),
+# SUM 33 4% over it, and its 12 px reach then covers every 4x4 bin of the 16x12 frame (halo = binned4, both
+# printed to 6 digits). A mean over the top two thirds alone would make SUM > 10.5 a lamp.
+for s in 30 33; do
+  "$MK" "$tmp/h$s.exr" halo $s && "$S" "$tmp/h$s.exr" -o "$tmp/h$s-a.exr" $M0 --method ref-a --no-png 2>/dev/null ||
+    bad "halo scene $s"
+  words relL1:14 "$S" "$tmp/h$s.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/h$s-a.exr" 2>/dev/null
+  set -- $w; eval "h$s=\${14}; b$s=\${12}"
+done
+[ "$h30" = 0 ] && awk -v h="$h33" -v b="$b33" 'BEGIN { d = h - b; if (d < 0) d = -d; exit !(b > 0.01 && d <= 1e-5 * b) }' && ok ||
+  bad "--compare's lamp threshold 10 x the frame's mean: halo $h30 at R+G+B = 30 (want 0), $h33 at 33 (want binned4 $b33)"
+# the mirrored-lamp cap: beyond the frame the border continues as its mirror image, each pixel capped at 4 x the
+# median R + G + B of the 8-pixel border band. mkexr capband: a 40x30 frame whose band has median 1 (cap 4) with a
+# lamp of 3 and one of 100 on the left edge; capband-ext: the same frame with the continuation written out as
+# 10 px of overscan (the lamps' mirror images at 3 and at the cap, 4). --extend 0.25 (10 px) on the first and
+# --extend 0 on the second see the same pixels, so S agrees to float rounding (measured 2e-8; 1e-6 allowed;
+# a band median read from the wrong pixels, 0.3, caps both lamps at 1.2: 2.7e-3)
+"$MK" "$tmp/cb.exr" capband && "$MK" "$tmp/cbx.exr" capband-ext &&
+  "$S" "$tmp/cb.exr" -o "$tmp/cb-a.exr" $M0 --method ref-a --depth ray --extend 0.25 --no-png 2>/dev/null || bad "capband run"
+words relL1:14 "$S" "$tmp/cbx.exr" -o "$tmp/x.exr" $M0 --method ref-a --depth ray --extend 0 --no-png --compare "$tmp/cb-a.exr" \
+  2>/dev/null
+set -- $w
+awk -v a="$2" -v m="${10}" 'BEGIN { exit !(a <= 1e-6 && m <= 1e-6) }' && ok ||
+  bad "mirrored border, lamps capped at 4 x the band's median = the continuation as overscan: $*"
 # a reference without S.G falls back to its RGB - T x input for all three channels: the same relL1
 # as with its S layer, but for RGB's float rounding (2^-24 of RGB, summed: below 1e-5 here; measured 1e-6)
 "$MK" "$tmp/lamp0-noG.exr" rename "$tmp/lamp0-a.exr" S.G X.G || bad "mkexr rename"
