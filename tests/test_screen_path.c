@@ -439,6 +439,72 @@ static void test_sky_ball(void)
     world_free(&r);
 }
 
+/* ---- patches nearer than a collision: a world of black patches at Z 1 with a 2 x 2 window onto black
+ * patches at Z 2.5, sky radiance beyond a ball of radius 4, isotropic scattering. The first order at a
+ * window pixel: collisions between the two depths receive the sky from behind (towards the camera) only
+ * through the window or past the world's edge, the near patches' backs block the rest. Reference: a
+ * brute-force Monte Carlo of the same integral (collision by the truncated exponential, direction uniform
+ * on the sphere, every patch tested for each direction, sky radiance attenuated to the ball's edge) ---- */
+static void brute_first_sky(const world *r, double sig, double alb, double R, size_t px, size_t py, long n,
+                            double *mean, double *se)
+{
+    const nbt_screen_world *W = &r->W;
+    double s1 = 0, s2 = 0;
+    for (long k = 0; k < n; k++) {
+        double u = (px + t_uniform() - W->cx) * W->dtheta, v = (W->cy - py - t_uniform()) * W->dtheta;
+        double nr = sqrt(1 + u * u + v * v), d[3] = {u / nr, v / nr, 1 / nr};
+        float Zp = r->Z[py * W->w + px];
+        double tb = fmin(isfinite(Zp) ? Zp * nr : INFINITY, R), F = -expm1(-sig * tb);
+        double t = -log1p(-t_uniform() * F) / sig, x[3] = {t * d[0], t * d[1], t * d[2]};
+        double wz = 2 * t_uniform() - 1, ph = 2 * M_PI * t_uniform(), ws = sqrt(fmax(0, 1 - wz * wz));
+        double w[3] = {ws * cos(ph), ws * sin(ph), wz};
+        int blocked = 0;
+        for (size_t j = 0; j < W->w * W->h && !blocked && wz != 0; j++) {
+            double Z = r->Z[j], tau = (Z - x[2]) / wz;
+            if (!isfinite(Z) || !(tau > 0))
+                continue;
+            double pu = (x[0] + tau * w[0]) / Z, pv = (x[1] + tau * w[1]) / Z;
+            size_t ix = j % W->w, iy = j / W->w;
+            blocked = pu >= (ix - W->cx) * W->dtheta && pu <= (ix + 1 - W->cx) * W->dtheta &&
+                      pv >= (W->cy - iy - 1) * W->dtheta && pv <= (W->cy - iy) * W->dtheta;
+        }
+        double b = x[0] * w[0] + x[1] * w[1] + x[2] * w[2], c = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] - R * R;
+        double f = blocked ? 0 : alb * F * exp(-sig * (-b + sqrt(b * b - c)));
+        s1 += f;
+        s2 += f * f;
+    }
+    *mean = s1 / n;
+    *se = sqrt(fmax(0, s2 / n - *mean * *mean) / (n - 1));
+}
+
+static void test_near_backs(void)
+{
+    world r = world_alloc(12, 8, 0.25, 5.7, 3.8);
+    world_fill(&r, 1.0f, (const float[3]){0, 0, 0});
+    for (size_t y = 3; y <= 4; y++)
+        for (size_t x = 5; x <= 6; x++)
+            r.Z[y * 12 + x] = 2.5f;
+    nbt_phase *p = nbt_phase_hg(0.0);
+    const double sig = 0.5, alb = 0.9, R = 4.0;
+    nbt_screen_path_medium m = {.sigma_t = {sig, sig, sig}, .albedo = {alb, alb, alb}, .phase = p, .radius = R,
+                                .sky = {1.0, 2.0, 0.5}};
+    nbt_screen_path_opts o = {.spp = 20000, .seed = 13, .nthreads = 0, .max_order = 1};
+    const size_t px[2][2] = {{5, 3}, {6, 4}};
+    for (int k = 0; k < 2; k++) {
+        double S[3], se[3], ref, rse;
+        path_pixel(&r, &m, &o, px[k][0], px[k][1], S, se);
+        brute_first_sky(&r, sig, alb, R, px[k][0], px[k][1], 1000000, &ref, &rse);
+        for (int ch = 0; ch < 3; ch++) {
+            double want = m.sky[ch] * ref, wse = m.sky[ch] * rse;
+            t_abs(S[ch], want, 4.5 * sqrt(se[ch] * se[ch] + wse * wse),
+                  "first order behind near patches, pixel (%zu, %zu), channel %d: %.5g +- %.2g vs brute force %.5g +- %.2g",
+                  px[k][0], px[k][1], ch, S[ch], se[ch], want, wse);
+        }
+    }
+    nbt_phase_free(p);
+    world_free(&r);
+}
+
 /* ---- 4. a lamp on a stepped wall: with and without next-event estimation;
  * determinism over threads and seeds ---- */
 static world lamp_scene(void)
@@ -583,6 +649,7 @@ int main(void)
     test_first_two_lamps();
     test_all_orders();
     test_sky_ball();
+    test_near_backs();
     test_nee();
     test_noise();
     return t_done();
