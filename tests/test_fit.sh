@@ -198,6 +198,16 @@ else
   "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 23 -o "$tmp/k3.exr" >/dev/null 2>&1
   "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 300000 --z-planes 1:6:4 --r-bins 12 --seed 24 -o "$tmp/k4.exr" >/dev/null 2>&1
   "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/corr.txt" -o "$tmp/kc.csv" 2>"$tmp/kcerr" && [ -s "$tmp/corr.txt" ] && ok || bad "--correction"
+  # a correction file that cannot be written once the fit is done (the start's check passed): exit status 1
+  # (nbt-fit.1), one message naming it, nothing left. A file size limit of 0 (ulimit -f, SIGXFSZ ignored) makes
+  # the write fail with EFBIG; stdout and stderr go to a pipe, which the limit does not touch
+  out=$(sh -c 'trap "" XFSZ; ulimit -f 0 || exit 99; "$@" 2>&1 >/dev/null; echo "exit $?"' sh \
+    "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --correction "$tmp/cfull.txt")
+  if [ "$out" = "exit 99" ]; then echo "NOTE: ulimit -f 0 refused: the late --correction write failure is not checked"
+  else
+    [ "$(echo "$out" | tail -n 1)" = "exit 1" ] && echo "$out" | grep -q "^nbt-fit: cannot write '$tmp/cfull.txt': " &&
+      [ -z "$(ls "$tmp" | grep cfull)" ] && ok || bad "--correction write failing after the start: $out"
+  fi
   # --apply on the fit's own two runs prints the fit's RMS lines: each run's name with its numbers
   "$NBT_FIT" kernel "$tmp/k3.exr" "$tmp/k4.exr" --apply "$tmp/corr.txt" 2>/dev/null | grep '^RMS' >"$tmp/app2" &&
     [ "$(wc -l <"$tmp/app2")" -eq 2 ] && grep '^RMS .* corrected ' "$tmp/kcerr" | cmp -s - "$tmp/app2" && ok ||
