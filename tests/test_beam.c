@@ -1,6 +1,10 @@
 /* tests/test_beam.c: narrow-beam moments (closed form vs line integral vs
  * independent integrals), kernels reproduce their moments, edges, bad input. */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
 
@@ -104,6 +108,77 @@ static void test_kernel_corrected(void)
  * branches: z = 2.385 (a z = 2.4, the closed form) and z = 0.2 (a z = 0.2,
  * the library's series; here the closed form loses about 3 digits to
  * cancellation, so 1e-10). */
+/* text into a fresh temporary file; path gets its name */
+static void put_text(char *path, const char *text)
+{
+    strcpy(path, "/tmp/nbt-test-beam.XXXXXX");
+    int fd = mkstemp(path);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    t_true(f != NULL, "temporary file %s", path);
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+/* the two readers of text files against the numbers written in them: density profiles (three layers of
+ * unequal thickness, a comment, a blank line, CRLF, an exponent) and kernel corrections (7 different
+ * numbers per line, alpha before beta); the documented refusals name the file's line */
+static void test_readers(void)
+{
+    char path[64], err[512];
+    double *z = NULL, *rho = NULL;
+    size_t n = 0;
+    put_text(path, "# z rho\n\n0 1.5   # top\n0.75 0\r\n  2.25 3e-1\n");
+    nbt_status st = nbt_density_read(path, &z, &rho, &n, err, sizeof err);
+    t_true(st == NBT_OK && n == 3 && z[0] == 0 && z[1] == 0.75 && z[2] == 2.25 && rho[0] == 1.5 && rho[1] == 0 &&
+               rho[2] == 0.3,
+           "density file: 3 layers (0, 1.5) (0.75, 0) (2.25, 0.3): status %d, n %zu", st, n);
+    if (st == NBT_OK) {
+        free(z);
+        free(rho);
+    }
+    unlink(path);
+    static const char *const bad[][2] = {{"0.1 1\n1 2\n", ":1: .*first z must be 0"},
+                                         {"0 1\n1 2\n1 3\n", ":3: .*z must increase"},
+                                         {"0 1\n2 1\n1 3\n", ":3: .*z must increase"},
+                                         {"0 1\n1 -0.5\n", ":2: .*rho must be >= 0"},
+                                         {"0 1\n1 2 3\n", ":2: .*two finite numbers"}};
+    for (int i = 0; i < 5; i++) {
+        put_text(path, bad[i][0]);
+        z = rho = NULL;
+        st = nbt_density_read(path, &z, &rho, &n, err, sizeof err);
+        /* the line number right after the file's name */
+        char want[96];
+        snprintf(want, sizeof want, "%s%.3s", path, bad[i][1]);
+        const char *why = strstr(bad[i][1], ".*") + 2;
+        t_true(st == NBT_EFORMAT && !strncmp(err, want, strlen(want)) && strstr(err, why) != NULL,
+               "density file %d refused at its line (%s): status %d, '%s'", i, bad[i][1], st, err);
+        unlink(path);
+    }
+    nbt_kernel_correction c;
+    memset(&c, 0, sizeof c);
+    put_text(path, "# a correction\nalpha -0.5 0.25 -0.125 1e-3 2.5 -3 0.0625\nbeta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n");
+    st = nbt_kernel_correction_read(path, &c, err, sizeof err);
+    const double wa[7] = {-0.5, 0.25, -0.125, 1e-3, 2.5, -3, 0.0625}, wb[7] = {0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.7};
+    int same = st == NBT_OK;
+    for (int i = 0; i < 7; i++)
+        same = same && c.alpha[i] == wa[i] && c.beta[i] == wb[i];
+    t_true(same, "kernel correction: alpha and beta lines read term by term: status %d", st);
+    unlink(path);
+    static const char *const badc[3] = {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n",
+                                        "alpha 1 2 3 4 5 6 7\n",
+                                        "beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\nalpha 1 2 3 4 5 6\n"};
+    for (int i = 0; i < 3; i++) {
+        put_text(path, badc[i]);
+        st = nbt_kernel_correction_read(path, &c, err, sizeof err);
+        t_true(st == NBT_EFORMAT && strstr(err, path) != NULL &&
+                   strstr(err, i < 2 ? "needs a 'beta' and an 'alpha' line" : "line 2: expected 7 finite numbers") != NULL,
+               "kernel correction %d refused: status %d, '%s'", i, st, err);
+        unlink(path);
+    }
+}
+
 static void test_eq26(void)
 {
     nbt_beam_medium m = nbt_beam_homogeneous(1.7, 0.6, 0.02);
@@ -271,6 +346,7 @@ int main(void)
     test_zeta_layers();
     test_eq26();
     test_kernel_corrected();
+    test_readers();
     nbt_quad_ws_free(ws);
     return t_done();
 }
