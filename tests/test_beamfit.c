@@ -116,6 +116,21 @@ static void test_fit_equivalent(const nbt_beam_fit *f)
     t_true(nbt_beam_fit_equivalent(&m, 0, &zeta, &lam) == NBT_EDOM, "z = 0 refused");
 }
 
+/* nbt_beam_fit_from_P against the header's definitions written out here, at distinct log-parameters
+ * (both signs) and tau 2.385, albedo 0.7, B 0.05: b = L e^P1, sqrt(2 pi) a b = T e^P0, M = T e^P2,
+ * s = L e^P3, h = s e^P4 with T = e^{-(1-albedo) tau}(1 - e^{-albedo tau}), L = tau sqrt(2B) */
+static void test_from_P(void)
+{
+    const double P[5] = {0.3, -0.2, 0.1, 0.4, -0.5}, tau = 2.385, alb = 0.7, B = 0.05;
+    double p[5];
+    nbt_beam_fit_from_P(P, tau, alb, B, p);
+    double T = exp(-0.3 * tau) * (1 - exp(-alb * tau)), L = tau * sqrt(0.1), b = L * exp(-0.2), s = L * exp(0.4);
+    const double want[5] = {T * exp(0.3) / (sqrt(2 * M_PI) * b), b, T * exp(0.1), s, s * exp(-0.5)};
+    static const char *const name[5] = {"a", "b", "M", "s", "h"};
+    for (int i = 0; i < 5; i++)
+        t_rel(p[i], want[i], 1e-13, "from_P: %s = %.15g (want %.15g)", name[i], p[i], want[i]);
+}
+
 int main(void)
 {
     const nbt_beam_fit *f = nbt_beam_fit_default();
@@ -258,5 +273,6 @@ int main(void)
         }
     nbt_quad_ws_free(ws);
     test_fit_equivalent(f);
+    test_from_P();
     return t_done();
 }
