@@ -242,7 +242,8 @@ else
   grep -q '^# fit status: misfit: chi^2/dof = .* is above ' "$tmp/corr.txt" && ok || bad "the correction file records its fit status: $(grep status "$tmp/corr.txt")"
 
   # ---- honest fits: every fit judged (doc/fit.md) ----
-  # check_rows CSV ERR WIDTHCOLS AMPCOLS SECOLS: every row 'ok' or 'misfit' has finite standard errors, an
+  # check_rows CSV ERR WIDTHCOLS AMPCOLS SECOLS: one row per plane (10: a header alone passed before); every row
+  # 'ok' or 'misfit' has finite standard errors, an
   # RMS no worse than the moment kernel's, no width on its bound (100 x the plane's largest radius, = 100 z
   # here) and no amplitude at 0; 'ok' rows a chi2_dof below 3.2 (the limit at the largest dof here, 48, is
   # 1.83; at 10, 3.12) and 'misfit' rows one above 1.8; every other row has nan standard errors; every row
@@ -261,7 +262,7 @@ else
           for (i = 1; i <= ne; i++) if (($E[i] "") != "nan") { print "flagged row with a stderr: " $0; bad = 1 }
           print $1, $NF > "/dev/stderr"
         } else { print "unknown status: " $0; bad = 1 }
-      } END { exit bad }' "$1" 2>"$tmp/flagged" || return 1
+      } END { if (NR != 11) print "rows: " NR - 1 ", not one per plane (10)"; exit bad || NR != 11 }' "$1" 2>"$tmp/flagged" || return 1
     while read -r z st; do grep -q "plane z = $z: $st: " "$2" || { echo "no flag line for z = $z ($st)"; return 1; }; done <"$tmp/flagged"
     [ "$(grep -c ': plane z = [^:]*: [a-z]*: ' "$2")" -eq "$(wc -l <"$tmp/flagged")" ] || { echo "flag lines != flagged rows"; return 1; }
   }
