@@ -140,6 +140,15 @@ double nbt_gls_nbt_kbar(int b, long d);
  * minus the pyramid's phase-averaged spill. */
 void nbt_gls_nbt_near_table(float *lut);
 
+/* NBT_GLS_NBT's in-slab excess (nbt_scatter_nbt.glsl): the unit erfc
+ * atom's mass beyond distance v beta_px along a line, all across it,
+ * tail(v) = ∫_0^1 G(v/s) ds (the atom is a uniform mixture of Gaussians of
+ * deviation s beta, s < 1; tail(0) = 1/2), at v = k / NBT_GLS_TAIL_PER for
+ * k < NBT_GLS_TAIL_N (beyond: 0). */
+#define NBT_GLS_TAIL_PER 128
+#define NBT_GLS_TAIL_N (8 * NBT_GLS_TAIL_PER + 1)
+void nbt_gls_nbt_tail_table(float *t);
+
 /* The slab plan for an input: n finite slabs, slab of a finite D > 0 =
  * the number of bound[k] <= D (float compare), mid log2 beta_px lb[j] of
  * each (the middle of its pixels' range with M0 > 0; 0 when empty). */
