@@ -46,6 +46,7 @@ struct nbt_gls {
     GLuint prog[NPASS];
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
     GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
+    GLuint ttail;             /* nbt: the atom's tail along a line (the in-slab excess) */
     unsigned slabs;
     GLuint stamp[2]; /* GL_TIMESTAMP before and after the passes */
     float *buf; /* staging, w*h*4 */
@@ -80,13 +81,14 @@ char *nbt_gls_pass_source(unsigned i)
 {
     if (i >= NPASS)
         return NULL;
-    char head[768];
+    char head[900];
     int n = snprintf(head, sizeof head,
-                     "#version 430 core\n#define NBT_SC_LUT_LO %d\n#define NBT_SC_LUT_PER %d\n#define NBT_SC_LUT_N %d\n"
+                     "#version 430 core\n#define NBT_SC_TAIL_PER %d\n#define NBT_SC_TAIL_N %d\n"
+                     "#define NBT_SC_LUT_LO %d\n#define NBT_SC_LUT_PER %d\n#define NBT_SC_LUT_N %d\n"
                      "#define NBT_SC_NAIVE_C %.9g\n#define NBT_SC_ELEK_C %.9g\n#define NBT_SC_NBT_MAXSLABS %d\n"
-                     "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n",
-                     NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C,
-                     NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR);
+                     "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n#define NBT_SC_NBT_K %d\n",
+                     NBT_GLS_TAIL_PER, NBT_GLS_TAIL_N, NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C,
+                     NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR, NBT_GLS_K);
     const char *parts[6] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common,
                             i >= FIRST_NBT_PASS ? nbt_glsl_nbt_scatter_nbtc : "",
                             i == P_NBTUP ? nbt_glsl_nbt_scatter_nbtmix : "", PASSES[i].src};
@@ -113,6 +115,27 @@ void nbt_gls_near_table(float *lut)
             lut[8 * i + k] = (float)nbt_screen_atom_pixel(NBT_ATOM_ERFC, b, off[k][0], off[k][1]);
         lut[8 * i + 6] = lut[8 * i + 7] = 0.0f;
     }
+}
+
+static float nbt_tail_tab[NBT_GLS_TAIL_N];
+static pthread_once_t nbt_tail_once = PTHREAD_ONCE_INIT;
+
+static void nbt_tail_fill(void)
+{
+    /* ∫_0^1 G(v/s) ds by the midpoint rule on 4096 panels (G(v/s) falls
+     * smoothly from G(v) to 0 as s goes to 0) */
+    for (int k = 0; k < NBT_GLS_TAIL_N; k++) {
+        double v = (double)k / NBT_GLS_TAIL_PER, sum = 0;
+        for (int j = 0; j < 4096; j++)
+            sum += 0.5 * erfc(v / ((j + 0.5) / 4096) / M_SQRT2);
+        nbt_tail_tab[k] = (float)(sum / 4096);
+    }
+}
+
+void nbt_gls_nbt_tail_table(float *t)
+{
+    pthread_once(&nbt_tail_once, nbt_tail_fill);
+    memcpy(t, nbt_tail_tab, sizeof nbt_tail_tab);
 }
 
 /* ---- NBT_GLS_NBT: the kernel fit ---- */
@@ -412,8 +435,8 @@ void nbt_gls_free(nbt_gls *g)
     for (int i = 0; i < NPASS; i++)
         if (g->prog[i])
             glDeleteProgram(g->prog[i]);
-    GLuint t[11] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol};
-    for (int i = 0; i < 11; i++)
+    GLuint t[12] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol, g->ttail};
+    for (int i = 0; i < 12; i++)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
@@ -481,6 +504,11 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     /* rows: texel (i, 0) = entries 0..3 of i, (i, 1) = entries 4..7 */
     int ok = upload_lut(g->tlut, lut);
     free(lut);
+    g->ttail = make_tex(1, GL_R32F, NBT_GLS_TAIL_N, 1, 0);
+    float tail[NBT_GLS_TAIL_N];
+    nbt_gls_nbt_tail_table(tail);
+    glBindTexture(GL_TEXTURE_2D, g->ttail);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N, 1, GL_RED, GL_FLOAT, tail);
     glGenQueries(2, g->stamp);
     if (!ok || glGetError() != GL_NO_ERROR) {
         nbt_gls_free(g);
@@ -659,11 +687,17 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     glUniform2i(glGetUniformLocation(g->prog[P_NBT], "nbt_sc_usize"), (GLint)bw, (GLint)bh);
 #undef EXT
     bind_tex(4, g->tn0);
+    bind_tex(5, g->tlut);  /* the atom's 3x3 weights and */
+    bind_tex(6, g->ttail); /* its tail: the in-slab excess */
+    glActiveTexture(GL_TEXTURE7);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, g->tsrc); /* and the slabs' colours */
     glActiveTexture(GL_TEXTURE3);
     glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
     glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(g->w, g->h);
     bind_tex(2, g->tlut);
+    glActiveTexture(GL_TEXTURE7);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
     glActiveTexture(GL_TEXTURE3);
     glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
 }

@@ -411,6 +411,113 @@ static double nbt_lbeta(double b)
     return log2(fmax(b, exp2(NBT_GLS_NBT_LO)));
 }
 
+/* nbt's in-slab excess at receiver x (slab s < n): along each of the four
+ * axis directions the depth profile is sampled at t = 1, 2, 3, 4, 6, 8, 12,
+ * 16, ... px up to 2 beta_x, stopping at the screen's edge (h = the distance
+ * to it) or at the first pixel outside the slab (h = the middle of the last
+ * interval); if no tap is farther than x there is nothing. Else each tap k
+ * changes the kernel of the sources beyond the middle m of its interval
+ * (t_{k-1}, t_k] from the previous one's to its own (x's own if the tap is
+ * not farther than x), which adds c_k (M0 (tail(m/b) - tail(h/b)) of the new
+ * kernel minus that of the old), c_k = level l = clamp(floor(log2(t_k -
+ * t_{k-1})), 1, K) of the source pyramid's colour layer of slab s read
+ * bilinearly at the tap; the first interval leaves out the 3x3 pixels on
+ * that side (M0 (a10 + 2 a11), the exact centre taps). The two directions
+ * of an axis add; the axes add in quadrature (sign of their sum). */
+static double emul_tail(const float *tail, double v)
+{
+    double u = v * NBT_GLS_TAIL_PER;
+    if (!(u < NBT_GLS_TAIL_N - 1))
+        return 0;
+    int k = (int)u;
+    return tail[k] + (u - k) * (tail[k + 1] - tail[k]);
+}
+
+static double emul_band(const float *tail, double M0, double b, double t, double h)
+{
+    b = fmax(b, 1e-6);
+    return M0 * (emul_tail(tail, t / b) - emul_tail(tail, h / b));
+}
+
+static int emul_tap(int t)
+{
+    return t < 4 ? t + 1 : (t & (t - 1)) == 0 ? t + t / 2 : t + t / 3;
+}
+
+typedef struct {
+    const nbt_gls_input *in;
+    const nbt_gls_nbt_plan *pl;
+    const stack *src; /* src[1 .. K], logical texel j at index j + 1 */
+    float alut[NBT_GLS_LUT_N * 8], tail[NBT_GLS_TAIL_N];
+} excess_ctx;
+
+static void emul_march(const excess_ctx *X, long x, long y, long ex, long ey, double *E)
+{
+    const nbt_gls_input *in = X->in;
+    size_t w = in->w, h = in->h, ix = (size_t)y * w + (size_t)x;
+    float Dx = key(in->D[ix]);
+    int s = nbt_slab(in->D[ix], X->pl);
+    double reach = (float)(2.0f * in->beta_px[ix]), hh = 1e30;
+    int t = 1, tprev = 0, cnt = 0, farther = 0;
+    for (int k = 0; k < 24 && t <= reach; k++) {
+        long qx = x + t * ex, qy = y + t * ey;
+        if (qx < 0 || qy < 0 || qx >= (long)w || qy >= (long)h) {
+            hh = (ex > 0 ? (double)w - x : ex < 0 ? x + 1.0 : ey > 0 ? (double)h - y : y + 1.0) - 0.5;
+            break;
+        }
+        size_t iq = (size_t)qy * w + (size_t)qx;
+        if (nbt_slab(in->D[iq], X->pl) != s) {
+            hh = 0.5 * (tprev + t);
+            break;
+        }
+        farther |= key(in->D[iq]) > Dx;
+        cnt++;
+        tprev = t;
+        t = emul_tap(t);
+    }
+    double pm = in->M0[ix], pb = in->beta_px[ix], nw[6];
+    t = 1;
+    tprev = 0;
+    for (int k = 0; k < cnt && farther; k++) {
+        long qx = x + t * ex, qy = y + t * ey;
+        size_t iq = (size_t)qy * w + (size_t)qx;
+        int far = key(in->D[iq]) > Dx;
+        double km = far ? in->M0[iq] : in->M0[ix], kb = far ? in->beta_px[iq] : in->beta_px[ix];
+        double m = 0.5 * (tprev + t);
+        double d = emul_band(X->tail, km, kb, m, hh) - emul_band(X->tail, pm, pb, m, hh);
+        if (k == 0) {
+            near_weights(in, X->alut, far ? iq : ix, nw);
+            d -= nw[1] + 2 * nw[2];
+            near_weights(in, X->alut, ix, nw);
+            d += nw[1] + 2 * nw[2];
+        }
+        int l = 0;
+        while ((2 << l) <= t - tprev)
+            l++;
+        l = l < 1 ? 1 : l > NBT_GLS_K ? NBT_GLS_K : l;
+        double c[3], sc = 1.0 / (1 << l);
+        stack_bilinear(&X->src[l], (size_t)(2 * X->pl->n + (unsigned)s), (qx + 0.5) * sc + 0.5, (qy + 0.5) * sc + 0.5, c);
+        for (int ch = 0; ch < 3; ch++)
+            E[ch] += d * c[ch];
+        pm = km, pb = kb;
+        tprev = t;
+        t = emul_tap(t);
+    }
+}
+
+static void emul_excess(const excess_ctx *X, long x, long y, double *out)
+{
+    double ex[3] = {0, 0, 0}, ey[3] = {0, 0, 0};
+    emul_march(X, x, y, 1, 0, ex);
+    emul_march(X, x, y, -1, 0, ex);
+    emul_march(X, x, y, 0, 1, ey);
+    emul_march(X, x, y, 0, -1, ey);
+    for (int c = 0; c < 3; c++) {
+        double sum = ex[c] + ey[c];
+        out[c] = (sum > 0 ? 1 : sum < 0 ? -1 : 0) * sqrt(ex[c] * ex[c] + ey[c] * ey[c]);
+    }
+}
+
 nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
 {
     size_t pad = (size_t)1 << NBT_GLS_K, w = in->w, h = in->h, np = w * h;
@@ -525,10 +632,17 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
                         }
                     }
         /* the receivers */
+        excess_ctx *X = malloc(sizeof *X);
+        if (X) {
+            X->in = in, X->pl = &pl, X->src = src;
+            nbt_gls_near_table(X->alut);
+            nbt_gls_nbt_tail_table(X->tail);
+        } else
+            st = NBT_ENOMEM;
         nbt_gls_nbt_near_table(lut);
         for (size_t i = 0; i < np; i++)
             near_weights(in, lut, i, nw + 6 * i);
-        for (long y = 0; y < (long)h; y++)
+        for (long y = 0; X && y < (long)h; y++)
             for (long x = 0; x < (long)w; x++) {
                 size_t ix = (size_t)y * w + (size_t)x;
                 double *o = S + 3 * ix, u[3], v[3];
@@ -544,6 +658,12 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
                     stack_bilinear(&col[1], (size_t)(2 * n + s), tx, ty, v);
                     for (int c = 0; c < 3; c++)
                         o[c] += in->M0[ix] * (u[c] + d * v[c]);
+                }
+                if (s < n) {
+                    double e[3];
+                    emul_excess(X, x, y, e);
+                    for (int c = 0; c < 3; c++)
+                        o[c] -= e[c];
                 }
                 float Dx = key(in->D[ix]);
                 for (long dy = -1; dy <= 1; dy++)
@@ -561,6 +681,7 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
                             o[c] += wt * in->rgb[3 * iy + c];
                     }
             }
+        free(X);
     }
     for (int k = 0; k <= NBT_GLS_K; k++) {
         free(src[k].v);

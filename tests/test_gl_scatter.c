@@ -47,16 +47,17 @@ const char *__asan_default_options(void)
 #define SHINYA_L1_TOL 3e-3
 
 /* nbt against operator A on the five scenes (measured, 4 slabs: relative L1
- * 0.6 .. 2.9% (mean 1.6%), edge band <= 4.4%, bias -0.0 .. +1.1% (slanted);
- * at dtheta / 4 (beta_px to ~30): see the printed table). Tolerances about
- * 1.5x the worst measured value of either setting; the goals are 3% mean,
- * 5% worst, 5% edge, 0.5% bias (the bias goal is not met on the slanted
- * plane: within a slab a nearer receiver takes the farther source's
- * kernel, whose M0 is larger). */
+ * 0.6 .. 2.9% (mean 1.4%), edge band <= 4.4%, bias +0.03 .. +0.15%; at
+ * dtheta / 4 (beta_px to ~30) relative L1 0.65 .. 3.2%, bias -0.10 ..
+ * +0.53% (blocks): see the printed table). Tolerances about 1.5x the worst
+ * measured value of either setting; the goals are 3% mean, 5% worst, 5%
+ * edge, 0.5% bias (the bias gate was 1.8% before nbt subtracted its
+ * in-slab excess: +1.1% on the slanted plane; test_nbt_slope_bias holds
+ * the 0.5% goal on continuous depth). */
 #define NBT_L1_TOL 4.5e-2
 #define NBT_MEAN_TOL 3e-2
 #define NBT_EDGE_TOL 7e-2
-#define NBT_BIAS_TOL 1.8e-2
+#define NBT_BIAS_TOL 8e-3
 /* the same beyond the screen (test_nbt_beyond_screen; measured relative L1
  * 0.06-0.9% for beta_px 0.3-30 (3.0% at 3-30 on the step), 2.9-4.4% for
  * beta_px 300-30000, where it is mostly bias: the fitted 1/r profile seen
@@ -426,6 +427,58 @@ static void test_nbt_beyond_screen(nbt_gls *g, const nbt_screen_kernel *km, cons
 /* nbt's own kernel: the impulse response (CPU emulation, = GL above) on a
  * constant-depth plane against the pixel-integrated erfc kernel, at three
  * sub-pixel phases of the 2^K pyramid grid; misplaced mass = L1 / mass */
+/* nbt's energy bias on continuous depth (issue 21). Within a depth slab the
+ * pyramid sends every pair through the source's kernel where operator A
+ * takes the nearer pixel's; nbt subtracts an estimate of that excess
+ * (nbt_scatter_nbt.glsl). A floor receding to a horizon with sky above,
+ * tilted across (depth varies along both axes), random colours, 64x48,
+ * against operator A by brute force in the same test, at dtheta 0.06 and
+ * 0.015 (beta_px 2.7-8 and 11-32): measured bias +0.19% and -0.10%,
+ * relative L1 0.78% and 0.75% (without the correction, mutation
+ * gls-nbt-excess-off: +1.51% and +1.87%, 1.92% and 2.20%). Tolerances: |bias| <= 0.5%, the issue's goal (what is
+ * left is second order in the kernel's change across a slab, the sparse
+ * taps, and the light the correction's strips assume beyond the screen's
+ * sides, about -0.6% for a 26 px kernel on this 48 px high image); relative
+ * L1 <= 1.2%, 1.5x the worse measured value. */
+#define NBT_SLOPE_BIAS_TOL 5e-3
+#define NBT_SLOPE_L1_TOL 1.2e-2
+
+static void test_nbt_slope_bias(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    float *Sg = malloc(NP * 3 * sizeof *Sg);
+    double *SA = malloc(NP * 3 * sizeof *SA), *Sd = malloc(NP * 3 * sizeof *Sd), *Se = malloc(NP * 3 * sizeof *Se);
+    for (int k = 0; k < 2; k++) {
+        double d = k ? dth / 4 : dth;
+        scene s = scene_new("floor", W, H);
+        random_rgb(&s);
+        for (size_t y = 0; y < H; y++)
+            for (size_t x = 0; x < W; x++) {
+                double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
+                s.D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
+            }
+        scene_kernels(&s, km, ke, d);
+        nbt_screen_input sin = {.w = s.w, .h = s.h, .rgb = s.rgb, .D = s.D, .dtheta = d};
+        t_true(nbt_screen_brute(&sin, km, NBT_SCREEN_NEAR, 1e-7, 2, SA, NULL) == NBT_OK, "floor: operator A");
+        nbt_gls_input in = gls_input(&s, 0, d);
+        nbt_status st = nbt_gls_exec(g, NBT_GLS_NBT, &in, Sg, NULL);
+        scatter_emul(NBT_GLS_NBT, &in, Se);
+        double e = gl_vs_emul(Sg, Se, NP * 3);
+        t_true(st == NBT_OK && e <= 1e-5, "floor, dtheta %g: nbt GL = CPU emulation (max diff %.2g of max S)", d, e);
+        for (size_t i = 0; i < NP * 3; i++)
+            Sd[i] = Sg[i];
+        nbt_screen_metrics m;
+        nbt_screen_compare(&sin, km, Sd, SA, &m);
+        t_true(fabs(m.bias) <= NBT_SLOPE_BIAS_TOL && m.rel_l1 <= NBT_SLOPE_L1_TOL,
+               "floor, dtheta %g: nbt against operator A, bias %+.3g within +-%.2g, relative L1 %.3g <= %.2g", d,
+               m.bias, NBT_SLOPE_BIAS_TOL, m.rel_l1, NBT_SLOPE_L1_TOL);
+        scene_free(&s);
+    }
+    free(Sg);
+    free(SA);
+    free(Sd);
+    free(Se);
+}
+
 static void test_nbt_kernel(void)
 {
     const size_t w = 384, h = 384, n = w * h;
@@ -720,6 +773,7 @@ int main(void)
     test_scenes(g, km, ke, dth);
     test_nbt_wide(g, km, ke, dth);
     test_nbt_beyond_screen(g, km, ke, dth);
+    test_nbt_slope_bias(g, km, ke, dth);
     test_nbt_kernel();
     test_odd_size(km, ke, dth);
     test_invariants(g, km, ke, dth);

@@ -48,9 +48,13 @@
  *       its own kernel, of slabs > i (sky included). Kernel weights per slab
  *       are taken at the slab's middle log2 beta with a first-order
  *       correction in each pixel's log2 beta (source side: an extra
- *       pyramid of delta M0 c; receiver side: an extra collapse). The
- *       approximation: pairs within one slab use the source's kernel, the
- *       fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
+ *       pyramid of delta M0 c; receiver side: an extra collapse). Pairs
+ *       within one slab go through the source's kernel; the receiver
+ *       subtracts an estimate of what that adds over the nearer pixel's
+ *       kernel (a march along its depth profile, nbt_scatter_nbt.glsl:
+ *       first order in the kernel's change, strips whole across the line,
+ *       so a kernel wider than the screen's sides is over-corrected). The
+ *       approximation: that estimate, the fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
  *       beta = 1 .. 30 px, tests/test_gl_scatter.c) and the second order in
  *       delta log2 beta. Weights are fitted (NNLS) for beta_px in
  *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held below and scaled by
@@ -139,6 +143,15 @@ double nbt_gls_nbt_kbar(int b, long d);
  * (entries a00, a10, a11 used; the others 0): the atom's pixel integral
  * minus the pyramid's phase-averaged spill. */
 void nbt_gls_nbt_near_table(float *lut);
+
+/* NBT_GLS_NBT's in-slab excess (nbt_scatter_nbt.glsl): the unit erfc
+ * atom's mass beyond distance v beta_px along a line, all across it,
+ * tail(v) = ∫_0^1 G(v/s) ds (the atom is a uniform mixture of Gaussians of
+ * deviation s beta, s < 1; tail(0) = 1/2), at v = k / NBT_GLS_TAIL_PER for
+ * k < NBT_GLS_TAIL_N (beyond: 0). */
+#define NBT_GLS_TAIL_PER 128
+#define NBT_GLS_TAIL_N (8 * NBT_GLS_TAIL_PER + 1)
+void nbt_gls_nbt_tail_table(float *t);
 
 /* The slab plan for an input: n finite slabs, slab of a finite D > 0 =
  * the number of bound[k] <= D (float compare), mid log2 beta_px lb[j] of
