@@ -266,7 +266,12 @@ static void check_lookup3(nbt_table *t, const char *what)
         "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
         "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
         "  color = nbt_lookup3q(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
-    GLuint p = config_program(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, t->interp2 == 2 ? LKQ : LK, "lookup3 shader");
+    static const char *LKC =
+        "uniform sampler2D pts;\nuniform sampler3D tab;\nuniform vec4 a0, a1, a2;\nuniform int m0, m1, m2;\n"
+        "out vec4 color;\nvoid main() {\n  vec4 p = texelFetch(pts, ivec2(gl_FragCoord.xy), 0);\n"
+        "  color = nbt_lookup3c(tab, a0, m0, a1, m1, a2, m2, p.x, p.y, p.z);\n}\n";
+    GLuint p = config_program(&(nbt_gl_config){0, 0, 0, 0, 0, 0, 0}, t->interp2 == 3 ? LKC : t->interp2 == 2 ? LKQ : LK,
+                              "lookup3 shader");
     if (!p)
         return;
     float *pt = malloc(W * H * 4 * sizeof(float)), *px = malloc(W * H * 4 * sizeof(float));
@@ -314,10 +319,12 @@ static void check_lookup3(nbt_table *t, const char *what)
     t_true(glGetError() == GL_NO_ERROR, "%s: render and read back", what);
     /* llvmpipe weights float textures in float (DESIGN.md): ~1e-7 of the
      * scale per product, 8 of them (quadratic in g: 3 bilinear fetches and
-     * weights, 1.5x that); the rest is the float unit coordinate (unit_noise)
+     * weights, 1.5x that; cubic: 4 fetches, weights summing to |w| <= 1.63,
+     * 2x); the rest is the float unit coordinate (unit_noise)
      * times the texel count and the largest texel step (quadratic: the
-     * weights' slope in g, up to 3 steps) */
-    double step[3], scale = data_maxabs(t), worst = 0, wcls[5] = {0}, q2 = t->interp2 == 2 ? 1.5 : 1.0;
+     * weights' slope in g, up to 3 steps; cubic 4) */
+    double step[3], scale = data_maxabs(t), worst = 0, wcls[5] = {0};
+    double q2 = t->interp2 == 3 ? 2.0 : t->interp2 == 2 ? 1.5 : 1.0;
     table_steps(t, step);
     for (int i = 0; i < W * H; i++) {
         const float *q = pt + 4 * i;
@@ -371,6 +378,16 @@ static void test_gsliced(void)
     rt = random_table3(&r0, &q1, &w2, 2);
     rt->interp2 = 2;
     check_lookup3(rt, "RG32F 7x4x7 atanh, quadratic in g");
+    /* cubic in g (nbt_lookup3c, what the tail-form H holds): the same table,
+     * and the fewest slices it takes (4: every cell an end cell or the
+     * middle one) on the ends map with an asymmetric range */
+    rt->interp2 = 3;
+    check_lookup3(rt, "RG32F 7x4x7 atanh, cubic in g");
+    nbt_table_free(rt);
+    nbt_axis c2 = {-0.7, 0.9, NBT_AXIS_ENDS, 5, 4};
+    rt = random_table3(&q0, &r1, &c2, 1);
+    rt->interp2 = 3;
+    check_lookup3(rt, "R32F 9x5x4 ends, cubic in g");
     nbt_table_free(rt);
     /* asinh (map code 6): theta of J^1 as the planner writes it (c = 1), and
      * strongly clustered (c = 20) on the slice axis */
