@@ -146,7 +146,8 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         if (rv == EXR_ERR_SUCCESS && a == 2)
             rv = exr_attr_set_int(ctx, part, axis_attr(a, "n", an, sizeof an), (int32_t)ax->n);
         if (rv == EXR_ERR_SUCCESS && a == 2)
-            rv = exr_attr_set_int(ctx, part, axis_attr(a, "interp", an, sizeof an), t->interp2 == 2 || t->interp2 == 3 ? t->interp2 : 1);
+            rv = exr_attr_set_int(ctx, part, axis_attr(a, "interp", an, sizeof an),
+                                  t->interp2 == 2 || t->interp2 == 3 ? t->interp2 : 1);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
         if (rv == EXR_ERR_SUCCESS)
