@@ -249,6 +249,9 @@ static void test_errors(nbt_table *H, nbt_table *J)
     t4 = nbt_table_alloc3(NBT_TABLE_J, &b0, &a1, &(nbt_axis){-0.5, 0.5, NBT_AXIS_ATANH, 0, 3}, 1);
     t4->n = 1;
     t_true(nbt_gslice_fill_form(t4, NBT_FORM_TAIL, &o) == NBT_EINVAL, "tail form for a J table: EINVAL");
+    t4->interp2 = 3; /* cubic: measured for the tail form only */
+    t_true(nbt_gslice_fill_form(t4, NBT_FORM_LOG_ET, &o) == NBT_EINVAL, "log_et J with interp2 3: EINVAL");
+    t4->interp2 = 1;
     nbt_table_free(t4);
     nbt_airlight_geom geo = {0.3, 0.5, 2.0, 3.0, 1.0, 5.0};
     double L, E;
@@ -415,6 +418,35 @@ static void test_tail_cubic(void)
     /* the (u, v) error is the same for both: what the cubic removes is most of the g error
      * (0.33 of the quadratic's total measured; the g error alone falls ~5x at 33 slices) */
     t_true(ec < 0.6 * eq, "tail: cubic in g errs %.2e in total at the 4 points, under 0.6 of quadratic's %.2e", ec, eq);
+    nbt_table_free(t);
+    /* the end g cells' 16/15: on 5 slices (g error dominant) at every (u, v) node, at x = 0.382
+     * of the first and last g cells (where the one-sided cubic's error peaks, 16/15 of its
+     * midpoint value), the lookup within the map's bound; the true error reaches 0.98 of it
+     * there (0.94 at the midpoint), so a map without the 16/15 would be exceeded */
+    nbt_axis c0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, 33}, c1 = {-M_PI_2, M_PI_2, NBT_AXIS_ENDS, 16.0, 65};
+    nbt_axis c2 = {-0.9, 0.6, NBT_AXIS_ATANH, 0, 5};
+    t = nbt_table_alloc3(NBT_TABLE_H, &c0, &c1, &c2, 1);
+    st = t ? nbt_gslice_fill(t, &o) : NBT_ENOMEM;
+    double wr = 0;
+    int over = 0;
+    for (int side = 0; st == NBT_OK && side < 2; side++) {
+        double g = nbt_axis_from_unit(&c2, (side ? 4 - 0.382 : 0.382) / 4.0);
+        nbt_phase *ph = nbt_phase_hg(g);
+        for (size_t j = 1; j + 1 < c1.n; j++)
+            for (size_t i = 1; i < c0.n; i++) {
+                double u = nbt_axis_node(&c0, i), v = nbt_axis_node(&c1, j), R, RE, L, E;
+                if (fabs(v) > 1.55)
+                    continue;
+                nbt_airlight_geom geo = {u, u, 1.0, 1.0 / cos(v), v + M_PI_2, INFINITY};
+                nbt_airlight_direct(ph, &geo, 1e-11, &R, &RE);
+                nbt_airlight_table_g_lookup(t, g, &geo, &L, &E);
+                over += !(fabs(L - R) <= E + RE);
+                wr = fmax(wr, fabs(L - R) / (E + RE));
+            }
+        nbt_phase_free(ph);
+    }
+    t_true(st == NBT_OK && over == 0 && wr >= 0.9, "tail 33x65x5, 0.382 into the end g cells: every node within the "
+           "map's bound (%d over, worst %.3f of it, >= 0.9: the check is tight)", over, wr);
     nbt_table_free(t);
     nbt_axis q2 = {-0.9, -0.75, NBT_AXIS_ATANH, 0, 3};
     t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &q2, 1);
