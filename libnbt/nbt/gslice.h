@@ -59,7 +59,9 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
  * sets interp2 = 3 (cubic in g; with 3 slices 2, quadratic) and records
  * the error relative to the value: cell_err
  * per g cell, max_err their largest (doc/tables.md). PLAIN as described
- * above. NBT_EINVAL for TAIL on a J table or LOG_ET on an H table. */
+ * above. NBT_EINVAL for TAIL on a J table or LOG_ET on an H table, and for
+ * PLAIN or LOG_ET with interp2 = 3 (their error measurement knows the
+ * linear and quadratic stencils). */
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o);
 
 /* An error-driven g-sliced table. */
