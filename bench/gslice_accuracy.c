@@ -7,14 +7,17 @@
  * the nearest slice, which leaves only the table's (u, v) error: the
  * difference between the passes is the interpolation in g (quadratic).
  *
- * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP [misses|- [VMAP[:c]]]]]]]
+ * Usage: bench/gslice_accuracy [N_UV [N_G [RAYS [MAP [misses|- [VMAP[:c] [INTERP]]]]]]]
  *   N_UV nodes on u (log1p_cbrt, c = 10, [0, 10]) and v (cos), default 257;
  *   NUxNV (65x257, say) sets the two apart;
  *   N_G slices on g in [-0.95, 0.95], default 33; RAYS default 2000;
  *   MAP the g mapping (atanh, linear, sqrt, cos, ...; default atanh);
  *   misses: print every ray above 1e-3 (CPU lookup, g anywhere) with its
  *   table coordinates (u, theta_0, theta_d, g) ('-': do not);
- *   VMAP[:c] the v mapping and its strength (ends:16, the planner's), default cos.
+ *   VMAP[:c] the v mapping and its strength (ends:16, the planner's), default cos;
+ *   INTERP the g interpolation the lookups use, 2 quadratic (the tail form
+ *   before issue 21) or 3 cubic (what nbt_gslice_fill writes now), default
+ *   the table's; the error map is the one measured for the table's own.
  * Rays: kappa_t = 0.2, kappa_s = 0.18, d_sv log-uniform in [0.5, 40], gamma
  * uniform in [0.02, pi - 0.02], d_vp infinite for 30%, else d_sv times a
  * log-uniform factor in [0.05, 3]; g uniform in [-0.95, 0.95] for half the
@@ -134,6 +137,14 @@ int main(int argc, char **argv)
         fprintf(stderr, "gslice_accuracy: building the table failed\n");
         return 1;
     }
+    if (argc > 7) {
+        int ip = atoi(argv[7]);
+        if (ip != 2 && ip != 3) {
+            fprintf(stderr, "gslice_accuracy: INTERP '%s' must be 2 or 3\n", argv[7]);
+            return 2;
+        }
+        Ht->interp2 = ip;
+    }
     const char *MAIN = "uniform sampler2D rays;\nout vec4 color;\nvoid main() {\n"
                        "  vec4 r = texelFetch(rays, ivec2(gl_FragCoord.xy), 0);\n"
                        "  color = vec4(nbt_airlight_g(0.18, 0.2, 1.0, r.x, r.y, r.z, r.w), 0.0, 0.0, 1.0);\n}\n";
@@ -169,9 +180,10 @@ int main(int argc, char **argv)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glUniform1i(glGetUniformLocation(prog, "rays"), 2);
     nbt_gl_set_table_axes(prog, "nbt_H", Ht);
-    printf("g-sliced H %zu x %zu x %zu (u log1p_cbrt [0, 10], v %s c %g, g %s [-0.95, 0.95]), %.1f MB as float, "
+    printf("g-sliced H %zu x %zu x %zu (u log1p_cbrt [0, 10], v %s c %g, g %s [-0.95, 0.95], %s in g), %.1f MB as float, "
            "assembled from 2-D builds in %.2f s (2-core machine shared with other jobs); %s\n",
-           N, NV, NG, nbt_axis_map_name(a1.map), a1.c, nbt_axis_map_name(gmap), (double)nbt_table_size(Ht) * 4 / 1e6, tb,
+           N, NV, NG, nbt_axis_map_name(a1.map), a1.c, nbt_axis_map_name(gmap),
+           Ht->interp2 == 3 ? "cubic" : "quadratic", (double)nbt_table_size(Ht) * 4 / 1e6, tb,
            (const char *)glGetString(GL_RENDERER));
     for (int pass = 0; pass < 2; pass++) {
         int bad = 0;

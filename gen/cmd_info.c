@@ -22,7 +22,8 @@ int cmd_info(int argc, char **argv)
                  "Prints the table's metadata; with --at, the bilinear (GPU-equivalent) values at\n"
                  "physical coordinates X (u or T) and Y (v or theta); on a 3-D (g-sliced) table the\n"
                  "value at X,Y,G as libnbt and the shaders look it up (trilinear, or quadratic in g for\n"
-                 "interp2 = 2; G: the slice axis, e.g. g; default its low end), in the table's value form.");
+                 "interp2 = 2, cubic for 3; G: the slice axis, e.g. g; default its low end), in the table's\n"
+                 "value form.");
             return 0;
         } else
             die_usage("see 'nbt-gen info --help'");
@@ -68,7 +69,9 @@ int cmd_info(int argc, char **argv)
                t->form == NBT_FORM_TAIL ? ": R = log(C W), C the scaled tail integral, W = 1 + s/2 + u s^2/2 "
                                           "(doc/tables.md); errors relative" : "");
     if (t->axis[2].n >= 2)
-        printf("g interp    %s\n", t->interp2 == 2 ? "quadratic (three nearest slices)" : "linear");
+        printf("g interp    %s\n", t->interp2 == 3   ? "cubic (the cell's two slices and one on either side)"
+                                   : t->interp2 == 2 ? "quadratic (three nearest slices)"
+                                                     : "linear");
     printf("%s %s\n", t->kind == NBT_TABLE_PSI ? "run        " : "phase      ", t->phase[0] ? t->phase : "legendre");
     int fitted = t->kind == NBT_TABLE_KERNEL && strstr(t->phase, " fitted ") != NULL;
     if (fitted)

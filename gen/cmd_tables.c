@@ -396,7 +396,7 @@ static void tables_help(const char *cmd)
            "                 airlight series truncation stays below tol/2, and the tables' error\n"
            "                 target is tol/2 over the error amplification sum (2k+1)|g|^k\n"
            "  --basis B      with --g: legendre (the orders above), slices (one 3-D table of HG\n"
-           "                 slices on an atanh g axis, quadratic in g: nbt/gslice.h) or auto (default:\n"
+           "                 slices on an atanh g axis, cubic in g for H: nbt/gslice.h) or auto (default:\n"
            "                 the smaller predicted build time; prints why); slices need --tol, and a\n"
            "                 g-sliced table whose recorded lookup error misses tol is an error (exit 1,\n"
            "                 nothing written) unless --allow-tol-miss\n"

@@ -132,6 +132,10 @@ static nbt_status fill_form(nbt_table *t, nbt_table_form form, const nbt_build_o
     t->theta_cells = 0;
     if (form == NBT_FORM_TAIL)
         return nbt__tail_fill(t, o);
+    /* the error measurement below knows the quadratic and linear stencils */
+    if (t->interp2 != 1 && t->interp2 != 2)
+        NBT_FAIL(NBT_EINVAL, "g-sliced table: interp2 must be 1 or 2 for the plain and log_et forms (3, cubic in g, "
+                             "is the tail form's)");
     t->form = form;
     nbt_status st0 = NBT_OK;
     size_t nx = t->axis[0].n, ny = t->axis[1].n, ng = t->axis[2].n, ns = nx * ny;
@@ -274,7 +278,7 @@ static const size_t PSIZES[] = {17, 33, 49, 65, 97, 129, 193, 257, 385, 513, 769
 #define NPSIZES (sizeof PSIZES / sizeof PSIZES[0])
 
 
-/* uniform in atanh g (H's tail form and J's log_et form are quadratic in g) */
+/* uniform in atanh g (H's tail form is cubic in g, J's log_et form quadratic) */
 static nbt_axis g_axis(const nbt_gslice_request *r, size_t n)
 {
     return (nbt_axis){r->g[0], r->g[1], NBT_AXIS_ATANH, 0, n};

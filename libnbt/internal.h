@@ -38,12 +38,33 @@ static inline void nbt__quad_weights(double t, double w[3])
     w[2] = 0.5 * t * (t + 1.0);
 }
 
+/* Cubic (Lagrange) interpolation in the slice coordinate (interp2 = 3):
+ * the weights of slices m0 .. m0 + 3 at p = m0 + x, x in [0, 3]. */
+static inline void nbt__cubic_weights(double x, double w[4])
+{
+    w[0] = -(x - 1.0) * (x - 2.0) * (x - 3.0) / 6.0;
+    w[1] = x * (x - 2.0) * (x - 3.0) / 2.0;
+    w[2] = -x * (x - 1.0) * (x - 3.0) / 2.0;
+    w[3] = x * (x - 1.0) * (x - 2.0) / 6.0;
+}
+
+/* First slice of the cubic stencil for p = s (n - 1): the cell's own four
+ * slices m - 1 .. m + 2 (m = floor p), moved inwards in the first and last
+ * cells; needs n >= 4. */
+static inline size_t nbt__cubic_first(double p, size_t n)
+{
+    double m0 = fmin(fmax(floor(p) - 1.0, 0.0), (double)(n - 4));
+    return (size_t)m0;
+}
+
 /* Sum of |weights| of one lookup: bilinear 1, quadratic in g (interp2 = 2)
- * at most 1.25 (at t = +-1/2): a change of at most d at every node moves a
- * lookup by at most this times d. */
+ * at most 1.25 (at t = +-1/2), cubic (interp2 = 3) 1.25 in inner cells and
+ * at most 1.6312 in the first and last (the one-sided stencil, at 0.451 of
+ * the cell): a change of at most d at every node moves a lookup by at most
+ * this times d. */
 static inline double nbt__lookup_weight_sum(const nbt_table *t)
 {
-    return t->interp2 == 2 && t->axis[2].n >= 3 ? 1.25 : 1.0;
+    return t->interp2 == 3 && t->axis[2].n >= 4 ? 1.6312 : t->interp2 == 2 && t->axis[2].n >= 3 ? 1.25 : 1.0;
 }
 
 /* nbt_table_round_half, returning the largest change of channel c. */

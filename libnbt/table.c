@@ -418,6 +418,21 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
         lookup_slice(t, 0, i, fx, j, fy, out);
         return;
     }
+    if (t->interp2 == 3 && t->axis[2].n >= 4) {
+        /* cubic through the cell's slices and one on either side */
+        double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);
+        size_t m0 = nbt__cubic_first(p, t->axis[2].n);
+        double w[4], s[NBT_TABLE_MAX_CH];
+        nbt__cubic_weights(p - (double)m0, w);
+        for (size_t c = 0; c < t->nch; c++)
+            out[c] = 0.0;
+        for (int q = 0; q < 4; q++) {
+            lookup_slice(t, m0 + (size_t)q, i, fx, j, fy, s);
+            for (size_t c = 0; c < t->nch; c++)
+                out[c] += w[q] * s[c];
+        }
+        return;
+    }
     if (t->interp2 == 2 && t->axis[2].n >= 3) {
         /* quadratic through the nearest slice and its two neighbours */
         double p = nbt_axis_to_unit(&t->axis[2], x2) * (double)(t->axis[2].n - 1);

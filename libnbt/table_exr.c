@@ -146,7 +146,8 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         if (rv == EXR_ERR_SUCCESS && a == 2)
             rv = exr_attr_set_int(ctx, part, axis_attr(a, "n", an, sizeof an), (int32_t)ax->n);
         if (rv == EXR_ERR_SUCCESS && a == 2)
-            rv = exr_attr_set_int(ctx, part, axis_attr(a, "interp", an, sizeof an), t->interp2 == 2 ? 2 : 1);
+            rv = exr_attr_set_int(ctx, part, axis_attr(a, "interp", an, sizeof an),
+                                  t->interp2 == 2 || t->interp2 == 3 ? t->interp2 : 1);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_attr_set_string(ctx, part, axis_attr(a, "map", an, sizeof an), nbt_axis_map_name(ax->map));
         if (rv == EXR_ERR_SUCCESS)
@@ -164,7 +165,8 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
                                  "cos: s = acos(1-2r)/pi, log1p_cbrt: s = cbrt(log1p(c r)/log1p(c)), "
                                  "r = (x-lo)/(hi-lo); atanh: s = (atanh x - atanh lo)/(atanh hi - atanh lo); "
                                  "axis2.interp 2: quadratic in s2 through slices m-1, m, m+1, "
-                                 "m = round(s2 (N-1)) clamped to [1, N-2]");
+                                 "m = round(s2 (N-1)) clamped to [1, N-2]; axis2.interp 3: cubic (Lagrange) "
+                                 "through slices m0..m0+3, m0 = floor(s2 (N-1)) - 1 clamped to [0, N-4]");
     size_t off = 0;
     buf[0] = '\0';
     for (size_t c = 0; c < nc; c++)
@@ -390,8 +392,9 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         int32_t ip = 1, ne;
         const float *ce;
         if (exr_attr_get_int(ctx, 0, axis_attr(2, "interp", an, sizeof an), &ip) == EXR_ERR_SUCCESS &&
-            !(ip == 1 || (ip == 2 && ax[2].n >= 3))) {
-            st = rd_fail(err, errlen, path, "nbt.axis2.interp must be 1 or 2 (2 needs at least 3 slices)");
+            !(ip == 1 || (ip == 2 && ax[2].n >= 3) || (ip == 3 && ax[2].n >= 4))) {
+            st = rd_fail(err, errlen, path,
+                         "nbt.axis2.interp must be 1, 2 or 3 (2 needs at least 3 slices, 3 at least 4)");
             goto done;
         }
         t->interp2 = ip;

@@ -33,6 +33,7 @@ NBT_U int nbt_H_map0, nbt_H_map1;
 #ifdef NBT_G_SLICED
 NBT_U vec4 nbt_H_ax2; // g axis
 NBT_U int nbt_H_map2;
+NBT_U int nbt_H_interp2; // the table's interp2: 3 cubic in g (nbt_lookup3c), else quadratic (nbt_lookup3q)
 #endif
 NBT_BLOCK_END
 
@@ -101,7 +102,9 @@ float nbt_tail_s(float t)
 // C(u, v; g) from the table
 float nbt_tail_c(float u, float v, float s, float g)
 {
-    float r = nbt_lookup3q(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, nbt_H_ax2, nbt_H_map2, u, v, g).r;
+    float r = nbt_H_interp2 == 3
+        ? nbt_lookup3c(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, nbt_H_ax2, nbt_H_map2, u, v, g).r
+        : nbt_lookup3q(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, nbt_H_ax2, nbt_H_map2, u, v, g).r;
     return exp(r) / (1.0 + 0.5 * s + 0.5 * u * s * s);
 }
 

@@ -33,7 +33,7 @@ NBT_U int nbt_J_map0, nbt_J_map1;
 NBT_U vec4 nbt_J_ax2; // g axis
 NBT_U int nbt_J_map2;
 NBT_U int nbt_J_form;    // 0: plain J; 1: log_et, the texel holds T + ln J
-NBT_U int nbt_J_interp2; // 2: quadratic in g (nbt_lookup3q), else trilinear
+NBT_U int nbt_J_interp2; // 3: cubic in g (nbt_lookup3c), 2: quadratic (nbt_lookup3q), else trilinear
 #endif
 NBT_BLOCK_END
 #if NBT_JN_PACKS > 0
@@ -50,13 +50,12 @@ NBT_SAMPLER(nbt_Jn_3, 14)
 #endif
 
 #ifdef NBT_G_SLICED
-// libnbt's nbt_surface_table_g: the lookup (quadratic or linear in g), then
+// libnbt's nbt_surface_table_g: the lookup (cubic, quadratic or linear in g), then
 // J = e^{v - T} for the log_et form
 float nbt_jlook3(sampler3D tex, float T, float th, float g)
 {
-    float v = nbt_J_interp2 == 2
-        ? nbt_lookup3q(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r
-        : nbt_lookup3(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, T, th, g).r;
+    float v = nbt_lookup3i(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, nbt_J_ax2, nbt_J_map2, nbt_J_interp2,
+                           T, th, g).r;
     return nbt_J_form == 1 ? exp(v - T) : v;
 }
 #define NBT_JLOOK3(tex, T, th, g) nbt_jlook3(tex, T, th, g)

@@ -9,7 +9,9 @@
 // nbt_lookup3 reads a 3-D (g-sliced) table, axis 2 the slices (e.g. the HG
 // g), with the same convention on all three axes: libnbt's nbt_table_lookup3;
 // nbt_lookup3q is its quadratic-in-g variant (interp2 = 2): three bilinear
-// fetches at the centres of the slices nearest to x2.
+// fetches at the centres of the slices nearest to x2; nbt_lookup3c the cubic
+// one (interp2 = 3, Lagrange): four fetches, the cell's two slices and one
+// on either side (moved inwards in the first and last cells).
 const float NBT_PI = 3.14159265358979;
 #ifdef NBT_VULKAN
 // HLSL has no atanh, so SPIRV-Cross cannot translate it: the Vulkan variant
@@ -74,4 +76,27 @@ vec4 nbt_lookup3q(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2
     return 0.5 * q * (q - 1.0) * texture(t, vec3(st, (mc - 0.5) / a2.w))
          + (1.0 - q * q) * texture(t, vec3(st, (mc + 0.5) / a2.w))
          + 0.5 * q * (q + 1.0) * texture(t, vec3(st, (mc + 1.5) / a2.w));
+}
+
+vec4 nbt_lookup3c(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2, float x0, float x1, float x2)
+{
+    vec2 st = vec2(nbt_texcoord(nbt_axis_unit(x0, a0, m0), a0.w), nbt_texcoord(nbt_axis_unit(x1, a1, m1), a1.w));
+    float p = nbt_axis_unit(x2, a2, m2) * (a2.w - 1.0);
+    float f = clamp(floor(p) - 1.0, 0.0, a2.w - 4.0), x = p - f;
+    float x1m = x - 1.0, x2m = x - 2.0, x3m = x - 3.0;
+    return (-x1m * x2m * x3m / 6.0) * texture(t, vec3(st, (f + 0.5) / a2.w))
+         + (x * x2m * x3m / 2.0) * texture(t, vec3(st, (f + 1.5) / a2.w))
+         + (-x * x1m * x3m / 2.0) * texture(t, vec3(st, (f + 2.5) / a2.w))
+         + (x * x1m * x2m / 6.0) * texture(t, vec3(st, (f + 3.5) / a2.w));
+}
+
+// a g-sliced table's lookup by its interp2: 3 cubic, 2 quadratic, else trilinear
+vec4 nbt_lookup3i(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2, int interp, float x0, float x1,
+                  float x2)
+{
+    if (interp == 3)
+        return nbt_lookup3c(t, a0, m0, a1, m1, a2, m2, x0, x1, x2);
+    if (interp == 2)
+        return nbt_lookup3q(t, a0, m0, a1, m1, a2, m2, x0, x1, x2);
+    return nbt_lookup3(t, a0, m0, a1, m1, a2, m2, x0, x1, x2);
 }

@@ -489,7 +489,7 @@ awk -v b="$(sed -n 's/^# g-sliced: .* built in \([0-9.]*\) s .*/\1/p' "$tmp/gsp.
   "$tmp/gsp.err" && ok || bad "g-sliced predicted time vs the build's: $(cat "$tmp/gsp.out" "$tmp/gsp.err")"
 "$NBT_GEN" info "$tmp/gs.exr" --at 0.7,0.3,0.21 >"$tmp/gs.info"
 grep -q "^axis2 *g atanh \[-0.4" "$tmp/gs.info" && grep -q "^form *tail" "$tmp/gs.info" &&
-  grep -q "^g interp *quadratic" "$tmp/gs.info" && ok || bad "info names the g axis and the tail form: $(cat "$tmp/gs.info")"
+  grep -q "^g interp *cubic" "$tmp/gs.info" && ok || bad "info names the g axis and the tail form: $(cat "$tmp/gs.info")"
 # the looked-up log(C W) against C from the direct integral: C(u, v; g) is the unobstructed airlight
 # of a ray with kappa_s = kappa_t = u, h = 1, theta_0 = v times 4 pi/u e^{u d_sv} (doc/tables.md);
 # the error map there (channel G, printed beside it) is ~2e-3: within 1e-2 relative

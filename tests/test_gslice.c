@@ -249,6 +249,9 @@ static void test_errors(nbt_table *H, nbt_table *J)
     t4 = nbt_table_alloc3(NBT_TABLE_J, &b0, &a1, &(nbt_axis){-0.5, 0.5, NBT_AXIS_ATANH, 0, 3}, 1);
     t4->n = 1;
     t_true(nbt_gslice_fill_form(t4, NBT_FORM_TAIL, &o) == NBT_EINVAL, "tail form for a J table: EINVAL");
+    t4->interp2 = 3; /* cubic: measured for the tail form only */
+    t_true(nbt_gslice_fill_form(t4, NBT_FORM_LOG_ET, &o) == NBT_EINVAL, "log_et J with interp2 3: EINVAL");
+    t4->interp2 = 1;
     nbt_table_free(t4);
     nbt_airlight_geom geo = {0.3, 0.5, 2.0, 3.0, 1.0, 5.0};
     double L, E;
@@ -374,6 +377,90 @@ static void test_one_pass(void)
     }
 }
 
+/* The tail form cubic in g (issue 21) at asymmetric points in the end g
+ * cells of a table on g in [-0.9, 0.6] (17 slices): near g = -0.9 where HG's
+ * backward peak sits at v -> pi/2, and near 0.6, each at 0.382 of a cell
+ * from the end, where the one-sided stencil's error polynomial peaks, at
+ * (u, v) between nodes: the lookup within the error map's bound of the
+ * direct ray integral (nbt_airlight_direct, tol 1e-11, its own estimate
+ * added), and closer to it than the quadratic lookup. A 3-slice table
+ * (quadratic, as H files before the cubic) still bounds its lookups and
+ * keeps interp2 = 2 through an EXR file. */
+static void test_tail_cubic(void)
+{
+    nbt_axis a0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, 49}, a1 = {-M_PI_2, M_PI_2, NBT_AXIS_ENDS, 16.0, 97};
+    nbt_axis a2 = {-0.9, 0.6, NBT_AXIS_ATANH, 0, 17};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &a2, 1);
+    nbt_build_opts o = {1e-10, 1, 2};
+    nbt_status st = t ? nbt_gslice_fill(t, &o) : NBT_ENOMEM;
+    t_true(st == NBT_OK && t->interp2 == 3, "tail H 49x97x17 on g [-0.9, 0.6]: fill, cubic in g (interp2 %d)",
+           t ? t->interp2 : 0);
+    if (st != NBT_OK) {
+        nbt_table_free(t);
+        return;
+    }
+    double ec = 0, eq = 0;
+    static const double pt[4][3] = {{0.37, 1.31, 0.382}, {1.73, 1.47, 0.618}, {0.58, -1.23, 16 - 0.382}, {2.9, 0.44, 14.5}};
+    for (int k = 0; k < 4; k++) {
+        double u = pt[k][0], v = pt[k][1], g = nbt_axis_from_unit(&a2, pt[k][2] / 16.0), R, RE, L, E, Lq, Eq;
+        tail_exact(u, v, g, &R, &RE);
+        nbt_airlight_geom geo = {u, u, 1.0, 1.0 / cos(v), v + M_PI_2, INFINITY};
+        nbt_status sl = nbt_airlight_table_g_lookup(t, g, &geo, &L, &E);
+        t->interp2 = 2;
+        nbt_airlight_table_g_lookup(t, g, &geo, &Lq, &Eq);
+        t->interp2 = 3;
+        t_true(sl == NBT_OK && fabs(L - R) <= E + RE,
+               "tail cubic in g at u %.2f v %+.2f g %+.4f: |lookup - direct| %.2e relative <= the bound %.2e "
+               "(quadratic: %.2e)", u, v, g, fabs(L - R) / R, E / R, fabs(Lq - R) / R);
+        ec += fabs(L - R) / R;
+        eq += fabs(Lq - R) / R;
+    }
+    /* the (u, v) error is the same for both: what the cubic removes is most of the g error
+     * (0.33 of the quadratic's total measured; the g error alone falls ~5x at 33 slices) */
+    t_true(ec < 0.6 * eq, "tail: cubic in g errs %.2e in total at the 4 points, under 0.6 of quadratic's %.2e", ec, eq);
+    nbt_table_free(t);
+    /* the end g cells' 16/15: on 5 slices (g error dominant) at every (u, v) node, at x = 0.382
+     * of the first and last g cells (where the one-sided cubic's error peaks, 16/15 of its
+     * midpoint value), the lookup within the map's bound; the true error reaches 0.98 of it
+     * there (0.94 at the midpoint), so a map without the 16/15 would be exceeded */
+    nbt_axis c0 = {0, 4.0, NBT_AXIS_LOG1P_CBRT, 10.0, 33}, c1 = {-M_PI_2, M_PI_2, NBT_AXIS_ENDS, 16.0, 65};
+    nbt_axis c2 = {-0.9, 0.6, NBT_AXIS_ATANH, 0, 5};
+    t = nbt_table_alloc3(NBT_TABLE_H, &c0, &c1, &c2, 1);
+    st = t ? nbt_gslice_fill(t, &o) : NBT_ENOMEM;
+    double wr = 0;
+    int over = 0;
+    for (int side = 0; st == NBT_OK && side < 2; side++) {
+        double g = nbt_axis_from_unit(&c2, (side ? 4 - 0.382 : 0.382) / 4.0);
+        nbt_phase *ph = nbt_phase_hg(g);
+        for (size_t j = 1; j + 1 < c1.n; j++)
+            for (size_t i = 1; i < c0.n; i++) {
+                double u = nbt_axis_node(&c0, i), v = nbt_axis_node(&c1, j), R, RE, L, E;
+                if (fabs(v) > 1.55)
+                    continue;
+                nbt_airlight_geom geo = {u, u, 1.0, 1.0 / cos(v), v + M_PI_2, INFINITY};
+                nbt_airlight_direct(ph, &geo, 1e-11, &R, &RE);
+                nbt_airlight_table_g_lookup(t, g, &geo, &L, &E);
+                over += !(fabs(L - R) <= E + RE);
+                wr = fmax(wr, fabs(L - R) / (E + RE));
+            }
+        nbt_phase_free(ph);
+    }
+    t_true(st == NBT_OK && over == 0 && wr >= 0.9, "tail 33x65x5, 0.382 into the end g cells: every node within the "
+           "map's bound (%d over, worst %.3f of it, >= 0.9: the check is tight)", over, wr);
+    nbt_table_free(t);
+    nbt_axis q2 = {-0.9, -0.75, NBT_AXIS_ATANH, 0, 3};
+    t = nbt_table_alloc3(NBT_TABLE_H, &a0, &a1, &q2, 1);
+    st = t ? nbt_gslice_fill(t, &o) : NBT_ENOMEM;
+    t_true(st == NBT_OK && t->interp2 == 2, "tail H with 3 slices: quadratic in g (interp2 %d)", t ? t->interp2 : 0);
+    if (st == NBT_OK) {
+        check_tail(t, 40);
+        nbt_table *back = exr_round_trip(t);
+        t_true(back && back->interp2 == 2 && back->form == NBT_FORM_TAIL, "3-slice tail file keeps interp2 2");
+        nbt_table_free(back);
+    }
+    nbt_table_free(t);
+}
+
 /* an error-driven build meets its tolerance, and an EXR round trip keeps
  * the table a g-sliced one */
 static void test_build_io(void)
@@ -385,8 +472,8 @@ static void test_build_io(void)
     t_true(st == NBT_OK, "error-driven build tol 2e-2: status %d %s", st, err);
     if (st != NBT_OK)
         return;
-    t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 2,
-           "build: H in the tail form on an atanh g axis, quadratic in g");
+    t_true(t->form == NBT_FORM_TAIL && t->axis[2].map == NBT_AXIS_ATANH && t->interp2 == 3,
+           "build: H in the tail form on an atanh g axis, cubic in g");
     t_true(t->axis[1].map == NBT_AXIS_ENDS && t->axis[1].c == 16.0 && t->axis[1].lo == -M_PI_2 && t->axis[1].hi == M_PI_2,
            "build: v on the ends mapping, c = 16 (the planner's rule)");
     check_tail(t, 60);
@@ -414,7 +501,7 @@ static void test_build_io(void)
     }
     nbt_table *back = exr_round_trip(t);
     t_true(back && nbt_table_is_gslice(back) && back->axis[2].n == t->axis[2].n &&
-               back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 2 &&
+               back->max_err[0] == t->max_err[0] && back->form == NBT_FORM_TAIL && back->interp2 == 3 &&
                back->nch == 2 && back->data[5] == t->data[5],
            "EXR round trip keeps the g-sliced table (%zu slices)", t->axis[2].n);
     /* the v mapping survives the file: same map and c, and a lookup between
@@ -578,6 +665,7 @@ int main(void)
     t_true(nbt_table_is_gslice(H) && nbt_table_is_gslice(J), "fill marks the tables g-sliced");
     check_tail(H, 200);
     check_table(J, 80);
+    test_tail_cubic();
     /* the plain form (older files) still builds and bounds its error */
     nbt_table *P = nbt_table_alloc3(NBT_TABLE_H, &H->axis[0], &H->axis[1],
                                     &(nbt_axis){-0.4, 0.5, NBT_AXIS_COS, 0, 9}, 1);

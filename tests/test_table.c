@@ -640,7 +640,65 @@ int main(void)
             }
             /* float node values <= 1: 1e-6 */
             t_true(q3 && w3 < 1e-6, "three slices, quadratic in g: lookup3 exact at 7 points (worst %.2g)", w3);
+            /* cubic needs four slices: a 3-slice file claiming interp 3 is refused */
+            char p3[64];
+            snprintf(p3, sizeof p3, "/tmp/nbt_test_table3_%ld.exr", (long)getpid());
+            nbt_table *r3 = NULL;
+            t_true(q3 && nbt_table_write_exr(q3, p3, NBT_EXR_NONE) == NBT_OK && patch_file(p3, "nbt.axis2.interp", NULL, 3) &&
+                       nbt_table_read_exr(p3, &r3, err, sizeof err) == NBT_EFORMAT && !r3 && strstr(err, "at least 4"),
+                   "interp 3 with 3 slices refused: %s", err);
+            unlink(p3);
             nbt_table_free(q3);
+        }
+        {
+            /* cubic in g (interp2 = 3): for f = s0 s1 + P^4/64, P = s2 (n - 1) the slice
+             * index, Lagrange through slices m0..m0+3 errs by exactly -(P - m0)(P - m0 - 1)
+             * (P - m0 - 2)(P - m0 - 3)/64 (f's 4th derivative / 4! = 1/64; bilinear is exact
+             * for s0 s1), m0 = floor(P) - 1 clamped to [0, n - 4]: a closed form that
+             * pins the stencil, in the first and last cells too (an off-by-one stencil
+             * there errs by up to 24/64 instead of 1/64) */
+            nbt_table *qc = nbt_table_dup(q);
+            for (size_t m = 0; qc && m < 7; m++)
+                for (size_t j = 0; j < 4; j++)
+                    for (size_t i = 0; i < 5; i++)
+                        qc->data[(m * 4 + j) * 5 + i] = (float)(i / 4.0 * (j / 3.0) + pow((double)m, 4) / 64.0);
+            double wc = 0, wcq = 0, wend = 0;
+            for (int rep = 0; qc && rep < 400; rep++) {
+                /* a quarter of the points in the last cell, a quarter in the first */
+                double x0 = 4 * t_uniform(), x1 = t_uniform(), P = rep % 4 == 0 ? 5 + t_uniform() : rep % 4 == 1 ? t_uniform() : 6 * t_uniform();
+                double x2 = nbt_axis_from_unit(&ga, P / 6.0), oc;
+                P = nbt_axis_to_unit(&ga, x2) * 6.0;
+                double m0 = fmin(fmax(floor(P) - 1.0, 0.0), 3.0), x = P - m0;
+                double e = nbt_axis_to_unit(&b0, x0) * nbt_axis_to_unit(&b1, x1) + pow(P, 4) / 64.0 -
+                           x * (x - 1) * (x - 2) * (x - 3) / 64.0;
+                qc->interp2 = 3;
+                nbt_table_lookup3(qc, x0, x1, x2, &oc);
+                wc = fmax(wc, fabs(oc - e));
+                if (rep % 4 < 2)
+                    wend = fmax(wend, fabs(oc - e));
+                qc->interp2 = 2;
+                nbt_table_lookup3(qc, x0, x1, x2, &oc);
+                wcq = fmax(wcq, fabs(oc - e));
+            }
+            /* float node values <= 21: 1e-5 */
+            t_true(qc && wc < 1e-5, "cubic-in-g lookup = f minus its closed-form interpolation error (worst %.2g, "
+                   "first and last cells %.2g)", wc, wend);
+            t_true(wcq > 1e-3, "the quadratic lookup is not (worst %.2g): the check above can fail", wcq);
+            /* the file keeps interp2 = 3 (an older reader refuses it: 'must be 1 or 2') */
+            char pc[64];
+            snprintf(pc, sizeof pc, "/tmp/nbt_test_tablec_%ld.exr", (long)getpid());
+            nbt_table *rc = NULL;
+            if (qc)
+                qc->interp2 = 3;
+            t_true(qc && nbt_table_write_exr(qc, pc, NBT_EXR_NONE) == NBT_OK &&
+                       nbt_table_read_exr(pc, &rc, err, sizeof err) == NBT_OK && rc->interp2 == 3 && same_tables(qc, rc),
+                   "cubic table written and read: interp2 3 kept");
+            nbt_table_free(rc);
+            rc = NULL;
+            t_true(patch_file(pc, "nbt.axis2.interp", NULL, 4) && nbt_table_read_exr(pc, &rc, err, sizeof err) == NBT_EFORMAT &&
+                       !rc && strstr(err, "interp"), "interp 4 refused: %s", err);
+            unlink(pc);
+            nbt_table_free(qc);
         }
         q->max_err[0] = 0.25;
         for (size_t m = 0; m < 6; m++)
@@ -666,8 +724,8 @@ int main(void)
                "EXR keeps interp2, form, atanh and the cell errors (rounded up to float)");
         nbt_table_free(rq);
         rq = NULL;
-        t_true(patch_file(pq, "nbt.axis2.interp", NULL, 3) && nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_EFORMAT &&
-                   !rq && strstr(err, "interp"), "interp 3 refused: %s", err);
+        t_true(patch_file(pq, "nbt.axis2.interp", NULL, 5) && nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_EFORMAT &&
+                   !rq && strstr(err, "interp"), "interp 5 refused: %s", err);
         t_true(nbt_table_write_exr(q, pq, NBT_EXR_NONE) == NBT_OK && patch_file(pq, "plain", "plein", 0) &&
                    nbt_table_read_exr(pq, &rq, err, sizeof err) == NBT_EFORMAT && !rq && strstr(err, "nbt.form"),
                "an unknown value form refused: %s", err);

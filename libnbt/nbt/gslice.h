@@ -11,7 +11,8 @@
  * g_m node m of axis[2], in the table's value form (t->form: PLAIN, or for
  * J LOG_ET, T + ln J), so a sampler3D at node-aligned coordinates on all
  * three axes returns what nbt_table_lookup3 does (interp2 = 2:
- * nbt_lookup3q's three fetches).
+ * nbt_lookup3q's three fetches; H's tail form interp2 = 3: nbt_lookup3c's
+ * four).
  *
  * Recorded error (in the value form; LOG_ET: in ln J, i.e. relative), per
  * g cell (cell_err, nbt_table_err_at) and its largest (max_err[0]): the
@@ -54,10 +55,13 @@ nbt_status nbt_gslice_fill(nbt_table *t, const nbt_build_opts *o);
  * set to LOG_ET). TAIL (H only; axis[1] must
  * be [-pi/2, pi/2], axis[0] start at 0) stores R = C(u, v; g) W(u, v),
  * C the scaled tail integral of nbt/table.h, W = 1 + s/2 + u s^2/2,
- * s = tan(pi/4 + v/2) (R(u, pi/2) = 4 pi p_g(-1)), sets interp2 = 2
- * (3 slices or more) and records the error relative to the value: cell_err
+ * s = tan(pi/4 + v/2) (R(u, pi/2) = 4 pi p_g(-1)), needs 3 slices or more,
+ * sets interp2 = 3 (cubic in g; with 3 slices 2, quadratic) and records
+ * the error relative to the value: cell_err
  * per g cell, max_err their largest (doc/tables.md). PLAIN as described
- * above. NBT_EINVAL for TAIL on a J table or LOG_ET on an H table. */
+ * above. NBT_EINVAL for TAIL on a J table or LOG_ET on an H table, and for
+ * PLAIN or LOG_ET with interp2 = 3 (their error measurement knows the
+ * linear and quadratic stencils). */
 nbt_status nbt_gslice_fill_form(nbt_table *t, nbt_table_form form, const nbt_build_opts *o);
 
 /* An error-driven g-sliced table. */
@@ -75,7 +79,8 @@ typedef struct {
  * H (tail form): u log1p_cbrt(c = 10) and v cos with 129 nodes at tol 1e-3;
  * J (log_et form): T log1p_cbrt(c = 20) with 65 nodes, theta linear
  * (Lambert) or cos (Phong) with 257; both times sqrt(1e-3/tol) up a ladder.
- * g uniform in atanh, quadratic, with 1 + 32 (atanh span / 2 atanh 0.95)
+ * g uniform in atanh, cubic (H) or quadratic (J), with
+ * 1 + 32 (atanh span / 2 atanh 0.95)
  * (1e-3/tol)^(1/3) slices up the g ladder 9, 13, 17, 25, 33, 49, 65, ...
  * The predicted time is a 33x33x3 proxy's scaled by the node count. */
 typedef struct {

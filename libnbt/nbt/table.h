@@ -38,7 +38,8 @@
  * same node-aligned texture coordinates on all three axes (interp2 = 1), or
  * quadratic in the slice coordinate through the three nearest slices
  * (interp2 = 2: three bilinear fetches at slice centres, the same weights in
- * GLSL). A 2-D table has axis[2].n == 1.
+ * GLSL), or cubic through four (interp2 = 3, nbt_lookup3c). A 2-D table has
+ * axis[2].n == 1.
  *
  * Value forms (nbt_table_form): what a table's values are. PLAIN: the
  * quantity itself (H_k, J_k^n, ...). Other forms store a transformed value
@@ -132,7 +133,8 @@ typedef struct {
     double max_abs[NBT_TABLE_MAX_CH];  /* max |value| per channel (scale for max_err) */
     int half;              /* values rounded to half precision (written as HALF) */
     nbt_table_form form;   /* what the values are (PLAIN unless a builder says otherwise) */
-    int interp2;           /* axis 2 interpolation: 1 linear, 2 quadratic (needs axis[2].n >= 3) */
+    int interp2;           /* axis 2 interpolation: 1 linear, 2 quadratic (needs axis[2].n >= 3),
+                              3 cubic (needs axis[2].n >= 4) */
     double *cell_err;      /* 3-D tables: (axis[2].n - 1) * nch values, cell_err[m * nch + c]
                               bounds |lookup3 - exact| of channel c for x2 between nodes m
                               and m + 1; NaN: not recorded (max_err applies). NULL for 2-D. */
@@ -188,7 +190,10 @@ nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0
  * m = round(p) clamped to [1, n-2], t = p - m, weights t(t-1)/2, 1 - t^2,
  * t(t+1)/2 on slices m-1, m, m+1; the stencil moves at midpoints between
  * slices, where the value jumps by the order of the interpolation error,
- * which the recorded error bounds on either side). x2 clamps to axis[2]'s range; on a 2-D
+ * which the recorded error bounds on either side), or cubic (interp2 = 3:
+ * Lagrange through slices m0 .. m0 + 3, m0 = floor(p) - 1 clamped to
+ * [0, n-4], weights of x = p - m0 at the nodes 0..3; continuous in x2, the
+ * error ~h^4 instead of ~h^3). x2 clamps to axis[2]'s range; on a 2-D
  * table x2 is ignored. */
 void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, double *out);
 

@@ -9,7 +9,8 @@
  * g-sliced (config g_sliced): nbt_H0, nbt_J1_0, nbt_Jn_0 are sampler3D (channel R, axis 2 = HG g),
  *   nbt_H_ax2, nbt_H_map2, nbt_J_ax2, nbt_J_map2 their g axes, float nbt_g the run-time g
  *   (clamped to the g axis' range by the lookup); nbt_J_form (int, 1: log_et, the texels hold
- *   T + ln J) and nbt_J_interp2 (int, 2: quadratic in g) for the J tables; nbt_hw is unused.
+ *   T + ln J) and nbt_J_interp2 (int, 3: cubic in g, 2: quadratic) for the J tables, nbt_H_interp2
+ *   (int, 3: cubic in g, else quadratic) for H; nbt_hw is unused.
  * Functions: nbt_airlight(kappa_s, kappa_t, I0, dsv, gamma, dvp),
  *   nbt_surface(kappa_s, kappa_t, I0, dsp, theta_s, theta_r, kd, ks, n),
  *   g-sliced: nbt_airlight_g(..., dvp, g), nbt_surface_g(..., n, g) at any g (the plain ones read nbt_g),
@@ -44,7 +45,7 @@ typedef struct {
  * loose uniforms. VULKAN: "#version 450" for glslangValidator -V (SPIR-V);
  * uniforms in std140 blocks and samplers at descriptor set 0, bindings:
  *   0 nbt_weights_block { nbt_hw[, nbt_g] }, 1 nbt_H_block { nbt_H_ax0, nbt_H_ax1, nbt_H_map0, nbt_H_map1
- *   [, nbt_H_ax2, nbt_H_map2] }, 2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
+ *   [, nbt_H_ax2, nbt_H_map2, nbt_H_interp2] }, 2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
  *   [, nbt_J_ax2, nbt_J_map2, nbt_J_form, nbt_J_interp2] } (the bracketed members with g_sliced;
  *   the samplers at 3, 7, 11 are
  *   then sampler3D),
