@@ -137,14 +137,18 @@ static nbt_status choose_terms(double gmax, double umax, double tol, size_t *N, 
             st = nbt__airlight_segment(ws, &w, u, gam[ig] - NBT_PI_2, NBT_PI_2, 1, 1e-10, d, d + K + 1);
             if (st != NBT_OK)
                 break;
-            double total = 0, tail = 0, gk = 1;
-            for (size_t k = 0; k <= K; k++, gk *= gmax)
-                total += (2.0 * k + 1.0) * gk * d[k];
-            /* tail after N terms, from the top down */
-            gk = pow(gmax, (double)K);
-            for (size_t k = K + 1; k-- > 0; gk = gmax != 0 ? gk / gmax : (k == 1 ? 1 : 0)) {
-                tail += (2.0 * k + 1.0) * gk * d[k];
-                worst[k] = fmax(worst[k], fabs(tail / total));
+            /* both signs of g: a backward lobe looking towards the source
+             * needs more terms than any forward one (gmax 0.8, u 30) */
+            for (int sg = 1; sg >= -1; sg -= 2) {
+                double g = sg * gmax, total = 0, tail = 0, gk = 1;
+                for (size_t k = 0; k <= K; k++, gk *= g)
+                    total += (2.0 * k + 1.0) * gk * d[k];
+                /* tail after N terms, from the top down */
+                gk = pow(g, (double)K);
+                for (size_t k = K + 1; k-- > 0; gk = g != 0 ? gk / g : (k == 1 ? 1 : 0)) {
+                    tail += (2.0 * k + 1.0) * gk * d[k];
+                    worst[k] = fmax(worst[k], fabs(tail / total));
+                }
             }
         }
     }

@@ -79,10 +79,11 @@ static void test_scene_check(void)
 
 /* The budget's claim against an independent reference: on the sample rays
  * (u = kappa_t h from xmax down by 10^0.6, gamma in {0.05 .. 2.5}, no
- * surface) the N-term Legendre series of HG (nbt_airlight_series) differs
- * from Nishita's integral of the exact HG phase along the ray
- * (nbt_airlight_direct) by <= tol/2 relative, and N - 1 terms exceed tol/2
- * on at least one ray; A is the closed-form sum. Both integrals to 1e-10. */
+ * surface, g = +0.5 and -0.5: |g| <= gmax means both lobes) the N-term
+ * Legendre series of HG (nbt_airlight_series) differs from Nishita's
+ * integral of the exact HG phase along the ray (nbt_airlight_direct) by
+ * <= tol/2 relative, and N - 1 terms exceed tol/2 on at least one ray; A is
+ * the closed-form sum. Both integrals to 1e-10. */
 static void test_legendre(void)
 {
     double g = 0.5, xmax = 12, tol = 2e-2;
@@ -95,25 +96,27 @@ static void test_legendre(void)
     t_rel(l.amp, A, 1e-12, "amplification = closed-form sum (2k+1) g^k");
     t_rel(l.table_tol, 0.5 * tol / A, 1e-12, "table target = tol/2 / A");
     double b[64], worstN = 0, worstN1 = 0;
-    for (int k = 0; k < 64; k++)
-        b[k] = pow(g, k);
-    nbt_phase *hg = NULL;
-    char err[128];
-    nbt_phase_parse("hg:g=0.5", &hg, err, sizeof err);
     static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
-    for (int iu = 0; iu < 6; iu++) {
-        double u = xmax * pow(10.0, -iu * 0.6);
-        for (int ig = 0; ig < 6; ig++) {
-            nbt_airlight_geom geo = {1.0, 1.0, 1.0, u / sin(gam[ig]), gam[ig], INFINITY};
-            double d, de, sN, sNe, s1, s1e;
-            nbt_airlight_direct(hg, &geo, 1e-10, &d, &de);
-            nbt_airlight_series(b, l.nterms, &geo, 1e-10, &sN, &sNe);
-            nbt_airlight_series(b, l.nterms - 1, &geo, 1e-10, &s1, &s1e);
-            worstN = fmax(worstN, (fabs(sN - d) - de - sNe) / d);
-            worstN1 = fmax(worstN1, (fabs(s1 - d) - de - s1e) / d);
+    for (int sg = 1; sg >= -1; sg -= 2) {
+        nbt_phase *hg = NULL;
+        char err[128];
+        nbt_phase_parse(sg > 0 ? "hg:g=0.5" : "hg:g=-0.5", &hg, err, sizeof err);
+        for (int k = 0; k < 64; k++)
+            b[k] = pow(sg * g, k);
+        for (int iu = 0; iu < 6; iu++) {
+            double u = xmax * pow(10.0, -iu * 0.6);
+            for (int ig = 0; ig < 6; ig++) {
+                nbt_airlight_geom geo = {1.0, 1.0, 1.0, u / sin(gam[ig]), gam[ig], INFINITY};
+                double d, de, sN, sNe, s1, s1e;
+                nbt_airlight_direct(hg, &geo, 1e-10, &d, &de);
+                nbt_airlight_series(b, l.nterms, &geo, 1e-10, &sN, &sNe);
+                nbt_airlight_series(b, l.nterms - 1, &geo, 1e-10, &s1, &s1e);
+                worstN = fmax(worstN, (fabs(sN - d) - de - sNe) / d);
+                worstN1 = fmax(worstN1, (fabs(s1 - d) - de - s1e) / d);
+            }
         }
+        nbt_phase_free(hg);
     }
-    nbt_phase_free(hg);
     t_true(worstN <= 0.5 * tol, "N = %zu terms: truncation %.3g <= tol/2 on the sample rays", l.nterms, worstN);
     t_true(worstN1 > 0.5 * tol, "N - 1 terms: truncation %.3g > tol/2 (N is the smallest)", worstN1);
     t_true(fabs(l.trunc_err - worstN) <= 1e-6 + 1e-3 * worstN, "recorded truncation error %.6g = ray reference %.6g",
@@ -128,28 +131,31 @@ static void test_legendre(void)
  * stretch, where the scattering cosine is cos(gamma), so the relative
  * truncation of the N-term series tends to that of HG's Legendre series at
  * one angle, |sum_{k>=N} (2k+1) g^k P_k(cos gamma)| / HG_4pi(cos gamma) (closed
- * form; the sum to k = 600, where (2k+1) 0.9^k < 1e-24). The budget for
+ * form; the sum to k = 600, where (2k+1) 0.9^k < 1e-24), for g and -g. The budget for
  * xmax = 1e6 must meet tol/2 there on the sample angles (its smallest rays,
  * u = 1e3 .. 1e6, are all in that limit), and N - 1 terms must not. (The H
  * values underflow there, e^{-u s} < e^{-700}: the budget integrates them
  * shifted; unshifted, those rays were 0/0 and silently dropped out.) */
-static double deep_trunc(double g, size_t N)
+static double deep_trunc(double gmax, size_t N)
 {
     static const double gam[] = {0.05, 0.2, 0.5, 1.0, 1.5, 2.5};
     double worst = 0;
-    for (int ig = 0; ig < 6; ig++) {
-        double mu = cos(gam[ig]), p0 = 1, p1 = mu, tail = 0, gk = 1;
-        for (size_t k = 0; k <= 600; k++, gk *= g) {
-            double pk = k == 0 ? 1.0 : p1;
-            if (k >= N)
-                tail += (2.0 * k + 1.0) * gk * pk;
-            if (k >= 1) { /* p0, p1 = P_k, P_{k+1} */
-                double p2 = ((2.0 * k + 1.0) * mu * p1 - (double)k * p0) / ((double)k + 1.0);
-                p0 = p1;
-                p1 = p2;
+    for (int sg = 1; sg >= -1; sg -= 2) {
+        for (int ig = 0; ig < 6; ig++) {
+            double g = sg * gmax;
+            double mu = cos(gam[ig]), p0 = 1, p1 = mu, tail = 0, gk = 1;
+            for (size_t k = 0; k <= 600; k++, gk *= g) {
+                double pk = k == 0 ? 1.0 : p1;
+                if (k >= N)
+                    tail += (2.0 * k + 1.0) * gk * pk;
+                if (k >= 1) { /* p0, p1 = P_k, P_{k+1} */
+                    double p2 = ((2.0 * k + 1.0) * mu * p1 - (double)k * p0) / ((double)k + 1.0);
+                    p0 = p1;
+                    p1 = p2;
+                }
             }
+            worst = fmax(worst, fabs(tail) / ((1 - g * g) / pow(1 + g * g - 2 * g * mu, 1.5)));
         }
-        worst = fmax(worst, fabs(tail) / ((1 - g * g) / pow(1 + g * g - 2 * g * mu, 1.5)));
     }
     return worst;
 }
