@@ -249,6 +249,12 @@ PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
 # the bar is PREVIEW_BAR_W = 24 coloured columns from x = 124 + 4 x 384 + 3 x 40 + 24 = 1804 (its
 # black frame lies outside them: a frame one pixel too wide eats the ramp's first column)
 grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad "h.png colour bar place: $(cat "$tmp/bar")"
+# and its frame: black lines one pixel outside the ramp (x = 1803 and 1828, y = 95 and 384), each side whole
+# (max luma 0 along it; the white background is 255)
+for r in "1803 95 1 290" "1828 95 1 290" "1803 95 26 1" "1803 384 26 1"; do
+  words 1 "$PNGCHECK" --max-luma $r "$tmp/h.png"
+  [ "$w" = 0.0 ] && ok || bad "h.png: the colour bar's frame side at $r not all black (max luma $w)"
+done
 # labels: "value" centred over the bar (x = 1804 + 12 - (5 x 12 - 2) / 2 = 1787, y = 96 - 18 - 4 = 74)
 # in glyph cells of 12 x 14 pixels: five different letters draw five different cells
 [ "$("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")" = 5 ] && ok ||
@@ -553,11 +559,24 @@ printf 'kappa_t = 0.5\ndistance = 8\ng = 0.9\nbasis = slices\n' >"$tmp/b.scene"
 expect_usage "scene: basis slices for one g" "basis = slices needs a g range" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
 printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\nbasis = slices\n' >"$tmp/b.scene"
 expect_usage "scene: basis with a fixed phase" "basis applies to a g range only" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
+# scene --help: its usage on stdout, exit 0; an unknown option: no help, a usage error (exit 2) naming --help
+"$NBT_GEN" scene --help >"$tmp/out" 2>"$tmp/err" && grep -q "^Usage: nbt-gen scene FILE" "$tmp/out" && [ ! -s "$tmp/err" ] && ok ||
+  bad "scene --help: rc $?, $(cat "$tmp/err")"
+"$NBT_GEN" scene --bogus "$tmp/b.scene" >"$tmp/out" 2>"$tmp/err"; rc=$?
+[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "see 'nbt-gen scene --help'" "$tmp/err" && ok ||
+  bad "scene --bogus: rc $rc, stdout $(head -c 100 "$tmp/out"), stderr $(cat "$tmp/err")"
 
 # the default scene
+t0=$(date +%s.%N)
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
   [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
   bad "default scene: $(cat "$tmp/err")"
+t1=$(date +%s.%N)
+# its "built in X s" is the time since it started: > 0 and within the wall time the shell measured around
+# the whole run (a time since boot, or the clock's value plus the start, is far beyond it)
+tb=$(sed -n 's/^nbt-gen: default scene: 3 tables in .*, built in \([0-9.]*\) s .*/\1/p' "$tmp/err")
+awk -v b="$tb" -v w="$t0 $t1" 'BEGIN { split(w, t, " "); exit !(b != "" && b + 0 > 0 && b + 0 <= t[2] - t[1]) }' && ok ||
+  bad "default scene: built in '$tb' s, the run took $(awk -v w="$t0 $t1" 'BEGIN { split(w, t, " "); print t[2] - t[1] }') s"
 # the thesis' set (Hong): H, J^1 and J^20, as their files and headers say
 [ -s "$tmp/nbt-tables/H.exr" ] && [ -s "$tmp/nbt-tables/J1.exr" ] && [ -s "$tmp/nbt-tables/J20.exr" ] &&
   "$NBT_GEN" info "$tmp/nbt-tables/J20.exr" | grep -q '^n  *20$' && "$NBT_GEN" info "$tmp/nbt-tables/J1.exr" | grep -q '^n  *1$' &&
