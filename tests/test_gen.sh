@@ -276,6 +276,17 @@ for r in "1803 95 1 290" "1828 95 1 290" "1803 95 26 1" "1803 384 26 1"; do
   words 1 "$PNGCHECK" --max-luma $r "$tmp/h.png"
   [ "$w" = 0.0 ] && ok || bad "h.png: the colour bar's frame side at $r not all black (max luma $w)"
 done
+# info --at beyond the table: the values clamped to its edge, and one warning on stderr. u = -0.5 lies below
+# u's [0, 10] (but inside v's [-pi/2, pi/2]): the values are those at u = 0, where H_0(0, v) = v + pi/2
+# (1.8708 at v = 0.3, within the table's recorded 1.03e-2); at u = 0.5, inside, no warning
+"$NBT_GEN" info "$tmp/h.exr" --at -0.5,0.3 >"$tmp/iout" 2>"$tmp/ierr"
+ia=$(sed -n 's/^at u=-0.5 v=[0-9.]*: //p' "$tmp/iout"); ib=$("$NBT_GEN" info "$tmp/h.exr" --at 0,0.3 2>/dev/null | sed -n 's/^at u=0 v=[0-9.]*: //p')
+[ -n "$ia" ] && [ "$ia" = "$ib" ] && [ "$(wc -l <"$tmp/ierr")" -eq 1 ] && grep -q "(-0.5, 0.3) lies outside the table" "$tmp/ierr" &&
+  awk -v h="${ia%% *}" 'BEGIN { d = h - (0.3 + 1.5707963267948966); if (d < 0) d = -d; exit !(d <= 1.04e-2) }' && ok ||
+  bad "info --at -0.5,0.3: '$ia' (at u = 0: '$ib'), stderr $(cat "$tmp/ierr")"
+"$NBT_GEN" info "$tmp/h.exr" --at 0.5,0.3 >/dev/null 2>"$tmp/ierr" && [ ! -s "$tmp/ierr" ] && ok ||
+  bad "info --at 0.5,0.3 (inside): $(cat "$tmp/ierr")"
+rm -f "$tmp/iout" "$tmp/ierr"
 # labels: "value" centred over the bar (x = 1804 + 12 - (5 x 12 - 2) / 2 = 1787, y = 96 - 18 - 4 = 74)
 # in glyph cells of 12 x 14 pixels: five different letters draw five different cells
 [ "$("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")" = 5 ] && ok ||
