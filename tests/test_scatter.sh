@@ -53,6 +53,11 @@ awk -v a="${a#* }" -v b="${b#* }" -v c="${c#* }" -v d="${d#* }" 'BEGIN { exit !(
 sed -n 's/.*on average \([0-9.]*\)%.* would leave \([0-9.]*\)%, 50% would leave \([0-9.]*\)%.*/\1 \2 \3/p' "$tmp/log" >"$tmp/lv"
 awk 'NF == 3 { n++; if (!($3 < $2 && $2 < $1 && $3 < 1)) bad = 1 } END { exit bad || n != 1 }' "$tmp/lv" && ok ||
   bad "overscan advice: mean > 15% grown > 50% grown, < 1%: $(cat "$tmp/log")"
+# and its "(at most X%)": the largest pixel fraction, a fraction (<= 100%) no smaller than the frame's mean nor the
+# mean over the 3 right columns (offscreen.X above, 0.49; printed to 0.1%)
+m=$(sed -n 's/.*on average \([0-9.]*\)% of a frame pixel.s kernel (at most \([0-9.]*\)%).*/\1 \2/p' "$tmp/log")
+awk -v m="$m" -v a="${a#* }" 'BEGIN { n = split(m, v, " "); exit !(n == 2 && v[2] <= 100 && v[2] + 0.05 >= v[1] && v[2] + 0.05 >= 100 * a) }' &&
+  ok || bad "overscan warning's largest fraction (mean, at most: $m) vs the right columns' offscreen.X ${a#* }: $(cat "$tmp/log")"
 # the frame is the direct part plus the scattered one, channel by channel: RGB = T.RGB input + S.RGB
 # (float round-off; an index or channel slip shows at the step's edge and in the tinted halves)
 words composite:2 "$MK" "$tmp/step-out.exr" composite "$tmp/step.exr"; set -- $w
