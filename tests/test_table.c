@@ -763,6 +763,23 @@ int main(void)
             rr = NULL;
             rt->row_err[at] = 0.125 * (double)(at + 1);
         }
+        /* a theta map (1 theta cell per band: 2 bands x 6) whose file lacks nbt.theta_err.cells (the name
+         * patched to ...cellz): refused, not read with a guessed band width */
+        okr = okr && nbt_table_theta_err_alloc(rt, 1) == NBT_OK && nbt_table_theta_err_len(rt) == 12;
+        for (size_t i = 0; okr && i < 12; i++)
+            rt->theta_err[i] = 0.0625 * (double)(i + 1);
+        t_true(okr && nbt_table_write_exr(rt, pr, NBT_EXR_NONE) == NBT_OK &&
+                   nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_OK && rr && rr->theta_cells == 1 &&
+                   rr->theta_err && rr->theta_err[11] == 0.75,
+               "a theta map of 1 cell per band written and read back");
+        nbt_table_free(rr);
+        rr = NULL;
+        snprintf(err, sizeof err, "read without error");
+        t_true(okr && patch_file(pr, "nbt.theta_err.cells", "nbt.theta_err.cellz", 0) &&
+                   nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_EFORMAT && !rr &&
+                   strstr(err, "needs nbt.theta_err.cells"),
+               "a theta map without nbt.theta_err.cells refused: %s", err);
+        nbt_table_free(rr);
         unlink(pr);
         nbt_table_free(rt);
     }
