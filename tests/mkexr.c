@@ -20,8 +20,8 @@
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
  * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15.
  * mkexr IN.exr noise B and mkexr IN.exr zsq OTHER.exr check a path-traced
- * output's Sse layer (below). mkexr OUT.exr halo SUM: a frame with a pixel of R + G + B = SUM against
- * --compare's lamp threshold; capband, capband-ext: a frame for nbt-scatter's mirrored-lamp cap, and
+ * output's Sse layer (below). mkexr OUT.exr halo SUM [ROW]: a frame with a pixel of R + G + B = SUM
+ * (in row ROW, default 3) against --compare's lamp threshold; capband, capband-ext: a frame for nbt-scatter's mirrored-lamp cap, and
  * the same frame with that continuation written out as overscan (both below).
  * Any other name: the grey render alone. */
 #include <config.h>
@@ -289,10 +289,11 @@ int main(int argc, char **argv)
         nbt_image_free(in);
         return rc;
     }
-    if (argc == 4 && !strcmp(argv[2], "halo")) {
+    if ((argc == 4 || argc == 5) && !strcmp(argv[2], "halo")) {
         /* 16x12 at depth 4: grey 0.5 in rows 0..7, 2.0 in rows 8..11 (the frame's bottom third), and one pixel
-         * (5, 3) of R = SUM (G = B = 0). --compare's lamps are pixels whose R + G + B exceeds 10 x the frame's
-         * mean of R + G + B, (190.5 + SUM + 384) / 192 here: SUM above 31.57 is a lamp, SUM below is not */
+         * (5, ROW) of R = SUM (G = B = 0), ROW 3 or argv[4] (0..7, so the mean below stays the same).
+         * --compare's lamps are pixels whose R + G + B exceeds 10 x the frame's mean of R + G + B,
+         * (190.5 + SUM + 384) / 192 here: SUM above 31.57 is a lamp, SUM below is not */
         nbt_image *im = nbt_image_alloc(16, 12, 1);
         if (!im)
             return 1;
@@ -300,8 +301,11 @@ int main(int argc, char **argv)
             im->rgb[3 * i] = im->rgb[3 * i + 1] = im->rgb[3 * i + 2] = i < 8 * 16 ? 0.5f : 2.0f;
             im->z[i] = 4.0f;
         }
-        im->rgb[3 * (3 * 16 + 5)] = (float)atof(argv[3]);
-        im->rgb[3 * (3 * 16 + 5) + 1] = im->rgb[3 * (3 * 16 + 5) + 2] = 0.0f;
+        size_t row = argc == 5 ? (size_t)atoi(argv[4]) : 3;
+        if (row > 7)
+            return 1;
+        im->rgb[3 * (row * 16 + 5)] = (float)atof(argv[3]);
+        im->rgb[3 * (row * 16 + 5) + 1] = im->rgb[3 * (row * 16 + 5) + 2] = 0.0f;
         int rc = nbt_image_write_exr_ex(im, argv[1], NULL, err, sizeof err) != NBT_OK;
         if (rc)
             fprintf(stderr, "%s\n", err);

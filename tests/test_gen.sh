@@ -199,6 +199,27 @@ awk -v v="$1" -v e="$2" -v m="$me" -v d="$d" 'BEGIN { w = 0.1 * 2 * 0.7 * m / (4
   if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(m > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
   bad "surface from a k = 0 J table: $1 +- $2 (bound from max_err $me) vs direct $d"
 rm -f "$tmp/j0.exr"
+S0=$S; d0=$d
+# one fixed-phase J table per lobe (hg:g=0.5, J^1 and J^20, 17x17 on T in [0, 4]): the bound is the recorded
+# interpolation errors through the lobe weights, kappa_s I0 (kd max_err_1 + ks max_err_20) / (4 pi dsp), and
+# the value lies within it of direct (measured 2.5e-5 against 2.6e-4); with ks = 0 the J^1 table alone serves
+# a Phong n = 20 surface (only its diffuse lobe counts)
+"$NBT_GEN" surface --phase hg:g=0.5 --size 17x17 --max 4 --no-preview --quiet -o "$tmp/j1p.exr" >/dev/null 2>&1 &&
+  "$NBT_GEN" surface --phase hg:g=0.5 --n 20 --size 17x17 --max 4 --no-preview --quiet -o "$tmp/j20p.exr" >/dev/null 2>&1 ||
+  bad "fixed-phase J^1 and J^20 tables"
+m1=$("$NBT_GEN" info "$tmp/j1p.exr" | sed -n 's/^channel R .*max interp err //p')
+m20=$("$NBT_GEN" info "$tmp/j20p.exr" | sed -n 's/^channel R .*max interp err //p')
+for ks in 0.3 0; do
+  S="--kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks $ks --n 20"
+  words 2 "$NBT_GEN" eval surface --g 0.5 $S --method direct; set -- $w; d=$1
+  tabs="$tmp/j1p.exr"; [ $ks = 0 ] || tabs="$tabs $tmp/j20p.exr"
+  words 2 "$NBT_GEN" eval surface $S --method table --tables $tabs 2>/dev/null; set -- $w
+  awk -v v="$1" -v e="$2" -v a="$m1" -v b="$m20" -v ks=$ks -v d="$d" 'BEGIN { w = 0.1 * 2 * (0.7 * a + ks * b) / (4 * 3.14159265358979 * 5)
+    x = e - w; if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(a > 0 && b > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
+    bad "surface from fixed-phase tables, ks $ks: $1 +- $2 (bound from max_err $m1, $m20) vs direct $d"
+done
+rm -f "$tmp/j1p.exr" "$tmp/j20p.exr"
+S=$S0; d=$d0
 words 2 "$NBT_GEN" eval surface $S --method table 2>/dev/null; set -- $w
 awk -v a="$1" -v b="$d" -v e="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= e) }' && ok ||
   bad "surface table $1 within its reported error $2 of direct $d"
@@ -249,6 +270,23 @@ PNGCHECK=$(abspath "${NBT_PNGCHECK:-./tests/pngcheck}")
 # the bar is PREVIEW_BAR_W = 24 coloured columns from x = 124 + 4 x 384 + 3 x 40 + 24 = 1804 (its
 # black frame lies outside them: a frame one pixel too wide eats the ramp's first column)
 grep -q '^bar at column 1827, rows 96\.\.383, width 24$' "$tmp/bar" && ok || bad "h.png colour bar place: $(cat "$tmp/bar")"
+# and its frame: black lines one pixel outside the ramp (x = 1803 and 1828, y = 95 and 384), each side whole
+# (max luma 0 along it; the white background is 255)
+for r in "1803 95 1 290" "1828 95 1 290" "1803 95 26 1" "1803 384 26 1"; do
+  words 1 "$PNGCHECK" --max-luma $r "$tmp/h.png"
+  [ "$w" = 0.0 ] && ok || bad "h.png: the colour bar's frame side at $r not all black (max luma $w)"
+done
+# info --at beyond the table: the values clamped to its edge, and one warning on stderr. u = -0.5 lies below
+# u's [0, 10] (but inside v's [-pi/2, pi/2]): the values are those at u = 0, where H_0(0, v) = v + pi/2
+# (1.8708 at v = 0.3, within the table's recorded 1.03e-2); at u = 0.5, inside, no warning
+"$NBT_GEN" info "$tmp/h.exr" --at -0.5,0.3 >"$tmp/iout" 2>"$tmp/ierr"
+ia=$(sed -n 's/^at u=-0.5 v=[0-9.]*: //p' "$tmp/iout"); ib=$("$NBT_GEN" info "$tmp/h.exr" --at 0,0.3 2>/dev/null | sed -n 's/^at u=0 v=[0-9.]*: //p')
+[ -n "$ia" ] && [ "$ia" = "$ib" ] && [ "$(wc -l <"$tmp/ierr")" -eq 1 ] && grep -q "(-0.5, 0.3) lies outside the table" "$tmp/ierr" &&
+  awk -v h="${ia%% *}" 'BEGIN { d = h - (0.3 + 1.5707963267948966); if (d < 0) d = -d; exit !(d <= 1.04e-2) }' && ok ||
+  bad "info --at -0.5,0.3: '$ia' (at u = 0: '$ib'), stderr $(cat "$tmp/ierr")"
+"$NBT_GEN" info "$tmp/h.exr" --at 0.5,0.3 >/dev/null 2>"$tmp/ierr" && [ ! -s "$tmp/ierr" ] && ok ||
+  bad "info --at 0.5,0.3 (inside): $(cat "$tmp/ierr")"
+rm -f "$tmp/iout" "$tmp/ierr"
 # labels: "value" centred over the bar (x = 1804 + 12 - (5 x 12 - 2) / 2 = 1787, y = 96 - 18 - 4 = 74)
 # in glyph cells of 12 x 14 pixels: five different letters draw five different cells
 [ "$("$PNGCHECK" --cells 1787 74 12 14 5 "$tmp/h.png")" = 5 ] && ok ||
@@ -553,11 +591,24 @@ printf 'kappa_t = 0.5\ndistance = 8\ng = 0.9\nbasis = slices\n' >"$tmp/b.scene"
 expect_usage "scene: basis slices for one g" "basis = slices needs a g range" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
 printf 'kappa_t = 0.5\ndistance = 8\nphase = iso\nbasis = slices\n' >"$tmp/b.scene"
 expect_usage "scene: basis with a fixed phase" "basis applies to a g range only" "$NBT_GEN" scene "$tmp/b.scene" -o "$tmp/bs"
+# scene --help: its usage on stdout, exit 0; an unknown option: no help, a usage error (exit 2) naming --help
+"$NBT_GEN" scene --help >"$tmp/out" 2>"$tmp/err" && grep -q "^Usage: nbt-gen scene FILE" "$tmp/out" && [ ! -s "$tmp/err" ] && ok ||
+  bad "scene --help: rc $?, $(cat "$tmp/err")"
+"$NBT_GEN" scene --bogus "$tmp/b.scene" >"$tmp/out" 2>"$tmp/err"; rc=$?
+[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "see 'nbt-gen scene --help'" "$tmp/err" && ok ||
+  bad "scene --bogus: rc $rc, stdout $(head -c 100 "$tmp/out"), stderr $(cat "$tmp/err")"
 
 # the default scene
+t0=$(date +%s.%N)
 (cd "$tmp" && "$NBT_GEN" >out 2>err) && [ "$(ls "$tmp/nbt-tables" | grep -c '\.exr$')" -eq 3 ] &&
   [ "$(ls "$tmp/nbt-tables" | grep -c '\.png$')" -eq 3 ] && [ "$(wc -l <"$tmp/out")" -eq 3 ] && ok ||
   bad "default scene: $(cat "$tmp/err")"
+t1=$(date +%s.%N)
+# its "built in X s" is the time since it started: > 0 and within the wall time the shell measured around
+# the whole run (a time since boot, or the clock's value plus the start, is far beyond it)
+tb=$(sed -n 's/^nbt-gen: default scene: 3 tables in .*, built in \([0-9.]*\) s .*/\1/p' "$tmp/err")
+awk -v b="$tb" -v w="$t0 $t1" 'BEGIN { split(w, t, " "); exit !(b != "" && b + 0 > 0 && b + 0 <= t[2] - t[1]) }' && ok ||
+  bad "default scene: built in '$tb' s, the run took $(awk -v w="$t0 $t1" 'BEGIN { split(w, t, " "); print t[2] - t[1] }') s"
 # the thesis' set (Hong): H, J^1 and J^20, as their files and headers say
 [ -s "$tmp/nbt-tables/H.exr" ] && [ -s "$tmp/nbt-tables/J1.exr" ] && [ -s "$tmp/nbt-tables/J20.exr" ] &&
   "$NBT_GEN" info "$tmp/nbt-tables/J20.exr" | grep -q '^n  *20$' && "$NBT_GEN" info "$tmp/nbt-tables/J1.exr" | grep -q '^n  *1$' &&

@@ -53,6 +53,11 @@ awk -v a="${a#* }" -v b="${b#* }" -v c="${c#* }" -v d="${d#* }" 'BEGIN { exit !(
 sed -n 's/.*on average \([0-9.]*\)%.* would leave \([0-9.]*\)%, 50% would leave \([0-9.]*\)%.*/\1 \2 \3/p' "$tmp/log" >"$tmp/lv"
 awk 'NF == 3 { n++; if (!($3 < $2 && $2 < $1 && $3 < 1)) bad = 1 } END { exit bad || n != 1 }' "$tmp/lv" && ok ||
   bad "overscan advice: mean > 15% grown > 50% grown, < 1%: $(cat "$tmp/log")"
+# and its "(at most X%)": the largest pixel fraction, a fraction (<= 100%) no smaller than the frame's mean nor the
+# mean over the 3 right columns (offscreen.X above, 0.49; printed to 0.1%)
+m=$(sed -n 's/.*on average \([0-9.]*\)% of a frame pixel.s kernel (at most \([0-9.]*\)%).*/\1 \2/p' "$tmp/log")
+awk -v m="$m" -v a="${a#* }" 'BEGIN { n = split(m, v, " "); exit !(n == 2 && v[2] <= 100 && v[2] + 0.05 >= v[1] && v[2] + 0.05 >= 100 * a) }' &&
+  ok || bad "overscan warning's largest fraction (mean, at most: $m) vs the right columns' offscreen.X ${a#* }: $(cat "$tmp/log")"
 # the frame is the direct part plus the scattered one, channel by channel: RGB = T.RGB input + S.RGB
 # (float round-off; an index or channel slip shows at the step's edge and in the tinted halves)
 words composite:2 "$MK" "$tmp/step-out.exr" composite "$tmp/step.exr"; set -- $w
@@ -113,6 +118,14 @@ for s in 30 33; do
 done
 [ "$h30" = 0 ] && awk -v h="$h33" -v b="$b33" 'BEGIN { d = h - b; if (d < 0) d = -d; exit !(b > 0.01 && d <= 1e-5 * b) }' && ok ||
   bad "--compare's lamp threshold 10 x the frame's mean: halo $h30 at R+G+B = 30 (want 0), $h33 at 33 (want binned4 $b33)"
+# the same lamp (SUM 33) in the frame's top row, (5, 0): its 12 px reach covers all 4 x 3 bins again, so
+# halo = binned4 (a finder that starts at row 1 sees no lamp: halo 0)
+"$MK" "$tmp/h33t.exr" halo 33 0 && "$S" "$tmp/h33t.exr" -o "$tmp/h33t-a.exr" $M0 --method ref-a --no-png 2>/dev/null ||
+  bad "halo scene, lamp in row 0"
+words relL1:14 "$S" "$tmp/h33t.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/h33t-a.exr" 2>/dev/null
+set -- $w
+awk -v h="${14}" -v b="${12}" 'BEGIN { d = h - b; if (d < 0) d = -d; exit !(b > 0.01 && d <= 1e-5 * b) }' && ok ||
+  bad "--compare's lamp finder: a lamp in row 0 gives halo ${14}, want binned4 ${12}"
 # the mirrored-lamp cap: beyond the frame the border continues as its mirror image, each pixel capped at 4 x the
 # median R + G + B of the 8-pixel border band. mkexr capband: a 40x30 frame whose band has median 1 (cap 4) with a
 # lamp of 3 and one of 100 on the left edge; capband-ext: the same frame with the continuation written out as

@@ -443,11 +443,32 @@ static void test_mc_albedos(void)
     nbt_phase_free(hg);
 }
 
+/* ---- the weight of paths cut at order_max, per photon (nbt_mc_kernel_result.lost):
+ * one plane at depth 60 in an infinite medium and a cap of 3 scatterings. No path
+ * can end before its 3rd scattering: reaching the plane (or -z_cut = -140) takes
+ * four unit-mean flights summing to ~60, P ~ e^-60 60^3/3! ~ 3e-22, so with 4096
+ * photons every path is cut and lost = albedo^3 exactly (N equal terms summed:
+ * rounding ~1e-13 relative). A random mutant that multiplied by the photon count
+ * instead of dividing survived: nothing else reads this field ---- */
+static void test_mc_lost(void)
+{
+    nbt_phase *hg = nbt_phase_hg(0.6);
+    const double z[] = {60.0}, edges[] = {0.1, 0.5}, alb[] = {1.0, 0.6, 0.35};
+    nbt_mc_kernel_config cfg = {hg, 1, 1, z, 2, edges, 3, alb, 3, 0, 4096, 7, 2, NULL, NULL};
+    nbt_mc_kernel_result *r = NULL;
+    t_true(nbt_mc_kernel_run(&cfg, &r) == NBT_OK && r && r->lost, "mc kernel run, order cap 3, plane at 60");
+    for (size_t k = 0; r && r->lost && k < 3; k++)
+        t_rel(r->lost[k], alb[k] * alb[k] * alb[k], 1e-12, "lost weight per photon at albedo %g = albedo^3", alb[k]);
+    nbt_mc_kernel_result_free(r);
+    nbt_phase_free(hg);
+}
+
 int main(void)
 {
     test_first_order();
     test_first_order_mc();
     test_mc_albedos();
+    test_mc_lost();
     test_far_weights();
     test_rgb();
     test_model();

@@ -733,6 +733,57 @@ int main(void)
         nbt_table_free(q);
     }
 
+    /* ---- a file's error bounds must each be >= 0 and finite: a row bound of +inf is
+     * refused wherever it stands, the first of the 6 (a random mutant that checked the
+     * next value's finiteness instead accepted it, and read one past the vector) ---- */
+    {
+        nbt_axis r0 = {0, 6, NBT_AXIS_LINEAR, 0, 7}, r1 = {0, 1, NBT_AXIS_LINEAR, 0, 3};
+        nbt_table *rt = nbt_table_alloc(NBT_TABLE_KERNEL, &r0, &r1, 1), *rr = NULL;
+        int okr = rt && nbt_table_row_err_alloc(rt) == NBT_OK && nbt_table_row_err_len(rt) == 6;
+        char pr[64];
+        snprintf(pr, sizeof pr, "/tmp/nbt_test_tablerow_%ld.exr", (long)getpid());
+        for (size_t i = 0; okr && i < 6; i++)
+            rt->row_err[i] = 0.125 * (double)(i + 1);
+        if (okr)
+            rt->max_err[0] = 1.0;
+        snprintf(err, sizeof err, "not written");
+        int rd = okr && nbt_table_write_exr(rt, pr, NBT_EXR_NONE) == NBT_OK &&
+                 nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_OK;
+        t_true(rd && rr && rr->row_err && rr->row_err[0] == 0.125 && rr->row_err[5] == 0.75,
+               "6 finite row bounds written and read back (exact in float): %s", rd ? "ok" : err);
+        nbt_table_free(rr);
+        rr = NULL;
+        for (size_t at = 0; okr && at < 6; at += 5) {
+            rt->row_err[at] = INFINITY;
+            t_true(nbt_table_write_exr(rt, pr, NBT_EXR_NONE) == NBT_OK &&
+                       nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_EFORMAT && !rr &&
+                       strstr(err, "an nbt.row_err value is negative or not finite"),
+                   "a row bound of +inf at place %zu of 6 refused: %s", at, err);
+            nbt_table_free(rr);
+            rr = NULL;
+            rt->row_err[at] = 0.125 * (double)(at + 1);
+        }
+        /* a theta map (1 theta cell per band: 2 bands x 6) whose file lacks nbt.theta_err.cells (the name
+         * patched to ...cellz): refused, not read with a guessed band width */
+        okr = okr && nbt_table_theta_err_alloc(rt, 1) == NBT_OK && nbt_table_theta_err_len(rt) == 12;
+        for (size_t i = 0; okr && i < 12; i++)
+            rt->theta_err[i] = 0.0625 * (double)(i + 1);
+        t_true(okr && nbt_table_write_exr(rt, pr, NBT_EXR_NONE) == NBT_OK &&
+                   nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_OK && rr && rr->theta_cells == 1 &&
+                   rr->theta_err && rr->theta_err[11] == 0.75,
+               "a theta map of 1 cell per band written and read back");
+        nbt_table_free(rr);
+        rr = NULL;
+        snprintf(err, sizeof err, "read without error");
+        t_true(okr && patch_file(pr, "nbt.theta_err.cells", "nbt.theta_err.cellz", 0) &&
+                   nbt_table_read_exr(pr, &rr, err, sizeof err) == NBT_EFORMAT && !rr &&
+                   strstr(err, "needs nbt.theta_err.cells"),
+               "a theta map without nbt.theta_err.cells refused: %s", err);
+        nbt_table_free(rr);
+        unlink(pr);
+        nbt_table_free(rt);
+    }
+
     /* ---- tabulating a function: f = x0^2 + 3 x1 on uniform axes has bilinear
      * error exactly h^2/4 at the cell midpoints along x0 ---- */
     nbt_axis u0 = {0, 2, NBT_AXIS_LINEAR, 0, 9}, u1 = {-1, 1, NBT_AXIS_LINEAR, 0, 5};
