@@ -41,3 +41,23 @@ bool nbt_sc_inside(ivec2 p, ivec2 size)
 {
     return p.x >= 0 && p.y >= 0 && p.x < size.x && p.y < size.y;
 }
+
+// Where beta_px falls in the per-beta tables (entry i at beta = 2^(LO + i /
+// PER)): entries i and i + 1 at fraction f, linear; past the last entry the
+// last one, times scale = beta_last / beta (the tables scale as 1 / beta)
+void nbt_sc_lut_at(float beta, out int i, out float f, out float scale)
+{
+    float u = beta > 0.0 ? (log2(beta) - float(NBT_SC_LUT_LO)) * float(NBT_SC_LUT_PER) : -1.0;
+    scale = 1.0;
+    if (u <= 0.0) {
+        i = 0;
+        f = 0.0;
+    } else if (u >= float(NBT_SC_LUT_N - 1)) {
+        i = NBT_SC_LUT_N - 2;
+        f = 1.0;
+        scale = exp2(float(NBT_SC_LUT_LO) + float(NBT_SC_LUT_N - 1) / float(NBT_SC_LUT_PER)) / beta;
+    } else {
+        i = int(floor(u));
+        f = u - float(i);
+    }
+}

@@ -44,19 +44,9 @@ layout(binding = 7) uniform sampler2DArray nbt_sc_srct; // the source pyramid (l
 // the 3x3 taps on one side of a line through x
 float nbt_sc_side3(vec2 pq)
 {
-    float b = pq.y, u = b > 0.0 ? (log2(b) - float(NBT_SC_LUT_LO)) * float(NBT_SC_LUT_PER) : -1.0, scale = 1.0, f;
     int i;
-    if (u <= 0.0) {
-        i = 0;
-        f = 0.0;
-    } else if (u >= float(NBT_SC_LUT_N - 1)) {
-        i = NBT_SC_LUT_N - 2;
-        f = 1.0;
-        scale = exp2(float(NBT_SC_LUT_LO) + float(NBT_SC_LUT_N - 1) / float(NBT_SC_LUT_PER)) / b;
-    } else {
-        i = int(floor(u));
-        f = u - float(i);
-    }
+    float f, scale;
+    nbt_sc_lut_at(pq.y, i, f, scale);
     vec2 a = mix(texelFetch(nbt_sc_alut, ivec2(i, 0), 0).yz, texelFetch(nbt_sc_alut, ivec2(i + 1, 0), 0).yz, f);
     return pq.x * scale * (a.x + 2.0 * a.y);
 }

@@ -24,20 +24,9 @@ void main()
     vec4 p = texelFetch(nbt_sc_p, x, 0);
     vec4 a = vec4(0.0), b = vec4(0.0);
     if (p.x > 0.0) { // beta_px = 0: no spread, the first entry (all but ~0 on the own pixel)
-        float u = p.y > 0.0 ? (log2(p.y) - float(NBT_SC_LUT_LO)) * float(NBT_SC_LUT_PER) : -1.0, scale = 1.0;
         int i;
-        float f;
-        if (u <= 0.0) {
-            i = 0;
-            f = 0.0;
-        } else if (u >= float(NBT_SC_LUT_N - 1)) {
-            i = NBT_SC_LUT_N - 2;
-            f = 1.0;
-            scale = exp2(float(NBT_SC_LUT_LO) + float(NBT_SC_LUT_N - 1) / float(NBT_SC_LUT_PER)) / p.y;
-        } else {
-            i = int(floor(u));
-            f = u - float(i);
-        }
+        float f, scale;
+        nbt_sc_lut_at(p.y, i, f, scale);
         a = mix(texelFetch(nbt_sc_lut, ivec2(i, 0), 0), texelFetch(nbt_sc_lut, ivec2(i + 1, 0), 0), f);
         b = mix(texelFetch(nbt_sc_lut, ivec2(i, 1), 0), texelFetch(nbt_sc_lut, ivec2(i + 1, 1), 0), f);
         a *= p.x * scale;
