@@ -994,5 +994,25 @@ int main(void)
         t_true(e[0][1] <= e[1][1], "J^1: theta asinh (%.3g) no worse than linear (%.3g, ratio %.2f) at 129^2", e[0][1],
                e[1][1], e[1][0] / e[1][1]);
     }
+    {
+        /* the bound where no cell map is recorded is the channel's own
+         * max_err (nbt/table.h), for every channel up to the last; a channel
+         * past nch is NaN. Unequal values so a neighbour's shows */
+        nbt_axis c0 = {0, 2, NBT_AXIS_LINEAR, 0, 5}, c1 = {-1, 1, NBT_AXIS_LINEAR, 0, 3};
+        nbt_table *tc = nbt_table_alloc(NBT_TABLE_H, &c0, &c1, 3);
+        t_true(tc != NULL, "a 3-channel table without a cell map");
+        if (tc) {
+            tc->max_err[0] = 1e-3;
+            tc->max_err[1] = 2e-3;
+            tc->max_err[2] = 4e-3;
+            int same = 1;
+            for (size_t c = 0; c < 3; c++)
+                same &= nbt_table_err_at(tc, c, 0.37) == tc->max_err[c];
+            t_true(same && isnan(nbt_table_err_at(tc, 3, 0.37)),
+                   "err_at without a cell map: max_err of channels 0, 1, 2 (%g %g %g); channel 3 NaN",
+                   nbt_table_err_at(tc, 0, 0.37), nbt_table_err_at(tc, 1, 0.37), nbt_table_err_at(tc, 2, 0.37));
+            nbt_table_free(tc);
+        }
+    }
     return t_done();
 }
