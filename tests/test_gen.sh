@@ -389,6 +389,13 @@ grep -q '^nbt-gen: scene: planned 3 table set(s) in .*, predicted build time ' "
 nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 [ -n "$nt" ] && [ "$nt" -le 16 ] && [ "$(ls "$tmp/scene"/H_k*.exr | wc -l)" -eq $(( (nt + 3) / 4 )) ] && ok ||
   bad "example scene: $nt orders, H files $(ls "$tmp/scene")"
+# -o DIR may exist already (check_writable_dir accepts a writable one; only a missing one is created):
+# a Legendre scene into an empty existing directory writes its packs there
+printf 'kappa_t = 0.1\ndistance = 10\ng = 0.5\ndiffuse = no\ntol = 1e-2\n' >"$tmp/one.scene"
+mkdir "$tmp/scex"
+"$NBT_GEN" scene "$tmp/one.scene" -o "$tmp/scex" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/scex/H_k0-3.exr" ] &&
+  [ ! -s "$tmp/err" ] && ok || bad "scene into an existing directory: $(cat "$tmp/err"), $(ls "$tmp/scex" | tr '\n' ' ')"
+rm -rf "$tmp/scex" "$tmp/one.scene" "$tmp/err"
 # a scene needing more orders than the shaders take (|g| <= 0.8 at tol 1e-2
 # needs ~38): with basis = legendre the planner stops with one line naming
 # orders_max and the limit, and writes nothing; orders_max = 512 builds
