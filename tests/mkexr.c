@@ -9,7 +9,8 @@
  * kept, plus layers S = 0.25 RGB, T (R 0.5, G 0.25, B 0.125) and offscreen
  * (the fraction of pixels x0..x of the row outside the display window),
  * written over the display window (crop) or the data window (full), with
- * the attribute nbt.method = layers; for the EXR tool tests.
+ * the attribute nbt.method = layers; for the EXR tool tests. A sixth argument
+ * PREFIX names the S layer PREFIX.S (a Blender view layer's prefix).
  * mkexr OUT.exr rename IN.exr FROM TO: IN with its channel FROM renamed TO
  * (no longer than FROM), e.g. to take one channel out of a layer.
  * mkexr OUT.exr flip IN.exr: IN's RGB and depth mirrored left to right (vflip: top to bottom)
@@ -193,7 +194,7 @@ int main(int argc, char **argv)
         nbt_grid_free(g);
         return rc;
     }
-    if (argc == 5 && !strcmp(argv[2], "layers")) {
+    if ((argc == 5 || argc == 6) && !strcmp(argv[2], "layers")) {
         nbt_image *in = NULL;
         if (nbt_image_read_exr(argv[3], &in, err, sizeof err) != NBT_OK) {
             fprintf(stderr, "%s\n", err);
@@ -213,7 +214,10 @@ int main(int argc, char **argv)
             f[i] = outside ? 1.0f : 0.0f;
         }
         const char *rgb[3] = {"R", "G", "B"}, *x1[1] = {"X"}, *attrs[2] = {"nbt.method", "layers"};
-        nbt_image_layer layers[3] = {{"S", 3, rgb, s}, {"T", 3, rgb, t}, {"offscreen", 1, x1, f}};
+        char sname[64] = "S"; /* argv[5]: a view-layer prefix, S named PREFIX.S (as Blender writes) */
+        if (argc == 6)
+            snprintf(sname, sizeof sname, "%s.S", argv[5]);
+        nbt_image_layer layers[3] = {{sname, 3, rgb, s}, {"T", 3, rgb, t}, {"offscreen", 1, x1, f}};
         nbt_exr_write_opts o = {.layers = layers, .nlayers = 3, .attrs = attrs, .nattrs = 1};
         if (!strcmp(argv[4], "crop"))
             o.window = &in->display;

@@ -330,7 +330,7 @@ int main(void)
     bad.z = zb;
     bad.rho = rb;
     t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 1, &M0, &M2, NULL) == NBT_EDOM, "non-increasing layers rejected");
-    /* a negative or NaN density in any layer, the last one too, is refused; the same layers with rho >= 0 run */
+    /* a negative, NaN or infinite density in any layer, the last one too, is refused; the same layers with rho >= 0 run */
     double z3[3] = {0, 1, 2.5};
     bad.nlayers = 3;
     bad.z = z3;
@@ -342,6 +342,8 @@ int main(void)
         t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_EDOM, "negative layer %d rejected", i);
         r3[i] = NAN;
         t_true(nbt_beam_moments(&bad, NBT_BEAM_ISHIMARU, 3, &M0, &M2, NULL) == NBT_EDOM, "NaN layer %d rejected", i);
+        r3[i] = INFINITY; /* >= 0 but not finite (nbt/beam.h: finite): the check itself refuses it */
+        t_true(nbt_beam_check(&bad) == NBT_EDOM, "infinite layer %d rejected by nbt_beam_check", i);
     }
     test_zeta_layers();
     test_eq26();

@@ -146,6 +146,16 @@ words relL1:14 "$S" "$tmp/lamp0.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png
 r0=$(cut -d' ' -f2 "$tmp/lamp0.cmp")   # lamp0.cmp's layout is checked above
 [ "$1" = relL1 ] && awk -v a="$2" -v b="$r0" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(b > 0.1 && d <= 1e-5) }' && ok ||
   bad "--compare, reference without S.G: $* (with S: relL1 $r0)"
+# a reference's S layer under a view-layer prefix (ViewLayer.S.R, as Blender writes) is its S layer too:
+# the same line as with the bare S.R (mkexr layers: S = 0.25 RGB, not RGB - T x input, so a reference
+# read the other way differs: relL1 0.695 against 1.078 here)
+"$MK" "$tmp/ref-S.exr" layers "$tmp/lamp0-a.exr" full && "$MK" "$tmp/ref-VS.exr" layers "$tmp/lamp0-a.exr" full ViewLayer ||
+  bad "mkexr layers with a prefix"
+"$S" "$tmp/lamp0.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/ref-S.exr" 2>/dev/null >"$tmp/cS" &&
+  "$S" "$tmp/lamp0.exr" -o "$tmp/x.exr" $M0 --method ref-b --no-png --compare "$tmp/ref-VS.exr" 2>/dev/null >"$tmp/cVS" &&
+  grep -q "^relL1 " "$tmp/cS" && cmp -s "$tmp/cS" "$tmp/cVS" && ok ||
+  bad "--compare, S layer as ViewLayer.S: $(cat "$tmp/cVS") vs S: $(cat "$tmp/cS")"
+rm -f "$tmp/ref-S.exr" "$tmp/ref-VS.exr" "$tmp/cS" "$tmp/cVS"
 LC_ALL=C grep -aq 'nbt\.kernel.string.....moment' "$tmp/lamp0-a.exr" && LC_ALL=C grep -aq 'nbt\.kernel.string.....elek' "$tmp/lamp0-b.exr" &&
   ok || bad "nbt.kernel names the kernel (moment for ref-a, elek for ref-b)"
 # the preview's tone map: the median luminance (Rec. 709: 0.2126 R + 0.7152 G + 0.0722 B) goes to

@@ -571,6 +571,20 @@ static void test_medium(void)
            "grid: a negative voxel is refused and named: %s", err2);
     unlink(path);
     t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EIO, "grid: missing file");
+    /* nbt/grid.h: the origin must be finite, each of its three coordinates (a raw header's
+     * "nan" or "inf" parses as a number) */
+    g->data[7] = 1.0f;
+    err2[0] = '\0';
+    t_true(nbt_grid_check(g, err2, sizeof err2) == NBT_OK, "grid: the check passes a good grid: %s", err2);
+    for (int ax = 0; ax < 3; ax++) {
+        const double bad[2] = {NAN, INFINITY};
+        for (int b = 0; b < 2; b++) {
+            g->origin[ax] = bad[b];
+            t_true(nbt_grid_check(g, err2, sizeof err2) == NBT_EDOM && strstr(err2, "origin"),
+                   "grid: origin[%d] = %g refused: %s", ax, bad[b], err2);
+        }
+        g->origin[ax] = o[ax];
+    }
     nbt_grid_free(g);
 }
 
@@ -800,6 +814,53 @@ static void test_custom_rgb(void)
     t_true(worst < 1e-14, "slot scales 2^(m/2) at m = -3, 5, -34, 22 (worst rel %.2g)", worst);
 }
 
+/* ---- truncation of a kernel of two shapes (nbt_screen_brute's tail) ----
+ * A caller's kernel at D = 1, dtheta = 0.01: a Gaussian atom of mass 0.5 and
+ * scale 6 px, then an erfc atom of mass 0.25 and scale 1 px. The kernel is
+ * truncated where less than tail of its mass lies outside, so an impulse's
+ * response (unit colour, in the middle of a 48 x 40 image that holds the
+ * square of radius R) sums to at least (1 - tail) 0.75. At tail 1e-2 the
+ * Gaussian needs R = 18 (0.4% outside the square); cut at the erfc shape's
+ * radius for 6 px (R = 14) it leaves 3.1% of its mass outside, and the sum
+ * falls to 0.734 < 0.7425. */
+static nbt_status two_shapes_fn(double D, nbt_screen_kern *o, void *ctx)
+{
+    (void)ctx;
+    o->T = 0.25;
+    o->n = 2;
+    o->shape[0] = NBT_ATOM_GAUSS;
+    o->mass[0] = 0.5;
+    o->scale[0] = 0.06 * D;
+    o->shape[1] = NBT_ATOM_ERFC;
+    o->mass[1] = 0.25;
+    o->scale[1] = 0.01 * D;
+    return NBT_OK;
+}
+
+static void test_two_shape_tail(void)
+{
+    const size_t W = 48, H = 40, N = W * H, c = 20 * W + 24;
+    const double tail = 1e-2;
+    nbt_screen_kernel *k = nbt_screen_kernel_custom(two_shapes_fn, NULL);
+    scene s = scene_new(W, H);
+    double *S = malloc(N * 3 * sizeof *S);
+    for (size_t i = 0; i < N; i++)
+        s.D[i] = 1.0f;
+    s.rgb[3 * c] = s.rgb[3 * c + 1] = s.rgb[3 * c + 2] = 1.0f;
+    nbt_screen_input in = as_input(&s, 0.01);
+    long Rg = nbt_screen_atom_radius(NBT_ATOM_GAUSS, 6.0, tail);
+    int ran = k && S && nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, tail, 1, S, NULL) == NBT_OK;
+    double sum = 0;
+    for (size_t i = 0; ran && i < N; i++)
+        sum += S[3 * i + 1];
+    t_true(ran && Rg < 20 && sum >= (1 - tail) * 0.75 && sum <= 0.75 * (1 + 1e-12),
+           "two-shape kernel, tail %g: impulse response %.6f in [(1 - tail) 0.75, 0.75] (Gaussian R = %ld)", tail, sum,
+           Rg);
+    free(S);
+    scene_free(&s);
+    nbt_screen_kernel_free(k);
+}
+
 /* ---- fitting a shape to radial masses (nbt_screen_shape_fit) ----
  * Exact data from 1.7 erfc atom of scale 2 (slot 2) and 0.4 Gaussian atom of
  * scale 2^-1.5 (slot -3), binned on 31 geometric edges 0.02 .. 60, the atoms'
@@ -877,6 +938,7 @@ int main(void)
     test_grid_linear();
     test_edge_band();
     test_custom_rgb();
+    test_two_shape_tail();
     test_shape_fit();
     return t_done();
 }
