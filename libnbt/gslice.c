@@ -330,8 +330,9 @@ static nbt_status build_at(const nbt_gslice_request *r, const nbt_axis *a0, cons
  * error-driven proxies: at tol 1e-3 relative,
  *   H (tail form): u 97 nodes (log1p_cbrt, c = 10), v 193 (ends, c = 16:
  *     HG's peaks of width ~1 - |g| at v = pi/2 for g < 0 and -pi/2 for g > 0;
- *     with bench/gslice_accuracy on 1e5 rays, 4.9 MB: 5 rays above 1e-3,
- *     worst 1.2e-3, where 129^2 on cos (4.4 MB) had 487, worst 3.5e-3; the
+ *     with bench/gslice_accuracy on 1e5 rays, 4.9 MB, quadratic in g: 5 rays
+ *     above 1e-3, worst 1.2e-3 (cubic in g, as filled now: none, worst
+ *     7.9e-4), where 129^2 on cos (4.4 MB) had 487, worst 3.5e-3; the
  *     v error dominated: 129 x 257 on cos had none above);
  *   J (log_et form, T <= 20): T 65 nodes (log1p_cbrt, c = 20), theta 257
  *     (linear for Lambert, cos for Phong lobes);
