@@ -12,6 +12,20 @@
 #include "gslice_tail.h"
 #include "gslice_j.h"
 
+static double cpu_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* a predicted wall time as the CPU time it stands for, by the CPU/wall
+ * ratio of the planning that measured it (its proxy builds) */
+static double as_cpu(double pred_wall, double cpu, double wall)
+{
+    return cpu > 0 && wall > 0 ? pred_wall * cpu / wall : pred_wall;
+}
+
 static double now_s(void)
 {
     struct timespec ts;
@@ -568,6 +582,7 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
     if (!(r->tol > 0 && r->tol < 1))
         return failf(err, errlen, NBT_EDOM, "basis: tol = %g is not accepted: in (0, 1)", r->tol);
     double gmax = fmax(fabs(r->g[0]), fabs(r->g[1]));
+    double leg_wall = 0, leg_cpu = 0, sl_wall = 0, sl_cpu = 0;
     nbt_status st;
     if (want != NBT_BASIS_SLICES) {
         nbt_plan_legendre leg;
@@ -577,8 +592,11 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
             nbt_plan_request q = {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, leg.nterms, NULL, r->xmax,
                                   leg.table_tol, {0, 0}, r->half};
             nbt_plan *plan = NULL;
+            double w0 = now_s(), c0 = cpu_s();
             if ((st = nbt_plan_tables(&q, 1, nthreads, &plan, err, errlen)) != NBT_OK)
                 return st;
+            leg_wall = now_s() - w0;
+            leg_cpu = cpu_s() - c0;
             const nbt_plan_set *ps = nbt_plan_get(plan, 0);
             out->leg_seconds = ps->pred_seconds;
             out->leg_err = ps->pred_err;
@@ -590,8 +608,11 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
     }
     if (want != NBT_BASIS_LEGENDRE) {
         nbt_gslice_plan_t p;
+        double w0 = now_s(), c0 = cpu_s();
         if ((st = nbt_gslice_plan(r, nthreads, &p, err, errlen)) != NBT_OK)
             return st;
+        sl_wall = now_s() - w0;
+        sl_cpu = cpu_s() - c0;
         out->sl_seconds = p.pred_seconds;
         out->sl_bytes = p.bytes;
         out->sl_err = p.pred_err;
@@ -615,14 +636,17 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
                  out->leg_nterms > 512 ? (size_t)512 : out->leg_nterms, r->tol, orders_max, out->sl_size[0],
                  out->sl_size[1], out->sl_size[2], 1e-6 * out->sl_bytes, out->sl_seconds);
     } else {
-        /* the predictions come from proxies of a few 0.01 s, whose times move by tens of percent with the
-         * machine's load: slices only when clearly faster, so that a scene's basis does not flip with it
-         * (the example scene: Legendre 0.032 s against slices 0.027 s on a loaded machine) */
-        out->basis = out->leg_seconds <= AUTO_SLICES_GAIN * out->sl_seconds ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
+        /* compared in CPU time (the work), not wall time: the proxies take a few 0.01 s and their wall
+         * times moved 6x against each other with the machine's load (example scene: Legendre 0.011 s vs
+         * slices 0.04 s idle, 0.092 s vs 0.056 s loaded), so that a scene's basis flipped with the load;
+         * and slices only when clearly cheaper */
+        double lc = as_cpu(out->leg_seconds, leg_cpu, leg_wall), sc = as_cpu(out->sl_seconds, sl_cpu, sl_wall);
+        out->basis = lc <= AUTO_SLICES_GAIN * sc ? NBT_BASIS_LEGENDRE : NBT_BASIS_SLICES;
         snprintf(out->reason, sizeof out->reason,
-                 "%s: predicted build Legendre %zu orders %.2g s, %.1f MB; slices %zux%zux%zu %.2g s, %.1f MB",
-                 nbt_basis_name(out->basis), out->leg_nterms, out->leg_seconds, 1e-6 * out->leg_bytes,
-                 out->sl_size[0], out->sl_size[1], out->sl_size[2], out->sl_seconds, 1e-6 * out->sl_bytes);
+                 "%s: predicted build Legendre %zu orders %.2g s (CPU %.2g s), %.1f MB; slices %zux%zux%zu %.2g s "
+                 "(CPU %.2g s), %.1f MB", nbt_basis_name(out->basis), out->leg_nterms, out->leg_seconds, lc,
+                 1e-6 * out->leg_bytes, out->sl_size[0], out->sl_size[1], out->sl_size[2], out->sl_seconds, sc,
+                 1e-6 * out->sl_bytes);
     }
     return NBT_OK;
 }

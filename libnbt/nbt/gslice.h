@@ -129,8 +129,9 @@ typedef struct {
 } nbt_basis_choice;
 
 /* Predict both for a table kind over r->g at r->tol (r->size unused) and
- * choose (want = AUTO): the smaller predicted build time (slices only when 1.5x
- * faster: the proxies' times move with the load); Legendre only
+ * choose (want = AUTO): the smaller predicted build work, i.e. CPU time (slices
+ * only when 1.5x cheaper; wall times of the small proxies move with the
+ * machine's load, their CPU times far less; reason gives both); Legendre only
  * when at most orders_max orders meet tol. want = LEGENDRE or SLICES
  * predicts only that one (LEGENDRE out of reach: NBT_ETOL naming the
  * orders). Planning runs the planners' proxy builds (about a tenth of a
