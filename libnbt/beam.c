@@ -1,5 +1,6 @@
 /* libnbt/beam.c: narrow beam moments and kernels (Shinya et al. sec. 3). */
 #include <config.h>
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -332,15 +333,17 @@ double nbt_beam_direct(const nbt_beam_medium *m, double z)
     return exp(-m->sigma_t * nbt_beam_zeta(m, z));
 }
 
-static const char *density_row(size_t i, double z, double rho, double prev)
+static int density_row(size_t i, double z, double rho, double prev, char *why, size_t n)
 {
     if (i == 0 && z != 0)
-        return "the first z must be 0 in";
-    if (i > 0 && !(z > prev))
-        return "z must increase in";
-    if (rho < 0)
-        return "rho must be >= 0 in";
-    return NULL;
+        snprintf(why, n, "the first z = %.17g is not accepted: the first z must be 0", z);
+    else if (i > 0 && !(z > prev))
+        snprintf(why, n, "z = %.17g is not accepted: z must increase (the previous z is %.17g)", z, prev);
+    else if (rho < 0)
+        snprintf(why, n, "rho = %.17g is not accepted: rho must be >= 0", rho);
+    else
+        return 0;
+    return 1;
 }
 
 nbt_status nbt_density_read(const char *path, double **z, double **rho, size_t *n, char *err, size_t errlen)
@@ -391,23 +394,52 @@ nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c
     char line[1024];
     int got = 0, ln = 0;
     nbt_status st = NBT_OK;
+    /* strict, as the other text inputs: every line is blank, a '#' comment,
+     * or one 'beta' / 'alpha' line of exactly 7 finite numbers; a mistyped
+     * key, an eighth number or a second 'alpha' is an error, not skipped */
     while (st == NBT_OK && fgets(line, sizeof line, f)) {
         ln++;
-        double *dst = !strncmp(line, "beta ", 5) ? c->beta : !strncmp(line, "alpha ", 6) ? c->alpha : NULL;
-        if (!dst)
+        char *h = strchr(line, '#');
+        if (h)
+            *h = '\0';
+        size_t len = strlen(line);
+        while (len > 0 && isspace((unsigned char)line[len - 1]))
+            line[--len] = '\0';
+        char *p = line;
+        while (isspace((unsigned char)*p))
+            p++;
+        if (*p == '\0')
             continue;
-        char *p = strchr(line, ' ');
-        for (int i = 0; i < NBT_KERNEL_CORR_TERMS && st == NBT_OK; i++) {
+        int which = !strncmp(p, "beta", 4) && isspace((unsigned char)p[4]) ? 1
+                    : !strncmp(p, "alpha", 5) && isspace((unsigned char)p[5]) ? 2 : 0;
+        if (!which || (got & which)) {
+            snprintf(err, errlen, "kernel correction '%s' line %d: '%.40s' is not accepted: %s", path, ln, p,
+                     which ? "a second line of the same key" : "expected a 'beta' or 'alpha' line of 7 numbers");
+            st = NBT_EFORMAT;
+            break;
+        }
+        double *dst = which == 1 ? c->beta : c->alpha;
+        p += which == 1 ? 4 : 5;
+        for (int i = 0; i <= NBT_KERNEL_CORR_TERMS && st == NBT_OK; i++) {
             char *end;
-            dst[i] = strtod(p, &end);
-            if (end == p || !isfinite(dst[i])) {
-                snprintf(err, errlen, "kernel correction '%s' line %d: expected %d finite numbers", path, ln,
-                         NBT_KERNEL_CORR_TERMS);
+            double v = strtod(p, &end);
+            int number = end != p;
+            if (i == NBT_KERNEL_CORR_TERMS ? number : !number || !isfinite(v)) {
+                snprintf(err, errlen, "kernel correction '%s' line %d: expected %d finite numbers after '%s'", path,
+                         ln, NBT_KERNEL_CORR_TERMS, which == 1 ? "beta" : "alpha");
                 st = NBT_EFORMAT;
-            }
+            } else if (i < NBT_KERNEL_CORR_TERMS)
+                dst[i] = v;
             p = end;
         }
-        got |= dst == c->beta ? 1 : 2;
+        while (st == NBT_OK && isspace((unsigned char)*p))
+            p++;
+        if (st == NBT_OK && *p != '\0') {
+            snprintf(err, errlen, "kernel correction '%s' line %d: '%.40s' after the %d numbers is not accepted", path,
+                     ln, p, NBT_KERNEL_CORR_TERMS);
+            st = NBT_EFORMAT;
+        }
+        got |= which;
     }
     if (st == NBT_OK && ferror(f)) {
         snprintf(err, errlen, "kernel correction '%s' cannot be read: %s", path, strerror(errno));

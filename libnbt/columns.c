@@ -64,9 +64,9 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
             st = NBT_EFORMAT;
             break;
         }
-        const char *why = check ? check(n, a, b, n ? x[n - 1] : 0) : NULL;
-        if (why) {
-            snprintf(err, errlen, "%s:%d: %s: %s '%s'", path, ln, what, why, names);
+        char why[160];
+        if (check && check(n, a, b, n ? x[n - 1] : 0, why, sizeof why)) {
+            snprintf(err, errlen, "%s:%d: %s: %s (columns '%s')", path, ln, what, why, names);
             st = NBT_EFORMAT;
             break;
         }

@@ -190,10 +190,11 @@ int nbt__table_series_diff(const nbt_table *const *tables, size_t ntables, const
                            size_t nterms, double x0, double y0, double y1, double *sum);
 
 /* Read a text file of rows "x y" ('#' comments, blank lines skipped). check
- * (may be NULL) returns why row i (previous x: prev) is rejected, or NULL.
- * Errors name the file, the line and `names` (e.g. "z rho"); on success *x
- * and *y are malloc'd and *n >= 1. */
-typedef const char *(*nbt__row_check)(size_t i, double x, double y, double prev);
+ * (may be NULL) writes why row i (previous x: prev) is rejected, naming the
+ * bad value and what is accepted, into why[whylen] and returns nonzero, or
+ * returns 0. Errors name the file, the line and `names` (e.g. "z rho"); on
+ * success *x and *y are malloc'd and *n >= 1. */
+typedef int (*nbt__row_check)(size_t i, double x, double y, double prev, char *why, size_t whylen);
 nbt_status nbt__read_columns(const char *path, const char *what, const char *names, nbt__row_check check,
                              double **x, double **y, size_t *n, char *err, size_t errlen);
 

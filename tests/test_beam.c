@@ -139,10 +139,11 @@ static void test_readers(void)
         free(rho);
     }
     unlink(path);
-    static const char *const bad[][2] = {{"0.1 1\n1 2\n", ":1: .*first z must be 0"},
-                                         {"0 1\n1 2\n1 3\n", ":3: .*z must increase"},
-                                         {"0 1\n2 1\n1 3\n", ":3: .*z must increase"},
-                                         {"0 1\n1 -0.5\n", ":2: .*rho must be >= 0"},
+    /* each message names the bad value (and for z the previous one) and what is accepted */
+    static const char *const bad[][2] = {{"0.1 1\n1 2\n", ":1: .*first z = 0.10000000000000001 is not accepted: the first z must be 0"},
+                                         {"0 1\n1 2\n1 3\n", ":3: .*z = 1 is not accepted: z must increase (the previous z is 1)"},
+                                         {"0 1\n2 1\n1.5 3\n", ":3: .*z = 1.5 is not accepted: z must increase (the previous z is 2)"},
+                                         {"0 1\n1 -0.5\n", ":2: .*rho = -0.5 is not accepted: rho must be >= 0"},
                                          {"0 1\n1 2 3\n", ":2: .*two finite numbers"}};
     for (int i = 0; i < 5; i++) {
         put_text(path, bad[i][0]);
@@ -166,17 +167,33 @@ static void test_readers(void)
         same = same && c.alpha[i] == wa[i] && c.beta[i] == wb[i];
     t_true(same, "kernel correction: alpha and beta lines read term by term: status %d", st);
     unlink(path);
-    static const char *const badc[3] = {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n",
-                                        "alpha 1 2 3 4 5 6 7\n",
-                                        "beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\nalpha 1 2 3 4 5 6\n"};
-    for (int i = 0; i < 3; i++) {
-        put_text(path, badc[i]);
+    /* a missing line, a short line, an eighth number, text after the numbers, a mistyped key and a repeated
+     * key are each refused at their line (before: the last four were read silently, the typo's line skipped) */
+    static const char *const badc[][2] = {
+        {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n", "needs a 'beta' and an 'alpha' line"},
+        {"alpha 1 2 3 4 5 6 7\n", "needs a 'beta' and an 'alpha' line"},
+        {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\nalpha 1 2 3 4 5 6\n", "line 2: expected 7 finite numbers after 'alpha'"},
+        {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7 0.8\nalpha 1 2 3 4 5 6 7\n", "line 1: expected 7 finite numbers after 'beta'"},
+        {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n\nalpha 1 2 3 4 5 6 7 x\n", "line 3: 'x' after the 7 numbers"},
+        {"beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\nalpah 1 2 3 4 5 6 7\nalpha 1 2 3 4 5 6 7\n",
+         "line 2: 'alpah 1 2 3 4 5 6 7' is not accepted: expected a 'beta' or 'alpha' line"},
+        {"alpha 1 2 3 4 5 6 7\nbeta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7\n# again\nalpha 1 2 3 4 5 6 8\n",
+         "line 4: 'alpha 1 2 3 4 5 6 8' is not accepted: a second line of the same key"}};
+    for (size_t i = 0; i < sizeof badc / sizeof badc[0]; i++) {
+        put_text(path, badc[i][0]);
         st = nbt_kernel_correction_read(path, &c, err, sizeof err);
-        t_true(st == NBT_EFORMAT && strstr(err, path) != NULL &&
-                   strstr(err, i < 2 ? "needs a 'beta' and an 'alpha' line" : "line 2: expected 7 finite numbers") != NULL,
-               "kernel correction %d refused: status %d, '%s'", i, st, err);
+        t_true(st == NBT_EFORMAT && strstr(err, path) != NULL && strstr(err, badc[i][1]) != NULL,
+               "kernel correction %zu refused (%s): status %d, '%s'", i, badc[i][1], st, err);
         unlink(path);
     }
+    /* comments after the numbers and CR LF line ends are fine */
+    put_text(path, "beta 0.1 -0.2 0.3 -0.4 0.5 -0.6 0.7 # fitted\r\nalpha -0.5 0.25 -0.125 1e-3 2.5 -3 0.0625\r\n");
+    st = nbt_kernel_correction_read(path, &c, err, sizeof err);
+    same = st == NBT_OK;
+    for (int i = 0; i < 7; i++)
+        same = same && c.alpha[i] == wa[i] && c.beta[i] == wb[i];
+    t_true(same, "kernel correction with a trailing comment and CR LF: status %d '%s'", st, st ? err : "");
+    unlink(path);
 }
 
 static void test_eq26(void)

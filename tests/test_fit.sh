@@ -458,7 +458,7 @@ expect_usage "bad planes" "--z-planes" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --
 : >"$tmp/empty.txt"
 expect_usage "empty density file" "empty" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/empty.txt" -o "$tmp/x.csv"
 printf '0 1\n0.5 -2\n' >"$tmp/neg.txt"
-expect_usage "negative density" "neg.txt:2: density file: rho must be >= 0" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/neg.txt" -o "$tmp/x.csv"
+expect_usage "negative density" "neg.txt:2: density file: rho = -2 is not accepted: rho must be >= 0" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/neg.txt" -o "$tmp/x.csv"
 printf '0 1\nO.5 2\n' >"$tmp/letter.txt"
 expect_usage "density: letter O" "letter.txt:2: density file: 'O.5 2' is not accepted" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 --density "$tmp/letter.txt" -o "$tmp/x.csv"
 expect_usage "not csv or exr" "\.exr" "$NBT_FIT" mc --albedo 0.5 --sigma-t 1 --B 0.1 --photons 1000 -o "$tmp/x.png"

@@ -90,7 +90,9 @@ void nbt_kernel_correction_terms(double tau, double albedo, double B, double *t)
 /* Corrected alpha, beta of a homogeneous medium at depth z (c == NULL: the moment kernel). */
 nbt_status nbt_kernel_corrected(const nbt_kernel_correction *c, const nbt_beam_medium *m, double z, double *alpha,
                                 double *beta);
-/* Read the file nbt-fit writes ('beta' and 'alpha' lines of 7 numbers, '#' comments). */
+/* Read the file nbt-fit writes: one 'beta' and one 'alpha' line of exactly 7
+ * finite numbers; '#' comments and blank lines skipped; any other line is an
+ * error naming the file and the line. */
 nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c, char *err, size_t errlen);
 
 /* The fitted kernel model (doc/fit.md, "A kernel model over the parameter
