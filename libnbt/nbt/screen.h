@@ -102,7 +102,8 @@ nbt_status nbt_skernel_parse(const char *name, nbt_skernel_kind *kind);
  * integral over the scattering angle, fitted as a non-negative mixture of
  * atoms on the slot grid below (relative L1 error of its radial masses
  * ~1e-5) at optical depths 2^(i/4) and interpolated in log depth between
- * them, with its total mass exact at every depth. Higher orders come from a
+ * them, with its total mass exact at every depth (to ~1e-7 relative;
+ * tested at optical depths 0.003 to 11.3). Higher orders come from a
  * model fitted to photon counts (nbt_mc_kernel_run) for the phase's family,
  * interpolated over its parameter, the albedo and the optical depth.
  *
