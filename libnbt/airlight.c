@@ -210,19 +210,21 @@ nbt_status nbt_h_phase(const nbt_phase *p, double u, double v, double tol, doubl
 nbt_status nbt_airlight_check(const nbt_airlight_geom *g)
 {
     if (!(g->kappa_s >= 0.0) || !isfinite(g->kappa_s))
-        NBT_FAIL(NBT_EDOM, "airlight: kappa_s must be finite and >= 0");
+        return nbt__failv(NBT_EDOM, "airlight: kappa_s = %g is not accepted: finite and >= 0", g->kappa_s);
     if (!(g->kappa_t >= g->kappa_s) || !isfinite(g->kappa_t))
-        NBT_FAIL(NBT_EDOM, "airlight: kappa_t must be finite and >= kappa_s");
+        return nbt__failv(NBT_EDOM, "airlight: kappa_t = %g is not accepted: finite and >= kappa_s = %g", g->kappa_t,
+                          g->kappa_s);
     if (!(g->I0 >= 0.0) || !isfinite(g->I0))
-        NBT_FAIL(NBT_EDOM, "airlight: I0 must be finite and >= 0");
+        return nbt__failv(NBT_EDOM, "airlight: I0 = %g is not accepted: finite and >= 0", g->I0);
     if (!(g->dsv > 0.0) || !isfinite(g->dsv))
-        NBT_FAIL(NBT_EDOM, "airlight: dsv must be finite and > 0");
+        return nbt__failv(NBT_EDOM, "airlight: dsv = %g is not accepted: finite and > 0", g->dsv);
     if (!(g->gamma >= 0.0 && g->gamma <= NBT_PI))
-        NBT_FAIL(NBT_EDOM, "airlight: gamma must lie in [0, pi]");
+        return nbt__failv(NBT_EDOM, "airlight: gamma = %g is not accepted: in [0, pi]", g->gamma);
     if (!(g->dvp > 0.0))
-        NBT_FAIL(NBT_EDOM, "airlight: dvp must be > 0 (INFINITY allowed)");
+        return nbt__failv(NBT_EDOM, "airlight: dvp = %g is not accepted: > 0 (INFINITY allowed)", g->dvp);
     if (g->gamma == 0.0 && g->dvp >= g->dsv)
-        NBT_FAIL(NBT_EDOM, "airlight: the ray runs through the source (gamma = 0, dvp >= dsv): infinite");
+        return nbt__failv(NBT_EDOM, "airlight: the ray runs through the source (gamma = 0, dvp = %g >= dsv = %g): "
+                          "infinite", g->dvp, g->dsv);
     return NBT_OK;
 }
 

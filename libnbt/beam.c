@@ -26,29 +26,37 @@ nbt_beam_medium nbt_beam_homogeneous(double sigma_t, double albedo, double B)
 nbt_status nbt_beam_check(const nbt_beam_medium *m)
 {
     if (!(m->sigma_t > 0) || !isfinite(m->sigma_t))
-        NBT_FAIL(NBT_EDOM, "beam: sigma_t must be finite and > 0");
+        return nbt__failv(NBT_EDOM, "beam: sigma_t = %g is not accepted: finite and > 0", m->sigma_t);
     if (!(m->albedo >= 0 && m->albedo <= 1))
-        NBT_FAIL(NBT_EDOM, "beam: albedo must lie in [0, 1]");
+        return nbt__failv(NBT_EDOM, "beam: albedo = %g is not accepted: in [0, 1]", m->albedo);
     if (m->nlobes < 1 || m->nlobes > NBT_BEAM_MAX_LOBES)
-        NBT_FAIL(NBT_EDOM, "beam: 1 to 16 Gaussian lobes");
+        return nbt__failv(NBT_EDOM, "beam: %zu Gaussian lobes are not accepted: 1 to %d", m->nlobes,
+                          NBT_BEAM_MAX_LOBES);
     double sw = 0;
     for (size_t i = 0; i < m->nlobes; i++) {
-        if (!(m->w[i] >= 0) || !(m->B[i] > 0) || !isfinite(m->B[i]) || !isfinite(m->w[i]))
-            NBT_FAIL(NBT_EDOM, "beam: lobe weights must be >= 0 and spreads B > 0, finite");
+        if (!(m->w[i] >= 0) || !isfinite(m->w[i]))
+            return nbt__failv(NBT_EDOM, "beam: lobe %zu's weight w = %g is not accepted: finite and >= 0", i, m->w[i]);
+        if (!(m->B[i] > 0) || !isfinite(m->B[i]))
+            return nbt__failv(NBT_EDOM, "beam: lobe %zu's spread B = %g is not accepted: finite and > 0", i, m->B[i]);
         sw += m->w[i];
     }
     if (fabs(sw - 1) > 1e-12)
-        NBT_FAIL(NBT_EDOM, "beam: lobe weights must sum to 1");
+        return nbt__failv(NBT_EDOM, "beam: lobe weights summing to %.15g are not accepted: they must sum to 1", sw);
     if (m->nlayers > 0 && !m->rho_fn) {
-        if (!m->z || !m->rho || m->z[0] != 0)
-            NBT_FAIL(NBT_EDOM, "beam: layers need z[0] = 0 and a density per layer");
+        if (!m->z || !m->rho)
+            NBT_FAIL(NBT_EDOM, "beam: layers need their boundaries z and a density per layer (z or rho is NULL)");
+        if (m->z[0] != 0)
+            return nbt__failv(NBT_EDOM, "beam: the first layer boundary z[0] = %g is not accepted: it must be 0",
+                              m->z[0]);
         for (size_t i = 0; i < m->nlayers; i++) {
             if (!(m->rho[i] >= 0) || !isfinite(m->rho[i]))
-                NBT_FAIL(NBT_EDOM, "beam: layer densities must be finite and >= 0");
-            if (i > 0 && !(m->z[i] > m->z[i - 1]) )
-                NBT_FAIL(NBT_EDOM, "beam: layer boundaries must increase");
+                return nbt__failv(NBT_EDOM, "beam: layer %zu's density rho = %g is not accepted: finite and >= 0", i,
+                                  m->rho[i]);
             if (!isfinite(m->z[i]))
-                NBT_FAIL(NBT_EDOM, "beam: layer boundaries must be finite");
+                return nbt__failv(NBT_EDOM, "beam: layer boundary z[%zu] = %g is not accepted: finite", i, m->z[i]);
+            if (i > 0 && !(m->z[i] > m->z[i - 1]))
+                return nbt__failv(NBT_EDOM, "beam: layer boundary z[%zu] = %g is not accepted: boundaries must "
+                                  "increase (z[%zu] = %g)", i, m->z[i], i - 1, m->z[i - 1]);
         }
     }
     return NBT_OK;

@@ -1,6 +1,8 @@
 /* libnbt/error.c: status strings and the optional error handler. */
 #include <config.h>
+#include <stdarg.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <nbt/nbt.h>
 #include "internal.h"
 
@@ -31,6 +33,16 @@ nbt_status nbt__fail(nbt_status s, const char *reason)
     if (h && s != NBT_OK && s != NBT_ETOL)
         h(reason, s);
     return s;
+}
+
+nbt_status nbt__failv(nbt_status s, const char *fmt, ...)
+{
+    char reason[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    return nbt__fail(s, reason);
 }
 
 const char *nbt_version(void)

@@ -16,6 +16,8 @@
 /* Report a failure to the error handler (if any) and return the status. */
 nbt_status nbt__fail(nbt_status s, const char *reason);
 #define NBT_FAIL(s, reason) return nbt__fail((s), (reason))
+/* The same with a formatted reason (naming the bad value). */
+nbt_status nbt__failv(nbt_status s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /* Format a one-line reason into err (if given) and return st; no handler
  * (the planners' errors go to the caller's buffer). Defined in plan.c. */

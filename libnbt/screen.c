@@ -558,18 +558,24 @@ nbt_status nbt__pixel_weights(const nbt__pkern *pk, double **wq, double **cell, 
 nbt_status nbt_screen_check(const nbt_screen_input *in)
 {
     if (in->w == 0 || in->h == 0 || !in->rgb || !in->D)
-        NBT_FAIL(NBT_EINVAL, "screen: empty image");
+        return nbt__failv(NBT_EINVAL, "screen: an empty image is not accepted (%zux%zu%s%s)", in->w, in->h,
+                          in->rgb ? "" : ", no colours", in->D ? "" : ", no depths");
     if (!(in->dtheta > 0) || !isfinite(in->dtheta))
-        NBT_FAIL(NBT_EDOM, "screen: dtheta must be finite and > 0");
+        return nbt__failv(NBT_EDOM, "screen: dtheta = %g is not accepted: finite and > 0", in->dtheta);
     for (size_t i = 0; i < in->w * in->h; i++) {
+        size_t x = i % in->w, y = i / in->w;
         if (!(in->D[i] >= 0))
-            NBT_FAIL(NBT_EDOM, "screen: a depth is negative or NaN");
+            return nbt__failv(NBT_EDOM, "screen: pixel (%zu, %zu): depth %g is not accepted: >= 0 (sky: infinite)", x,
+                              y, (double)in->D[i]);
         if (in->pix && !(in->pix[i].T >= 0 && in->pix[i].T <= 1 && in->pix[i].M0 >= 0 && isfinite(in->pix[i].M0) &&
                          in->pix[i].beta_px >= 0 && isfinite(in->pix[i].beta_px)))
-            NBT_FAIL(NBT_EDOM, "screen: a per-pixel kernel is out of range (T in [0,1], M0 and beta >= 0, finite)");
+            return nbt__failv(NBT_EDOM, "screen: pixel (%zu, %zu): the kernel T = %g, M0 = %g, beta = %g px is not "
+                              "accepted: T in [0, 1], M0 and beta >= 0 and finite", x, y, in->pix[i].T,
+                              in->pix[i].M0, in->pix[i].beta_px);
         for (int c = 0; c < 3; c++)
             if (!isfinite(in->rgb[3 * i + c]))
-                NBT_FAIL(NBT_EDOM, "screen: a colour is not finite");
+                return nbt__failv(NBT_EDOM, "screen: pixel (%zu, %zu): colour channel %d = %g is not accepted: finite",
+                                  x, y, c, (double)in->rgb[3 * i + c]);
     }
     return NBT_OK;
 }

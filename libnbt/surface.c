@@ -215,19 +215,24 @@ nbt_status nbt_j_phase(const nbt_phase *p, int n, double T, double theta, double
 nbt_status nbt_surface_check(const nbt_surface_geom *g)
 {
     if (!(g->kappa_s >= 0.0) || !isfinite(g->kappa_s))
-        NBT_FAIL(NBT_EDOM, "surface: kappa_s must be finite and >= 0");
+        return nbt__failv(NBT_EDOM, "surface: kappa_s = %g is not accepted: finite and >= 0", g->kappa_s);
     if (!(g->kappa_t >= g->kappa_s) || !isfinite(g->kappa_t))
-        NBT_FAIL(NBT_EDOM, "surface: kappa_t must be finite and >= kappa_s");
+        return nbt__failv(NBT_EDOM, "surface: kappa_t = %g is not accepted: finite and >= kappa_s = %g", g->kappa_t,
+                          g->kappa_s);
     if (!(g->I0 >= 0.0) || !isfinite(g->I0))
-        NBT_FAIL(NBT_EDOM, "surface: I0 must be finite and >= 0");
+        return nbt__failv(NBT_EDOM, "surface: I0 = %g is not accepted: finite and >= 0", g->I0);
     if (!(g->dsp > 0.0) || !isfinite(g->dsp))
-        NBT_FAIL(NBT_EDOM, "surface: dsp must be finite and > 0");
-    if (!(g->theta_s >= 0 && g->theta_s <= NBT_PI) || !(g->theta_r >= 0 && g->theta_r <= NBT_PI))
-        NBT_FAIL(NBT_EDOM, "surface: theta_s and theta_r must lie in [0, pi]");
-    if (!(g->kd >= 0) || !(g->ks >= 0) || !isfinite(g->kd) || !isfinite(g->ks))
-        NBT_FAIL(NBT_EDOM, "surface: kd and ks must be finite and >= 0");
+        return nbt__failv(NBT_EDOM, "surface: dsp = %g is not accepted: finite and > 0", g->dsp);
+    if (!(g->theta_s >= 0 && g->theta_s <= NBT_PI))
+        return nbt__failv(NBT_EDOM, "surface: theta_s = %g is not accepted: in [0, pi]", g->theta_s);
+    if (!(g->theta_r >= 0 && g->theta_r <= NBT_PI))
+        return nbt__failv(NBT_EDOM, "surface: theta_r = %g is not accepted: in [0, pi]", g->theta_r);
+    if (!(g->kd >= 0) || !isfinite(g->kd))
+        return nbt__failv(NBT_EDOM, "surface: kd = %g is not accepted: finite and >= 0", g->kd);
+    if (!(g->ks >= 0) || !isfinite(g->ks))
+        return nbt__failv(NBT_EDOM, "surface: ks = %g is not accepted: finite and >= 0", g->ks);
     if (g->n < 1)
-        NBT_FAIL(NBT_EDOM, "surface: the Phong exponent n must be >= 1");
+        return nbt__failv(NBT_EDOM, "surface: the Phong exponent n = %d is not accepted: >= 1", g->n);
     return NBT_OK;
 }
 

@@ -40,7 +40,8 @@ typedef struct {
 } nbt_airlight_geom;
 
 /* Checks ranges; NBT_EDOM for a ray that runs through the source itself
- * (gamma = 0 and dvp > dsv): the airlight is infinite there. */
+ * (gamma = 0 and dvp >= dsv): the airlight is infinite there. The handler
+ * gets one line naming the bad value and what is accepted. */
 nbt_status nbt_airlight_check(const nbt_airlight_geom *g);
 
 /* Reference: Nishita's integral along the ray by adaptive quadrature. */
