@@ -48,17 +48,14 @@ int cmd_info(int argc, char **argv)
     printf("kind        %s\n", nbt_table_kind_name(t->kind));
     if (t->kind == NBT_TABLE_J)
         printf("n           %d\n", t->n);
-    int has_c = 0, is_asinh = 0;
-    for (int a = 0; a < 2; a++) {
+    for (int a = 0; a < 2; a++) { /* each mapping with its own parameter, as nbt-gen's summary line prints it */
         nbt_axis_map m = t->axis[a].map;
-        int withc = axis_map_has_c(m);
-        has_c |= withc;
-        is_asinh |= m == NBT_AXIS_ASINH || m == NBT_AXIS_ENDS;
-        printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(m), withc ? "(c)" : "",
+        char cs[40] = "";
+        if (axis_map_has_c(m))
+            snprintf(cs, sizeof cs, "(c=%.17g)", t->axis[a].c);
+        printf("axis%d       %s %s%s [%.17g, %.17g] %zu nodes\n", a, a ? n1 : n0, nbt_axis_map_name(m), cs,
                t->axis[a].lo, t->axis[a].hi, t->axis[a].n);
     }
-    if (has_c)
-        printf("%-11s %g %g\n", is_asinh ? "map c" : "log1p c", t->axis[0].c, t->axis[1].c);
     if (t->axis[2].n >= 2)
         printf("axis2       %s %s [%.17g, %.17g] %zu slices (3-D: a sampler3D)\n",
                nbt_table_axis_name(t->kind, 2), nbt_axis_map_name(t->axis[2].map), t->axis[2].lo, t->axis[2].hi,

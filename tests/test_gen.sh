@@ -644,5 +644,12 @@ awk -v b="$tb" -v w="$t0 $t1" 'BEGIN { split(w, t, " "); exit !(b != "" && b + 0
 [ -s "$tmp/nbt-tables/H.exr" ] && [ -s "$tmp/nbt-tables/J1.exr" ] && [ -s "$tmp/nbt-tables/J20.exr" ] &&
   "$NBT_GEN" info "$tmp/nbt-tables/J20.exr" | grep -q '^n  *20$' && "$NBT_GEN" info "$tmp/nbt-tables/J1.exr" | grep -q '^n  *1$' &&
   ok || bad "default scene: H, J1, J20: $(ls "$tmp/nbt-tables")"
+# info names each axis' mapping with its own parameter, as the summary line on stdout does (one planned, the
+# other read back from the file): J1 has a different c on each axis (log1p_cbrt 10, asinh 1)
+for f in H J1 J20; do
+  want=$(grep "^nbt-tables/$f.exr " "$tmp/out" | awk '{ print $3, $4 }' | sed 's/\[[^]]*\]//g')
+  inf=$("$NBT_GEN" info "$tmp/nbt-tables/$f.exr" | awk '/^axis[01] / { printf "%s%s:%s", n++ ? " " : "", $2, $3 }')
+  [ -n "$want" ] && [ "$inf" = "$want" ] && ok || bad "info $f.exr: axes '$inf', the summary line says '$want'"
+done
 
 finish
