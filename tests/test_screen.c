@@ -397,6 +397,16 @@ static void test_operators(void)
         for (size_t i = 8 * W; i < N; i++)
             worst = fmax(worst, fabs(log(Dq[i] / Dc[i])));
         t_true(worst <= 0.5 * log(r) * (1 + 1e-6) && Dq[0] == Dc[0], "quantise: within half a layer in log, sky kept");
+        /* L = 2: every depth snaps to the nearest or the farthest, whichever is nearer in log; L < 2: unchanged */
+        nbt_screen_quantize(Dc, N, 2, Dq);
+        int two = 1, one = 1;
+        for (size_t i = 8 * W; i < N; i++)
+            two &= Dq[i] == (float)(fabs(log(Dc[i] / lo)) <= fabs(log(hi / Dc[i])) ? lo : hi) ||
+                   fabs(log(Dc[i] * Dc[i] / (lo * hi))) < 1e-6; /* a tie may go either way */
+        nbt_screen_quantize(Dc, N, 1, Dq);
+        for (size_t i = 0; i < N; i++)
+            one &= Dq[i] == Dc[i];
+        t_true(two && one, "quantise: 2 layers are the two ends (%d), 1 layer leaves D unchanged (%d)", two, one);
         free(Dc);
         free(Dq);
     }

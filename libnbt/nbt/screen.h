@@ -244,7 +244,9 @@ nbt_status nbt_screen_layered(const nbt_screen_input *in, const nbt_screen_kerne
 /* An approximation for continuous depth: out[i] = D[i] snapped to one of L
  * layers (L >= 2) log-spaced between the nearest and the farthest finite
  * non-zero distance (0 and sky unchanged), so that nbt_screen_layered with
- * max_layers = L + 2 applies. The error falls as 1/L (doc/screenspace.md). */
+ * max_layers = L + 2 applies. The error falls as 1/L (doc/screenspace.md).
+ * L < 2 (no snapping possible), or a map with one finite non-zero depth:
+ * out = D unchanged. */
 void nbt_screen_quantize(const float *D, size_t n, size_t L, float *out);
 
 /* Scores of a scattered part S against a reference (both w*h*3). */
