@@ -10,7 +10,7 @@
  * of the reconstructed f, relative to max |channel 0| (nbt-gen's "rel").
  *
  * Usage: table_singular [m<mode>] [r<points>] [a<a>[,<p>]] [M<m>[,<w>]] [N ...]
- *   (default N: 17 33 65 129). m: the remedy (modes at S() below); r: also
+ *   (options in this order; default N: 17 33 65 129). m: the remedy (modes at S() below); r: also
  *   that many random points against nbt_hk/nbt_jk; a: the decay in x of
  *   mode 6, e^-ax, or (1 + a x/p)^-p for p > 0; M: J's row 0 by a least
  *   squares fit of cos(q y), q = 0..m, the last (q = m) replaced when w is
@@ -21,9 +21,9 @@
  *   options are meant for. doc/tables.md's numbers ("33^2 at 1e-3: what
  *   limits it"):
  *     table_singular r2000 17 33 65 129            plain: where the error sits
- *     table_singular m6 a1,1 r2000 17 33 65 129    H: H_k(0, v)/(1 + u) subtracted
- *     table_singular m6 a1 M4 r2000 17 33 65 129   J1: e^-T (1, cos y .. cos 4y)
- *     table_singular m6 a1 M3,-0 r2000 17 33 65 129   J20: e^-T (1, cos y, cos 2y, peak)
+ *     table_singular m6 r2000 a1,1 17 33 65 129    H: H_k(0, v)/(1 + u) subtracted
+ *     table_singular m6 r2000 a1 M4 17 33 65 129   J1: e^-T (1, cos y .. cos 4y)
+ *     table_singular m6 r2000 a1 M3,-0 17 33 65 129   J20: e^-T (1, cos y, cos 2y, peak)
  *     table_singular m1 33 65 129                  e^-x f(0, y) exact (the bound of this family) */
 #include <math.h>
 #include <stdio.h>
@@ -312,8 +312,16 @@ int main(int argc, char **argv)
     }
     if (argc > 1) {
         nN = 0;
-        for (int a = 1; a < argc && nN < 8; a++)
-            Ns[nN++] = (size_t)atoi(argv[a]);
+        for (int a = 1; a < argc && nN < 8; a++) {
+            char *end;
+            long v = strtol(argv[a], &end, 10);
+            if (*end || v < 2 || v > 1025) {
+                fprintf(stderr, "table_singular: '%s' is not a size 2 .. 1025 (options come first, in the order "
+                                "m, r, a, M)\n", argv[a]);
+                return 2;
+            }
+            Ns[nN++] = (size_t)v;
+        }
     }
     for (int s = 0; s < 3; s++) {
         double prev = 0, regprev[4][8];
