@@ -328,7 +328,7 @@ int main(int argc, char **argv)
         nbt_plan_legendre leg;
         nbt_status st = legmax < 0 ? NBT_EINVAL : nbt_plan_legendre_terms(G, XMAX, tol, 512, &leg);
         if (st == NBT_OK) {
-            nbt_plan_request q = {NBT_TABLE_H, 0, leg.nterms, NULL, XMAX, leg.table_tol, {0, 0}, 0};
+            nbt_plan_request q = {NBT_TABLE_H, 0, leg.nterms, NULL, XMAX, leg.table_tol, {0, 0}, 0, 0};
             nbt_plan *plan = NULL;
             char err[256];
             double t0 = now();

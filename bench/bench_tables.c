@@ -135,7 +135,7 @@ static void goals(double scene_tol)
         nbt_table *t = make(sp, 512);
         double per, base = baseline(t, q ? 40 : 400, &per);
         double tb = time_build(t, 2), tm = time_build_m(t, 2, 1);
-        nbt_plan_request rq = {sp->kind, sp->n, 4, NULL, 10.0, 0, {512, 512}, 0};
+        nbt_plan_request rq = {sp->kind, sp->n, 4, NULL, 10.0, 0, {512, 512}, 0, 0};
         size_t N;
         double err, ps, tp = plan_run(&rq, 1, &N, &err, &ps);
         printf("%-9s 512^2: naive %.3g s; build %.3f s (%.0fx), with error measurement %.3f s (%.0fx; best of 3 each), "
@@ -148,9 +148,9 @@ static void goals(double scene_tol)
         nbt_table_free(t);
     }
     /* the default scene: H, J^1, J^20 at 1e-3 over [0, 10] */
-    nbt_plan_request def[3] = {{NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
-                               {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
-                               {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0}};
+    nbt_plan_request def[3] = {{NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0},
+                               {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0},
+                               {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0}};
     size_t N[3 + NBT_SCENE_MAX_PHONG];
     double err, ps, td = plan_run(def, 3, N, &err, &ps);
     printf("default scene (nbt-gen): %.3f s (plan %.3f s), sizes %zu, %zu, %zu, worst rel err %.2e\n", td, ps, N[0],

@@ -201,7 +201,7 @@ static int eval_phys(const args_t *a, phys_t *ph)
             st = series_auto(ph, p, terms, 1e-3, &sv, &se, &used);
         double x = ph->surface ? ph->sg.kappa_t * ph->sg.dsp : ph->ag.kappa_t * ph->ag.dsv * sin(ph->ag.gamma);
         nbt_plan_request rq[2] = {{ph->surface ? NBT_TABLE_J : NBT_TABLE_H, 1, used, fixed ? p : NULL,
-                                   fmax(10.0, 1.01 * x), 1e-3, {0, 0}, 0}};
+                                   fmax(10.0, 1.01 * x), 1e-3, {0, 0}, 0, 0}};
         nbt_tableset sets[2];
         memset(sets, 0, sizeof sets);
         int nsets = ph->surface ? 2 : 1;

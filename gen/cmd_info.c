@@ -64,7 +64,18 @@ int cmd_info(int argc, char **argv)
     if (t->form != NBT_FORM_PLAIN || t->axis[2].n >= 2)
         printf("form        %s%s\n", nbt_table_form_name(t->form),
                t->form == NBT_FORM_TAIL ? ": R = log(C W), C the scaled tail integral, W = 1 + s/2 + u s^2/2 "
-                                          "(doc/tables.md); errors relative" : "");
+                                          "(doc/tables.md); errors relative"
+               : t->form == NBT_FORM_SUB ? ": values minus S = d(x0) sum_q c_q b_q(x1) (nbt/table.h); the lookup "
+                                           "adds S back, errors are the quantity's" : "");
+    if (t->form == NBT_FORM_SUB) {
+        printf("sub         d(x) = %s, w %.9g\n", t->sub_decay == NBT_SUB_EXP ? "exp(-x)" : "1/(1 + x)", t->sub_w);
+        for (size_t ch = 0; ch < t->nch; ch++) {
+            printf("sub c[%zu]   ", ch);
+            for (int q = 0; q < NBT_SUB_TERMS; q++)
+                printf(" %.9g", t->sub_c[ch][q]);
+            printf("\n");
+        }
+    }
     if (t->axis[2].n >= 2)
         printf("g interp    %s\n", t->interp2 == 3   ? "cubic (the cell's two slices and one on either side)"
                                    : t->interp2 == 2 ? "quadratic (three nearest slices)"

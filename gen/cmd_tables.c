@@ -485,7 +485,7 @@ int cmd_tables(int argc, char **argv)
 {
     const char *cmd = argv[0];
     int surface = !strcmp(cmd, "surface");
-    nbt_plan_request s = {surface ? NBT_TABLE_J : NBT_TABLE_H, surface ? 1 : 0, 4, NULL, 10.0, 0, {0, 0}, 0};
+    nbt_plan_request s = {surface ? NBT_TABLE_J : NBT_TABLE_H, surface ? 1 : 0, 4, NULL, 10.0, 0, {0, 0}, 0, 0};
     unsigned threads = 0;
     const char *out = NULL, *phase_spec = NULL, *basis_arg = NULL;
     nbt_basis basis = NBT_BASIS_AUTO;
@@ -612,9 +612,9 @@ int cmd_default(int argc, char **argv)
     /* the thesis' set: H_0..3, J_0..3^1, J_0..3^20, u and T in [0, 10],
      * theta over [0, pi]; resolution planned for 1e-3 relative error */
     nbt_plan_request rq[3] = {
-        {NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
-        {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
-        {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0},
+        {NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0},
+        {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0},
+        {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 0},
     };
     char stems[3][1024], err[512];
     const char *stemp[3] = {stems[0], stems[1], stems[2]};

@@ -590,7 +590,7 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
         out->leg_nterms = leg.nterms;
         if (st == NBT_OK) {
             nbt_plan_request q = {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, leg.nterms, NULL, r->xmax,
-                                  leg.table_tol, {0, 0}, r->half};
+                                  leg.table_tol, {0, 0}, r->half, 0};
             nbt_plan *plan = NULL;
             double w0 = now_s(), c0 = cpu_s();
             if ((st = nbt_plan_tables(&q, 1, nthreads, &plan, err, errlen)) != NBT_OK)

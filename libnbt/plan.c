@@ -217,6 +217,7 @@ static nbt_status build_packs(const nbt_plan_request *r, size_t count, const nbt
             t->k[c] = r->phase ? -1 : (int)(4 * i + c);
         t->n = r->kind == NBT_TABLE_J ? r->n : 0;
         t->half = r->half;
+        t->form = r->sub ? NBT_FORM_SUB : NBT_FORM_PLAIN;
         if (r->phase)
             snprintf(t->phase, sizeof t->phase, "%s", nbt_phase_name(r->phase));
     }
@@ -311,6 +312,8 @@ static nbt_status check_request(const nbt_plan_request *r, char *err, size_t err
     if (r->tol == 0 && (r->size[0] < 2 || r->size[1] < 2 || r->size[0] > 4096 || r->size[1] > 4096))
         return failf(err, errlen, NBT_EDOM, "plan: size %zux%zu is not accepted: 2 .. 4096 per axis", r->size[0],
                      r->size[1]);
+    if (r->sub != 0 && r->sub != 1)
+        return failf(err, errlen, NBT_EDOM, "plan: sub = %d is not accepted: 0 (plain tables) or 1 (form sub)", r->sub);
     return NBT_OK;
 }
 
@@ -536,7 +539,7 @@ nbt_status nbt_plan_scene(const nbt_scene *s, unsigned nthreads, nbt_plan **out,
     nbt_plan_request rq[2 + NBT_SCENE_MAX_PHONG];
     size_t n = 0;
     nbt_plan_request base = {NBT_TABLE_H, 0, s->have_g ? leg.nterms : 0, s->have_g ? NULL : s->phase, xmax,
-                             s->have_g ? leg.table_tol : s->tol, {0, 0}, s->half};
+                             s->have_g ? leg.table_tol : s->tol, {0, 0}, s->half, 0};
     if (s->airlight)
         rq[n++] = base;
     base.kind = NBT_TABLE_J;

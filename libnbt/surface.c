@@ -785,8 +785,10 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     else if (!(o->quad_tol > 0 && o->quad_tol < 1))
         st = nbt__fail(NBT_EDOM, "J table: quad_tol must lie in (0, 1)");
     for (size_t i = 0; i < ntab && st == NBT_OK; i++)
-        if (ts[i]->form != t->form || (t->form != NBT_FORM_PLAIN && (t->form != NBT_FORM_LOG_ET || !(fixed || hg))))
-            st = nbt__fail(NBT_EINVAL, "J table: forms plain, or log_et for a fixed phase, the same for the set");
+        if (ts[i]->form != t->form || (t->form != NBT_FORM_PLAIN && (t->form != NBT_FORM_SUB || hg) &&
+                                       (t->form != NBT_FORM_LOG_ET || !(fixed || hg))))
+            st = nbt__fail(NBT_EINVAL, "J table: forms plain, sub (not for HG slices), or log_et for a fixed "
+                                       "phase, the same for the set");
     c.logform = t->form == NBT_FORM_LOG_ET;
     if (st != NBT_OK) {
         free(kmap);

@@ -131,6 +131,8 @@ const char *nbt_table_form_name(nbt_table_form f)
         return "tail";
     case NBT_FORM_LOG_ET:
         return "log_et";
+    case NBT_FORM_SUB:
+        return "sub";
     case NBT_FORM_PLAIN:
     default:
         return "plain";
@@ -145,6 +147,8 @@ nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f)
         *f = NBT_FORM_TAIL;
     else if (!strcmp(name, "log_et"))
         *f = NBT_FORM_LOG_ET;
+    else if (!strcmp(name, "sub"))
+        *f = NBT_FORM_SUB;
     else
         return NBT_EFORMAT;
     return NBT_OK;
@@ -377,6 +381,61 @@ static void lookup_slice(const nbt_table *t, size_t m, size_t i, double fx, size
     }
 }
 
+/* NBT_FORM_SUB's terms at y (nbt/table.h) */
+static void sub_basis(double y, double w, double *b)
+{
+    double c1 = cos(y), s1 = sin(y);
+    b[0] = 1.0;
+    b[1] = y;
+    b[2] = c1;
+    b[3] = s1;
+    b[4] = c1 * c1 - s1 * s1;
+    b[5] = 2.0 * s1 * c1;
+    b[6] = b[4] * c1 - b[5] * s1;
+    b[7] = b[5] * c1 + b[4] * s1;
+    b[8] = b[6] * c1 - b[7] * s1;
+    b[9] = w > 0 ? 1.0 / sqrt(y * y + w * w) : 0.0;
+}
+
+static double sub_decay(const nbt_table *t, double x0)
+{
+    double x = fmin(fmax(x0, t->axis[0].lo), t->axis[0].hi) - t->axis[0].lo;
+    return t->sub_decay == NBT_SUB_EXP ? exp(-x) : 1.0 / (1.0 + x);
+}
+
+/* sum_q sub_c[c][q] b_q(y) for every channel */
+static void sub_profile(const nbt_table *t, double x1, double *out)
+{
+    double b[NBT_SUB_TERMS], y = fmin(fmax(x1, t->axis[1].lo), t->axis[1].hi);
+    sub_basis(y, t->sub_w, b);
+    for (size_t c = 0; c < t->nch; c++) {
+        double s = 0;
+        for (int q = 0; q < NBT_SUB_TERMS; q++)
+            s += t->sub_c[c][q] * b[q];
+        out[c] = s;
+    }
+}
+
+double nbt_table_sub(const nbt_table *t, size_t c, double x0, double x1)
+{
+    if (t->form != NBT_FORM_SUB || c >= t->nch)
+        return 0.0;
+    double p[NBT_TABLE_MAX_CH];
+    sub_profile(t, x1, p);
+    return sub_decay(t, x0) * p[c];
+}
+
+/* a SUB table's lookup: the remainder's bilinear value plus S */
+static void sub_add(const nbt_table *t, double x0, double x1, double *out)
+{
+    if (t->form != NBT_FORM_SUB)
+        return;
+    double p[NBT_TABLE_MAX_CH], d = sub_decay(t, x0);
+    sub_profile(t, x1, p);
+    for (size_t c = 0; c < t->nch; c++)
+        out[c] += d * p[c];
+}
+
 void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
 {
     size_t i, j;
@@ -384,6 +443,7 @@ void nbt_table_lookup(const nbt_table *t, double x0, double x1, double *out)
     nbt__axis_cell(&t->axis[0], x0, &i, &fx);
     nbt__axis_cell(&t->axis[1], x1, &j, &fy);
     lookup_slice(t, 0, i, fx, j, fy, out);
+    sub_add(t, x0, x1, out);
 }
 
 nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0, const double *x1, size_t n1,
@@ -400,9 +460,20 @@ nbt_status nbt_table_lookup_grid(const nbt_table *t, const double *x0, size_t n0
         nbt__axis_cell(&t->axis[0], x0[i], &ij[i], &f[i]);
     for (size_t j = 0; j < n1; j++)
         nbt__axis_cell(&t->axis[1], x1[j], &ij[n0 + j], &f[n0 + j]);
-    for (size_t j = 0; j < n1; j++)
-        for (size_t i = 0; i < n0; i++)
-            lookup_slice(t, 0, ij[i], f[i], ij[n0 + j], f[n0 + j], out + (j * n0 + i) * t->nch);
+    for (size_t j = 0; j < n1; j++) {
+        double p[NBT_TABLE_MAX_CH];
+        if (t->form == NBT_FORM_SUB)
+            sub_profile(t, x1[j], p);
+        for (size_t i = 0; i < n0; i++) {
+            double *o = out + (j * n0 + i) * t->nch;
+            lookup_slice(t, 0, ij[i], f[i], ij[n0 + j], f[n0 + j], o);
+            if (t->form == NBT_FORM_SUB) {
+                double d = sub_decay(t, x0[i]);
+                for (size_t c = 0; c < t->nch; c++)
+                    o[c] += d * p[c];
+            }
+        }
+    }
     free(ij);
     free(f);
     return NBT_OK;
@@ -416,6 +487,7 @@ void nbt_table_lookup3(const nbt_table *t, double x0, double x1, double x2, doub
     nbt__axis_cell(&t->axis[1], x1, &j, &fy);
     if (t->axis[2].n < 2) {
         lookup_slice(t, 0, i, fx, j, fy, out);
+        sub_add(t, x0, x1, out);
         return;
     }
     if (t->interp2 == 3 && t->axis[2].n >= 4) {
@@ -557,6 +629,135 @@ static int mid_exact(size_t i, size_t ncell, int measure)
     return measure == NBT__MEASURE_FULL || i < MID_HEAD || i % MID_STRIDE == 0 || i + 1 == ncell;
 }
 
+/* Least squares fit of f (np values, stride fs) by the terms tq[0..m-1]
+ * (modified Gram-Schmidt; A: np m scratch) into coef[tq[k]], each rounded
+ * to float (the EXR's precision, so that writer and reader subtract the
+ * same S); returns the largest |residual| / largest |f|. */
+static double sub_lsq(const double *B, size_t np, const double *f, size_t fs, const int *tq, int m, double *A,
+                      double *coef)
+{
+    double R[NBT_SUB_TERMS][NBT_SUB_TERMS] = {{0}}, qf[NBT_SUB_TERMS], x[NBT_SUB_TERMS];
+    for (int k = 0; k < m; k++) {
+        double *a = A + (size_t)k * np;
+        for (size_t p = 0; p < np; p++)
+            a[p] = B[p * NBT_SUB_TERMS + (size_t)tq[k]];
+        for (int l = 0; l < k; l++) {
+            const double *q = A + (size_t)l * np;
+            double r = 0;
+            for (size_t p = 0; p < np; p++)
+                r += q[p] * a[p];
+            R[l][k] = r;
+            for (size_t p = 0; p < np; p++)
+                a[p] -= r * q[p];
+        }
+        double nn = 0;
+        for (size_t p = 0; p < np; p++)
+            nn += a[p] * a[p];
+        R[k][k] = sqrt(nn);
+        qf[k] = 0;
+        for (size_t p = 0; p < np; p++) {
+            a[p] = R[k][k] > 0 ? a[p] / R[k][k] : 0.0;
+            qf[k] += a[p] * f[p * fs];
+        }
+    }
+    for (int k = m - 1; k >= 0; k--) {
+        double s = qf[k];
+        for (int l = k + 1; l < m; l++)
+            s -= R[k][l] * x[l];
+        x[k] = R[k][k] > 0 ? s / R[k][k] : 0.0;
+    }
+    for (int q = 0; q < NBT_SUB_TERMS; q++)
+        coef[q] = 0;
+    for (int k = 0; k < m; k++)
+        coef[tq[k]] = (double)(float)x[k];
+    double res = 0, mx = 0;
+    for (size_t p = 0; p < np; p++) {
+        double s = 0;
+        for (int q = 0; q < NBT_SUB_TERMS; q++)
+            s += coef[q] * B[p * NBT_SUB_TERMS + (size_t)q];
+        res = fmax(res, fabs(s - f[p * fs]));
+        mx = fmax(mx, fabs(f[p * fs]));
+    }
+    return mx > 0 ? res / mx : res;
+}
+
+/* NBT_FORM_SUB: fit every channel's profile at x0 = lo (computed by fill on
+ * SUB_FIT_CELLS + 1 points, uniform in the unit coordinate of x1: as dense
+ * where the table's nodes are) by the kind's terms (doc/tables.md, "33^2 at
+ * 1e-3"): H_k(0, v) lies in the span of 1, v, cos mv, sin mv (m <= k), so
+ * H (k <= 3) is fitted exactly, decaying as 1/(1 + u); J^1 by 1, cos y ..
+ * cos 4y, J^n (n > 1) by 1, cos y, cos 2y and the source's peak, rounded off
+ * by the lobe to 1/sqrt(theta^2 + w^2) with the w of the smallest residual
+ * in [0.05, 1]; J decays as e^-T. The same fit for every size, so the
+ * planner's 17^2 sub-grid of a 33^2 build is the 17^2 table. */
+#define SUB_FIT_CELLS 256
+static nbt_status sub_fit(nbt_table *const *ts, size_t nt, size_t C, nbt__grid_fill fill, void *ctx)
+{
+    const nbt_table *t0 = ts[0];
+    static const int th[] = {0, 1, 2, 3, 4, 5, 6, 7}, tj1[] = {0, 2, 4, 6, 8}, tjn[] = {0, 2, 4, 9};
+    const int *tq = t0->kind == NBT_TABLE_H ? th : t0->n == 1 ? tj1 : tjn;
+    int m = t0->kind == NBT_TABLE_H ? 8 : t0->n == 1 ? 5 : 4;
+    size_t np = SUB_FIT_CELLS + 1;
+    if ((t0->kind != NBT_TABLE_H && t0->kind != NBT_TABLE_J) || t0->axis[2].n > 1)
+        NBT_FAIL(NBT_EINVAL, "table: form sub is for 2-D H and J tables");
+    double *ys = malloc(np * sizeof *ys), *f = malloc(np * C * sizeof *f);
+    double *B = malloc(np * NBT_SUB_TERMS * sizeof *B), *A = malloc(np * NBT_SUB_TERMS * sizeof *A);
+    nbt_status st = ys && f && B && A ? NBT_OK : nbt__fail(NBT_ENOMEM, "table: out of memory");
+    double x = t0->axis[0].lo, q = 0;
+    for (size_t p = 0; st == NBT_OK && p < np; p++)
+        ys[p] = nbt_axis_from_unit(&t0->axis[1], (double)p / (double)(np - 1));
+    if (st == NBT_OK)
+        st = fill(ctx, &x, 1, ys, np, f, &q);
+    double best = INFINITY, bw = 0;
+    int peak = tq[m - 1] == 9;
+    for (double w = peak ? 0.05 : 0; st == NBT_OK && w <= (peak ? 1.0 + 1e-9 : 0); w += 0.01) {
+        double res = 0, coef[NBT_SUB_TERMS];
+        for (size_t p = 0; p < np; p++)
+            sub_basis(ys[p], w, B + p * NBT_SUB_TERMS);
+        for (size_t ch = 0; ch < C; ch++)
+            res = fmax(res, sub_lsq(B, np, f + ch, C, tq, m, A, coef));
+        if (res < best) {
+            best = res;
+            bw = w;
+        }
+    }
+    for (size_t p = 0; st == NBT_OK && p < np; p++)
+        sub_basis(ys[p], bw, B + p * NBT_SUB_TERMS);
+    for (size_t ti = 0, ch = 0; st == NBT_OK && ti < nt; ti++) {
+        nbt_table *t = ts[ti];
+        t->sub_decay = t->kind == NBT_TABLE_H ? NBT_SUB_RECIP : NBT_SUB_EXP;
+        t->sub_w = peak ? (double)(float)bw : 0.0;
+        for (size_t c = 0; c < t->nch; c++, ch++)
+            sub_lsq(B, np, f + ch, C, tq, m, A, t->sub_c[c]);
+    }
+    free(ys);
+    free(f);
+    free(B);
+    free(A);
+    return st;
+}
+
+/* F (nr rows at xr, fy values at ys, C channels) -= S; amax[ch] gets the
+ * largest |value| before, over the node entries (every step-th y) */
+static void sub_apply(nbt_table *const *ts, size_t nt, const double *xr, size_t nr, const double *ys, size_t fy,
+                      size_t step, size_t C, double *F, double *amax)
+{
+    for (size_t jr = 0; jr < fy; jr++) {
+        double p[NBT_TABLE_MAX_CH];
+        for (size_t ti = 0, off = 0; ti < nt; off += ts[ti]->nch, ti++) {
+            sub_profile(ts[ti], ys[jr], p);
+            for (size_t i = 0; i < nr; i++) {
+                double d = sub_decay(ts[ti], xr[i]), *v = F + (i * fy + jr) * C + off;
+                for (size_t c = 0; c < ts[ti]->nch; c++) {
+                    if (amax && jr % step == 0 && fabs(v[c]) > amax[off + c])
+                        amax[off + c] = fabs(v[c]);
+                    v[c] -= d * p[c];
+                }
+            }
+        }
+    }
+}
+
 nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__grid_fill fill, void *ctx)
 {
     const nbt_table *t0 = ts[0];
@@ -599,6 +800,22 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
         st = fill(ctx, xm, nm, ys, fy, Fm, &qerr2);
     qerr = fmax(qerr, qerr2);
     size_t off = 0, step = measure ? 2 : 1;
+    /* form sub: the tables hold f - S (after the node fills: J checks its
+     * quadrature on the first call's rows); max_abs stays f's */
+    double *amax = NULL;
+    for (size_t i = 1; i < nt && st == NBT_OK; i++)
+        if (ts[i]->form != t0->form)
+            st = nbt__fail(NBT_EINVAL, "table set: the tables must share their form");
+    if (st == NBT_OK && t0->form == NBT_FORM_SUB) {
+        if (!(amax = calloc(C, sizeof *amax)))
+            st = nbt__fail(NBT_ENOMEM, "table: out of memory");
+        if (st == NBT_OK)
+            st = sub_fit(ts, nt, C, fill, ctx);
+        if (st == NBT_OK) {
+            sub_apply(ts, nt, xs, nx, ys, fy, step, C, F, amax);
+            sub_apply(ts, nt, xm, nm, ys, fy, step, C, Fm, NULL);
+        }
+    }
     for (size_t ti = 0; ti < nt && st == NBT_OK; off += ts[ti]->nch, ti++) {
         nbt_table *t = ts[ti];
         size_t nc = t->nch;
@@ -614,6 +831,8 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
                         if (fabs(v) > t->max_abs[c])
                             t->max_abs[c] = fabs(v);
                     }
+        for (size_t c = 0; amax && c < nc; c++)
+            t->max_abs[c] = amax[off + c];
         if (t->half)
             nbt_table_round_half(t);
         t->quad_err = qerr;
@@ -726,6 +945,7 @@ nbt_status nbt__table_fill(nbt_table *const *ts, size_t nt, int measure, nbt__gr
 #undef D
 #undef EX
     }
+    free(amax);
     free(xs);
     free(ys);
     free(xm);

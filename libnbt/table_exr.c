@@ -190,6 +190,19 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
     }
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_attr_set_string(ctx, part, "nbt.form", nbt_table_form_name(t->form));
+    /* form sub: the closed form the values exclude (its coefficients are
+     * float values, so the vectors hold them exactly) */
+    if (rv == EXR_ERR_SUCCESS && t->form == NBT_FORM_SUB)
+        rv = exr_attr_set_string(ctx, part, "nbt.sub.decay", t->sub_decay == NBT_SUB_EXP ? "exp" : "recip");
+    if (rv == EXR_ERR_SUCCESS && t->form == NBT_FORM_SUB)
+        rv = exr_attr_set_double(ctx, part, "nbt.sub.w", t->sub_w);
+    for (size_t c = 0; rv == EXR_ERR_SUCCESS && t->form == NBT_FORM_SUB && c < nc; c++) {
+        float v[NBT_SUB_TERMS];
+        for (int q = 0; q < NBT_SUB_TERMS; q++)
+            v[q] = (float)t->sub_c[c][q];
+        snprintf(an, sizeof an, "nbt.sub.%s", CH[c]);
+        rv = exr_attr_set_float_vector(ctx, part, an, NBT_SUB_TERMS, v);
+    }
     if (rv == EXR_ERR_SUCCESS && nax == 3)
         rv = write_err_vectors(ctx, part, t->cell_err, t->axis[2].n - 1, t->nch, "cell_err");
     if (rv == EXR_ERR_SUCCESS && t->row_err)
@@ -387,6 +400,29 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         nbt_table_form_parse(s, &t->form) != NBT_OK) {
         st = rd_fail(err, errlen, path, "unknown nbt.form (written by a newer nbt?)");
         goto done;
+    }
+    if (t->form == NBT_FORM_SUB) {
+        double w = -1;
+        if (nax == 3 || exr_attr_get_string(ctx, 0, "nbt.sub.decay", &len, &s) != EXR_ERR_SUCCESS ||
+            (strcmp(s, "exp") && strcmp(s, "recip")) || exr_attr_get_double(ctx, 0, "nbt.sub.w", &w) != EXR_ERR_SUCCESS ||
+            !(w >= 0 && w <= 1e3)) {
+            st = rd_fail(err, errlen, path, "form sub needs a 2-D table with nbt.sub.decay (exp or recip) and "
+                                            "nbt.sub.w in [0, 1e3]");
+            goto done;
+        }
+        t->sub_decay = strcmp(s, "exp") ? NBT_SUB_RECIP : NBT_SUB_EXP;
+        t->sub_w = w;
+        for (size_t c = 0; c < nc; c++) {
+            int32_t ne = 0;
+            const float *v = NULL;
+            snprintf(an, sizeof an, "nbt.sub.%s", CH[c]);
+            if (exr_attr_get_float_vector(ctx, 0, an, &ne, &v) != EXR_ERR_SUCCESS || ne != NBT_SUB_TERMS) {
+                st = rd_fail(err, errlen, path, "form sub needs nbt.sub.R.. with 10 coefficients per channel");
+                goto done;
+            }
+            for (int q = 0; q < NBT_SUB_TERMS; q++)
+                t->sub_c[c][q] = v[q];
+        }
     }
     if (nax == 3) {
         int32_t ip = 1, ne;

@@ -126,6 +126,8 @@ unsigned nbt_gl_upload_table(const nbt_table *t)
 {
     size_t nx = t->axis[0].n, ny = t->axis[1].n, nz = t->axis[2].n, nv = nx * ny * nz;
     GLenum target = nbt_gl_table_target(t);
+    if (t->form == NBT_FORM_SUB) /* the shaders do not add the closed form back yet: refused, not wrong */
+        return 0;
     /* 2-D tables stay RGBA (the Legendre shaders dot all four channels);
      * a one-channel 3-D table needs only R (its shaders read .r), and so
      * does a tail-form one (channel 1 is libnbt's error map) */

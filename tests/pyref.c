@@ -109,7 +109,7 @@ int main(void)
     put1("surface.series", La);
 
     /* a planned H table (orders 0..3, 17 x 9 nodes) and two lookups */
-    nbt_plan_request rq = {NBT_TABLE_H, 0, 4, NULL, 5.0, 0.0, {17, 9}, 0};
+    nbt_plan_request rq = {NBT_TABLE_H, 0, 4, NULL, 5.0, 0.0, {17, 9}, 0, 0};
     nbt_plan *pl = NULL;
     nbt_tableset ts;
     if (nbt_plan_tables(&rq, 1, 1, &pl, NULL, 0) != NBT_OK || nbt_plan_execute(pl, 0, &ts, NULL, 0) != NBT_OK)
@@ -124,7 +124,7 @@ int main(void)
     nbt_tableset_free(&ts);
     nbt_plan_free(pl);
     /* a planned J^1 table (orders 0..3, 17 x 9) and surface radiance from it (diffuse only) */
-    nbt_plan_request rj = {NBT_TABLE_J, 1, 4, NULL, 4.0, 0.0, {17, 9}, 0};
+    nbt_plan_request rj = {NBT_TABLE_J, 1, 4, NULL, 4.0, 0.0, {17, 9}, 0, 0};
     if (nbt_plan_tables(&rj, 1, 1, &pl, NULL, 0) != NBT_OK || nbt_plan_execute(pl, 0, &ts, NULL, 0) != NBT_OK)
         die("plan J");
     nbt_surface_geom sd = {0.1, 0.25, 2.0, 3.0, 0.4, 1.1, 0.6, 0.0, 1};

@@ -727,6 +727,12 @@ int main(void)
     glActiveTexture(GL_TEXTURE0);
     for (int i = 0; i < 6; i++)
         tex[i] = nbt_gl_upload_table(all[i]);
+    /* form sub (issue 21): the shaders would read the remainder as the value */
+    nbt_table *subt = nbt_table_dup(Ht[0]);
+    if (subt)
+        subt->form = NBT_FORM_SUB;
+    t_true(subt && nbt_gl_upload_table(subt) == 0, "a form-sub table is refused, not uploaded as plain values");
+    nbt_table_free(subt);
     glUseProgram(prog);
     for (int i = 0; i < 6; i++) {
         glActiveTexture(GL_TEXTURE0 + (GLenum)i);

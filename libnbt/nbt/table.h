@@ -99,9 +99,22 @@ typedef enum {
      * max_err are relative too */
     NBT_FORM_TAIL,
     NBT_FORM_LOG_ET,   /* J tables: ln(e^T J) = T + ln J (J > 0); the bilinear error is relative */
+    /* 2-D H and J tables: the value minus a closed form S(x0, x1) =
+     * d(x0 - lo0) sum_q sub_c[c][q] b_q(x1) (nbt_table_sub; its fit at x0 = lo0
+     * in doc/tables.md, "33^2 at 1e-3"), which the lookups add back:
+     * nbt_table_lookup and _lookup_grid return the quantity itself, max_err
+     * and max_abs are the quantity's. The shaders do not know it yet
+     * (libnbt-gl refuses it). */
+    NBT_FORM_SUB,
 } nbt_table_form;
 
-/* "plain", "tail", "log_et"; parse returns NBT_EFORMAT for other names. */
+/* NBT_FORM_SUB's terms b_q(y): 1, y, cos y, sin y, cos 2y, sin 2y, cos 3y,
+ * sin 3y, cos 4y, 1/sqrt(y^2 + w^2) (0 when w = 0) */
+#define NBT_SUB_TERMS 10
+/* its decay d(x): 1/(1 + x) or e^-x */
+typedef enum { NBT_SUB_RECIP, NBT_SUB_EXP } nbt_sub_decay;
+
+/* "plain", "tail", "log_et", "sub"; parse returns NBT_EFORMAT for other names. */
 const char *nbt_table_form_name(nbt_table_form f);
 nbt_status nbt_table_form_parse(const char *name, nbt_table_form *f);
 
@@ -149,7 +162,15 @@ typedef struct {
                               + i) * nch + c] bounds |lookup3 - exact| of channel c for x0 between nodes i
                               and i + 1, x1 in cells b theta_cells .. (b + 1) theta_cells - 1 (the last band
                               may hold fewer) and x2 in cell m; NaN: not recorded there */
+    nbt_sub_decay sub_decay;  /* NBT_FORM_SUB: d(x) */
+    double sub_w;             /* NBT_FORM_SUB: the peak term's width, > 0, or 0: no peak term */
+    double sub_c[NBT_TABLE_MAX_CH][NBT_SUB_TERMS]; /* NBT_FORM_SUB: coefficients (float values: the EXR
+                                                      stores them as floats) */
 } nbt_table;
+
+/* NBT_FORM_SUB's closed form S of channel c at (x0, x1), both clamped to
+ * the axes' ranges as the lookup clamps them; 0 for other forms. */
+double nbt_table_sub(const nbt_table *t, size_t c, double x0, double x1);
 
 /* Values in row_err: max(axis[2].n - 1, 1) (axis[0].n - 1) nch. */
 size_t nbt_table_row_err_len(const nbt_table *t);

@@ -154,7 +154,8 @@ class TableStruct(ctypes.Structure):  # nbt_table
                 ("phase", ctypes.c_char * 128), ("quad_tol", c_double), ("quad_err", c_double),
                 ("max_err", c_double * 4), ("max_abs", c_double * 4), ("half", c_int), ("form", c_int),
                 ("interp2", c_int), ("cell_err", c_double_p), ("data", c_float_p),
-                ("row_err", c_double_p), ("theta_cells", c_size_t), ("theta_err", c_double_p)]
+                ("row_err", c_double_p), ("theta_cells", c_size_t), ("theta_err", c_double_p),
+                ("sub_decay", c_int), ("sub_w", c_double), ("sub_c", (c_double * 10) * 4)]
 
 
 BEAM_MAX_LOBES = 16
@@ -239,7 +240,7 @@ class Scene(ctypes.Structure):  # nbt_scene
 
 class PlanRequest(ctypes.Structure):  # nbt_plan_request
     _fields_ = [("kind", c_int), ("n", c_int), ("nterms", c_size_t), ("phase", c_void_p), ("xmax", c_double),
-                ("tol", c_double), ("size", c_size_t * 2), ("half", c_int)]
+                ("tol", c_double), ("size", c_size_t * 2), ("half", c_int), ("sub", c_int)]
 
 
 class PlanSet(ctypes.Structure):  # nbt_plan_set

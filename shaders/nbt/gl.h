@@ -90,7 +90,8 @@ unsigned nbt_gl_table_target(const nbt_table *t);
  * axis[2].n texels (slice m = depth m), GL_R32F for one channel, else
  * GL_RGBA32F (channels beyond nch 0); GL_R16F / GL_RGBA16F when t->half
  * (the values are already half, so nothing is rounded again). Returns the
- * texture name, 0 on failure (glGetError set). */
+ * texture name, 0 on failure (glGetError set) or for a table of form sub,
+ * whose closed form the shaders do not add back yet (nbt/table.h). */
 unsigned nbt_gl_upload_table(const nbt_table *t);
 
 /* Upload t on texture unit `unit` (nbt_gl_upload_table, which leaves it
