@@ -215,11 +215,11 @@ ok(PS.shape == (3, 5, 3) and done == 4, "path shape %r, spp %r" % (PS.shape, don
 # ---- errors carry libnbt's message ----
 raises("bad phase spec", "g must be a number in (-1, 1)", nbt.Phase, "hg:g=1.5")
 raises("unknown phase", "nope", nbt.Phase, "nope:x=1")
-raises("albedo 1.5", "albedo", nbt.Medium, 1.0, 1.5, 0.1)
+raises("albedo 1.5", "albedo = 1.5 is not accepted", nbt.Medium, 1.0, 1.5, 0.1)
 raises("Phase.hg(1)", "(-1, 1)", nbt.Phase.hg, 1.0)
 bad = D.copy()
 bad[3, 2] = np.nan
-raises("NaN depth", "negative or NaN", nbt.screen.layered, rgb, bad, 0.02, kf)
+raises("NaN depth at row 3, column 2", "pixel (2, 3): depth nan", nbt.screen.layered, rgb, bad, 0.02, kf)
 raises("transposed depth", "(5, 9)", nbt.screen.layered, rgb, D.T, 0.02, kf)
 raises("path spp 1", "spp", nbt.screen.path, prgb, PZ, 0.05, 0.3, 0.9, hg, spp=1)
 raises("plan xmax -1", "xmax", nbt.plan_table, "H", -1.0, nterms=4)
