@@ -2,7 +2,8 @@
 // view ray from H tables (Hong, eq. 4.18 with albedo and 1/4pi explicit):
 //   L_a = kappa_s I0 e^{-kappa_t t}/(4 pi h) sum_k w_k [H_k(kappa_t h, theta_d) - H_k(kappa_t h, theta_0)]
 // Defines: NBT_H_PACKS (1..4 RGBA textures holding orders 4p..4p+3) with
-// weights nbt_hw[p] (nbt_weights.glsl), or, with NBT_FIXED_PHASE, one
+// weights nbt_hw[p] (nbt_weights.glsl; a pack of form sub adds its closed
+// form back: nbt_Hp_sub, _sub_w, _sub_c, nbt_sub in nbt_table.glsl), or, with NBT_FIXED_PHASE, one
 // fixed-phase table (channel R, weight (1, 0, 0, 0)), or, with NBT_G_SLICED,
 // one g-sliced table H_p(u, v; g) of the HG phase (a sampler3D, channel R,
 // axis 2 = g, the tail form below): nbt_airlight_g(..., g) reads it at any g,
@@ -34,27 +35,46 @@ NBT_U int nbt_H_map0, nbt_H_map1;
 NBT_U vec4 nbt_H_ax2; // g axis
 NBT_U int nbt_H_map2;
 NBT_U int nbt_H_interp2; // the table's interp2: 3 cubic in g (nbt_lookup3c), else quadratic (nbt_lookup3q)
+#else
+// per pack: form sub's closed form (nbt_sub; set by nbt_gl_set_table_sub, all 0 for a plain table)
+NBT_U vec4 nbt_H0_sub_c[10];
+NBT_U int nbt_H0_sub;
+NBT_U float nbt_H0_sub_w;
+#if NBT_H_PACKS > 1
+NBT_U vec4 nbt_H1_sub_c[10];
+NBT_U int nbt_H1_sub;
+NBT_U float nbt_H1_sub_w;
+#endif
+#if NBT_H_PACKS > 2
+NBT_U vec4 nbt_H2_sub_c[10];
+NBT_U int nbt_H2_sub;
+NBT_U float nbt_H2_sub_w;
+#endif
+#if NBT_H_PACKS > 3
+NBT_U vec4 nbt_H3_sub_c[10];
+NBT_U int nbt_H3_sub;
+NBT_U float nbt_H3_sub_w;
+#endif
 #endif
 NBT_BLOCK_END
 
 #ifndef NBT_G_SLICED
 
+// one pack's H(u, v1) - H(u, v0), its closed form added back for form sub
+#define NBT_H_PACK(t, sub, w, c) (nbt_lookup_sub(t, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, sub, w, c, u, v1) - nbt_lookup_sub(t, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, sub, w, c, u, v0))
+
 // sum_k w_k [H_k(u, v1) - H_k(u, v0)]
 float nbt_h_diff(float u, float v0, float v1)
 {
-    float s = dot(nbt_hw[0], nbt_lookup(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
-                             nbt_lookup(nbt_H0, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+    float s = dot(nbt_hw[0], NBT_H_PACK(nbt_H0, nbt_H0_sub, nbt_H0_sub_w, nbt_H0_sub_c));
 #if NBT_H_PACKS > 1
-    s += dot(nbt_hw[1], nbt_lookup(nbt_H1, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
-                        nbt_lookup(nbt_H1, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+    s += dot(nbt_hw[1], NBT_H_PACK(nbt_H1, nbt_H1_sub, nbt_H1_sub_w, nbt_H1_sub_c));
 #endif
 #if NBT_H_PACKS > 2
-    s += dot(nbt_hw[2], nbt_lookup(nbt_H2, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
-                        nbt_lookup(nbt_H2, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+    s += dot(nbt_hw[2], NBT_H_PACK(nbt_H2, nbt_H2_sub, nbt_H2_sub_w, nbt_H2_sub_c));
 #endif
 #if NBT_H_PACKS > 3
-    s += dot(nbt_hw[3], nbt_lookup(nbt_H3, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v1) -
-                        nbt_lookup(nbt_H3, nbt_H_ax0, nbt_H_map0, nbt_H_ax1, nbt_H_map1, u, v0));
+    s += dot(nbt_hw[3], NBT_H_PACK(nbt_H3, nbt_H3_sub, nbt_H3_sub_w, nbt_H3_sub_c));
 #endif
     return s;
 }

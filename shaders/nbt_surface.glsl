@@ -8,7 +8,9 @@
 // J^1 and J^n tables (at most one each) are g-sliced J_p^n(T, theta; g) of the
 // HG phase (sampler3D, channel R, axis 2 = g): nbt_surface_g(..., g) reads
 // them at any g, nbt_surface at the uniform nbt_g (g clamps to the tables' g
-// range). T beyond the table reads its edge. nbt_J_form and nbt_J_interp2
+// range). T beyond the table reads its edge. A 2-D pack of form sub adds
+// its closed form back (nbt_J1_p_sub, _sub_w, _sub_c and nbt_Jn_p_*: nbt_sub
+// in nbt_table.glsl). nbt_J_form and nbt_J_interp2
 // (set by nbt_gl_set_table_axes) name the tables' value form and g
 // interpolation, as libnbt's nbt_surface_table_g reads them.
 #ifdef NBT_G_SLICED
@@ -34,6 +36,46 @@ NBT_U vec4 nbt_J_ax2; // g axis
 NBT_U int nbt_J_map2;
 NBT_U int nbt_J_form;    // 0: plain J; 1: log_et, the texel holds T + ln J
 NBT_U int nbt_J_interp2; // 3: cubic in g (nbt_lookup3c), 2: quadratic (nbt_lookup3q), else trilinear
+#else
+// per pack: form sub's closed form (nbt_sub; set by nbt_gl_set_table_sub, all 0 for a plain table)
+NBT_U vec4 nbt_J1_0_sub_c[10];
+NBT_U int nbt_J1_0_sub;
+NBT_U float nbt_J1_0_sub_w;
+#if NBT_J1_PACKS > 1
+NBT_U vec4 nbt_J1_1_sub_c[10];
+NBT_U int nbt_J1_1_sub;
+NBT_U float nbt_J1_1_sub_w;
+#endif
+#if NBT_J1_PACKS > 2
+NBT_U vec4 nbt_J1_2_sub_c[10];
+NBT_U int nbt_J1_2_sub;
+NBT_U float nbt_J1_2_sub_w;
+#endif
+#if NBT_J1_PACKS > 3
+NBT_U vec4 nbt_J1_3_sub_c[10];
+NBT_U int nbt_J1_3_sub;
+NBT_U float nbt_J1_3_sub_w;
+#endif
+#if NBT_JN_PACKS > 0
+NBT_U vec4 nbt_Jn_0_sub_c[10];
+NBT_U int nbt_Jn_0_sub;
+NBT_U float nbt_Jn_0_sub_w;
+#endif
+#if NBT_JN_PACKS > 1
+NBT_U vec4 nbt_Jn_1_sub_c[10];
+NBT_U int nbt_Jn_1_sub;
+NBT_U float nbt_Jn_1_sub_w;
+#endif
+#if NBT_JN_PACKS > 2
+NBT_U vec4 nbt_Jn_2_sub_c[10];
+NBT_U int nbt_Jn_2_sub;
+NBT_U float nbt_Jn_2_sub_w;
+#endif
+#if NBT_JN_PACKS > 3
+NBT_U vec4 nbt_Jn_3_sub_c[10];
+NBT_U int nbt_Jn_3_sub;
+NBT_U float nbt_Jn_3_sub_w;
+#endif
 #endif
 NBT_BLOCK_END
 #if NBT_JN_PACKS > 0
@@ -62,21 +104,22 @@ float nbt_jlook3(sampler3D tex, float T, float th, float g)
 #define NBT_J1_SUM(T, th, g) NBT_JLOOK3(nbt_J1_0, T, th, g)
 #define NBT_JN_SUM(T, th, g) NBT_JLOOK3(nbt_Jn_0, T, th, g)
 #else
-#define NBT_JLOOK(tex, T, th) nbt_lookup(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, T, th)
+// a pack's value, its closed form added back for form sub (the pack's uniforms: tex_sub, _sub_w, _sub_c)
+#define NBT_JLOOK(tex, sub, w, c, T, th) nbt_lookup_sub(tex, nbt_J_ax0, nbt_J_map0, nbt_J_ax1, nbt_J_map1, sub, w, c, T, th)
 #define NBT_J1_SUM(T, th, g) nbt_j1_sum(T, th)
 #define NBT_JN_SUM(T, th, g) nbt_jn_sum(T, th)
 
 float nbt_j1_sum(float T, float th)
 {
-    float s = dot(nbt_hw[0], NBT_JLOOK(nbt_J1_0, T, th));
+    float s = dot(nbt_hw[0], NBT_JLOOK(nbt_J1_0, nbt_J1_0_sub, nbt_J1_0_sub_w, nbt_J1_0_sub_c, T, th));
 #if NBT_J1_PACKS > 1
-    s += dot(nbt_hw[1], NBT_JLOOK(nbt_J1_1, T, th));
+    s += dot(nbt_hw[1], NBT_JLOOK(nbt_J1_1, nbt_J1_1_sub, nbt_J1_1_sub_w, nbt_J1_1_sub_c, T, th));
 #endif
 #if NBT_J1_PACKS > 2
-    s += dot(nbt_hw[2], NBT_JLOOK(nbt_J1_2, T, th));
+    s += dot(nbt_hw[2], NBT_JLOOK(nbt_J1_2, nbt_J1_2_sub, nbt_J1_2_sub_w, nbt_J1_2_sub_c, T, th));
 #endif
 #if NBT_J1_PACKS > 3
-    s += dot(nbt_hw[3], NBT_JLOOK(nbt_J1_3, T, th));
+    s += dot(nbt_hw[3], NBT_JLOOK(nbt_J1_3, nbt_J1_3_sub, nbt_J1_3_sub_w, nbt_J1_3_sub_c, T, th));
 #endif
     return s;
 }
@@ -84,15 +127,15 @@ float nbt_j1_sum(float T, float th)
 #if NBT_JN_PACKS > 0
 float nbt_jn_sum(float T, float th)
 {
-    float s = dot(nbt_hw[0], NBT_JLOOK(nbt_Jn_0, T, th));
+    float s = dot(nbt_hw[0], NBT_JLOOK(nbt_Jn_0, nbt_Jn_0_sub, nbt_Jn_0_sub_w, nbt_Jn_0_sub_c, T, th));
 #if NBT_JN_PACKS > 1
-    s += dot(nbt_hw[1], NBT_JLOOK(nbt_Jn_1, T, th));
+    s += dot(nbt_hw[1], NBT_JLOOK(nbt_Jn_1, nbt_Jn_1_sub, nbt_Jn_1_sub_w, nbt_Jn_1_sub_c, T, th));
 #endif
 #if NBT_JN_PACKS > 2
-    s += dot(nbt_hw[2], NBT_JLOOK(nbt_Jn_2, T, th));
+    s += dot(nbt_hw[2], NBT_JLOOK(nbt_Jn_2, nbt_Jn_2_sub, nbt_Jn_2_sub_w, nbt_Jn_2_sub_c, T, th));
 #endif
 #if NBT_JN_PACKS > 3
-    s += dot(nbt_hw[3], NBT_JLOOK(nbt_Jn_3, T, th));
+    s += dot(nbt_hw[3], NBT_JLOOK(nbt_Jn_3, nbt_Jn_3_sub, nbt_Jn_3_sub_w, nbt_Jn_3_sub_c, T, th));
 #endif
     return s;
 }

@@ -100,3 +100,31 @@ vec4 nbt_lookup3i(sampler3D t, vec4 a0, int m0, vec4 a1, int m1, vec4 a2, int m2
         return nbt_lookup3q(t, a0, m0, a1, m1, a2, m2, x0, x1, x2);
     return nbt_lookup3(t, a0, m0, a1, m1, a2, m2, x0, x1, x2);
 }
+
+// NBT_FORM_SUB (libnbt's nbt_table_sub, doc/tables.md "33^2 at 1e-3"): the texels hold f - S,
+// S(x0, x1) = d(x0 - lo0) sum_q c_q b_q(x1), both coordinates clamped to the axes as the lookup
+// clamps them; b = 1, y, cos y, sin y, cos 2y, sin 2y, cos 3y, sin 3y, cos 4y, 1/sqrt(y^2 + w^2)
+// (0 when w = 0); c_q holds term q of all four channels. sub: 0 a plain table (S = 0), 1 form sub
+// with d(x) = 1/(1 + x), 2 with d(x) = e^-x. One sin/cos pair, the rest by angle addition.
+// The coefficients come as ten vec4 (NBT_SUB_C(c) spells out a uniform array c[10]): no array
+// parameter to copy per call.
+vec4 nbt_sub(int sub, float w, vec4 c0, vec4 c1, vec4 c2, vec4 c3, vec4 c4, vec4 c5, vec4 c6, vec4 c7, vec4 c8,
+             vec4 c9, vec4 a0, vec4 a1, float x0, float x1)
+{
+    if (sub == 0)
+        return vec4(0.0);
+    float x = clamp(x0, a0.x, a0.y) - a0.x, y = clamp(x1, a1.x, a1.y);
+    float cs1 = cos(y), sn1 = sin(y);
+    float cs2 = cs1 * cs1 - sn1 * sn1, sn2 = 2.0 * sn1 * cs1;
+    float cs3 = cs2 * cs1 - sn2 * sn1, sn3 = sn2 * cs1 + cs2 * sn1;
+    float cs4 = cs3 * cs1 - sn3 * sn1;
+    vec4 s = c0 + y * c1 + cs1 * c2 + sn1 * c3 + cs2 * c4 + sn2 * c5 + cs3 * c6 + sn3 * c7 + cs4 * c8;
+    if (w > 0.0)
+        s += inversesqrt(y * y + w * w) * c9;
+    return (sub == 2 ? exp(-x) : 1.0 / (1.0 + x)) * s;
+}
+#define NBT_SUB_C(c) c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9]
+
+// a 2-D table's value whatever its form: nbt_lookup plus the closed form (nbt_table_lookup);
+// sub, w, c: the pack's uniforms (c its vec4[10] array); one line: GLSL 3.30 has no line continuation
+#define nbt_lookup_sub(t, a0, m0, a1, m1, sub, w, c, x0, x1) (nbt_lookup(t, a0, m0, a1, m1, x0, x1) + nbt_sub(sub, w, NBT_SUB_C(c), a0, a1, x0, x1))
