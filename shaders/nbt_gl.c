@@ -117,6 +117,23 @@ void nbt_gl_set_table_axes(unsigned program, const char *prefix, const nbt_table
     }
 }
 
+void nbt_gl_set_table_sub(unsigned program, const char *sampler, const nbt_table *t)
+{
+    /* term q of the four channels in one vec4 (nbt_sub in nbt_table.glsl); zeros for a plain table */
+    float c[NBT_SUB_TERMS][4] = {{0}};
+    int sub = t->form == NBT_FORM_SUB && t->axis[2].n <= 1;
+    for (size_t ch = 0; sub && ch < t->nch && ch < 4; ch++)
+        for (int q = 0; q < NBT_SUB_TERMS; q++)
+            c[q][ch] = (float)t->sub_c[ch][q];
+    char name[128];
+    snprintf(name, sizeof name, "%s_sub", sampler);
+    glUniform1i(glGetUniformLocation(program, name), sub ? (t->sub_decay == NBT_SUB_EXP ? 2 : 1) : 0);
+    snprintf(name, sizeof name, "%s_sub_w", sampler);
+    glUniform1f(glGetUniformLocation(program, name), sub ? (float)t->sub_w : 0.0f);
+    snprintf(name, sizeof name, "%s_sub_c", sampler);
+    glUniform4fv(glGetUniformLocation(program, name), NBT_SUB_TERMS, &c[0][0]);
+}
+
 unsigned nbt_gl_table_target(const nbt_table *t)
 {
     return t->axis[2].n > 1 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
@@ -126,8 +143,6 @@ unsigned nbt_gl_upload_table(const nbt_table *t)
 {
     size_t nx = t->axis[0].n, ny = t->axis[1].n, nz = t->axis[2].n, nv = nx * ny * nz;
     GLenum target = nbt_gl_table_target(t);
-    if (t->form == NBT_FORM_SUB) /* the shaders do not add the closed form back yet: refused, not wrong */
-        return 0;
     /* 2-D tables stay RGBA (the Legendre shaders dot all four channels);
      * a one-channel 3-D table needs only R (its shaders read .r), and so
      * does a tail-form one (channel 1 is libnbt's error map) */
@@ -165,8 +180,10 @@ unsigned nbt_gl_bind_table(unsigned program, const char *sampler, const nbt_tabl
 {
     glActiveTexture(GL_TEXTURE0 + unit);
     GLuint tex = nbt_gl_upload_table(t);
-    if (tex)
+    if (tex) {
         glUniform1i(glGetUniformLocation(program, sampler), (GLint)unit);
+        nbt_gl_set_table_sub(program, sampler, t);
+    }
     return tex;
 }
 

@@ -6,6 +6,8 @@
  *   nbt_hw[NBT_W_PACKS] (vec4)        Legendre weights w_k = (2k+1) b_k, see nbt_gl_weights
  *   nbt_H0..nbt_H3 (sampler2D)        H packs;  nbt_H_ax0, nbt_H_ax1 (vec4), nbt_H_map0, nbt_H_map1 (int)
  *   nbt_J1_0..3, nbt_Jn_0..3          J^1 and J^n packs; nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
+ *   X_sub (int), X_sub_w (float), X_sub_c[10] (vec4) for each 2-D pack X above: form sub's closed
+ *                                     form (nbt_gl_set_table_sub; 0: plain, the GL default)
  * g-sliced (config g_sliced): nbt_H0, nbt_J1_0, nbt_Jn_0 are sampler3D (channel R, axis 2 = HG g),
  *   nbt_H_ax2, nbt_H_map2, nbt_J_ax2, nbt_J_map2 their g axes, float nbt_g the run-time g
  *   (clamped to the g axis' range by the lookup); nbt_J_form (int, 1: log_et, the texels hold
@@ -47,6 +49,8 @@ typedef struct {
  *   0 nbt_weights_block { nbt_hw[, nbt_g] }, 1 nbt_H_block { nbt_H_ax0, nbt_H_ax1, nbt_H_map0, nbt_H_map1
  *   [, nbt_H_ax2, nbt_H_map2, nbt_H_interp2] }, 2 nbt_J_block { nbt_J_ax0, nbt_J_ax1, nbt_J_map0, nbt_J_map1
  *   [, nbt_J_ax2, nbt_J_map2, nbt_J_form, nbt_J_interp2] } (the bracketed members with g_sliced;
+ *   without it the packs' X_sub_c, X_sub, X_sub_w follow instead, in pack order: nbt_H0..H3 in
+ *   block 1, nbt_J1_0..3 then nbt_Jn_0..3 in block 2, as many as the configuration declares;
  *   the samplers at 3, 7, 11 are
  *   then sampler3D),
  *   3..6 nbt_H0..nbt_H3, 7..10 nbt_J1_0..nbt_J1_3, 11..14 nbt_Jn_0..nbt_Jn_3,
@@ -90,13 +94,24 @@ unsigned nbt_gl_table_target(const nbt_table *t);
  * axis[2].n texels (slice m = depth m), GL_R32F for one channel, else
  * GL_RGBA32F (channels beyond nch 0); GL_R16F / GL_RGBA16F when t->half
  * (the values are already half, so nothing is rounded again). Returns the
- * texture name, 0 on failure (glGetError set) or for a table of form sub,
- * whose closed form the shaders do not add back yet (nbt/table.h). */
+ * texture name, 0 on failure (glGetError set). A table of form sub uploads
+ * its remainder f - S: the shaders add S back from the uniforms
+ * nbt_gl_set_table_sub sets. */
 unsigned nbt_gl_upload_table(const nbt_table *t);
 
+/* Set the form-sub uniforms of the pack read through `sampler` (e.g.
+ * "nbt_H0", "nbt_J1_2", "nbt_Jn_0") in the program in use: SAMPLER_sub (int:
+ * 0 plain, 1 form sub with d(x) = 1/(1 + x), 2 with e^-x), SAMPLER_sub_w
+ * (float, the peak term's width) and SAMPLER_sub_c (vec4[10]: term q of the
+ * four channels in element q, as floats); zeros for a plain or 3-D table, so
+ * a pack's lookup reads exactly nbt_table_lookup's value either way. Absent
+ * uniforms (g-sliced programs) are ignored. */
+void nbt_gl_set_table_sub(unsigned program, const char *sampler, const nbt_table *t);
+
 /* Upload t on texture unit `unit` (nbt_gl_upload_table, which leaves it
- * bound there and that unit active) and point the program's sampler
- * `sampler` (e.g. "nbt_H0") at it; the program must be in use. Returns the
+ * bound there and that unit active), point the program's sampler
+ * `sampler` (e.g. "nbt_H0") at it and set its form-sub uniforms
+ * (nbt_gl_set_table_sub); the program must be in use. Returns the
  * texture name, 0 on failure. */
 unsigned nbt_gl_bind_table(unsigned program, const char *sampler, const nbt_table *t, unsigned unit);
 
