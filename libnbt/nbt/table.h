@@ -103,8 +103,8 @@ typedef enum {
      * d(x0 - lo0) sum_q sub_c[c][q] b_q(x1) (nbt_table_sub; its fit at x0 = lo0
      * in doc/tables.md, "33^2 at 1e-3"), which the lookups add back:
      * nbt_table_lookup and _lookup_grid return the quantity itself, max_err
-     * and max_abs are the quantity's. The shaders do not know it yet
-     * (libnbt-gl refuses it). */
+     * and max_abs are the quantity's. The shaders add it back too
+     * (nbt_sub, libnbt-gl's nbt_gl_set_table_sub). */
     NBT_FORM_SUB,
 } nbt_table_form;
 
