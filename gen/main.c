@@ -8,8 +8,8 @@
 
 static void help(void)
 {
-    puts("Usage: nbt-gen [--quiet]       build the default scene into ./nbt-tables/ (--quiet: no\n"
-         "                               progress lines on stderr)\n"
+    puts("Usage: nbt-gen [--quiet]       build the default scene into ./nbt-tables/ (form sub, 33x33;\n"
+         "                               --quiet: no progress lines on stderr)\n"
          "       nbt-gen airlight [...]  H_k(u, v) tables (airlight)\n"
          "       nbt-gen surface [...]   J_k^n(T, theta) tables (surface radiance)\n"
          "       nbt-gen scene FILE      only the tables a scene needs\n"

@@ -35,7 +35,7 @@ typedef struct {
 } seen_t;
 
 static const char *const scene_keys[] = {"kappa_t", "kappa_s", "distance", "g", "basis", "phase",
-                                         "airlight", "diffuse", "phong", "tol", "half", "orders_max"};
+                                         "airlight", "diffuse", "phong", "tol", "half", "orders_max", "form"};
 #define NKEYS (sizeof scene_keys / sizeof scene_keys[0])
 
 static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, char *err, size_t n)
@@ -109,6 +109,12 @@ static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, ch
         } else if (!strcmp(key, "half")) {
             if (yesno(path, line, key, val, &s->half, err, n))
                 return -1;
+        } else if (!strcmp(key, "form")) {
+            if (strcmp(val, "plain") && strcmp(val, "sub")) {
+                snprintf(err, n, "%s = '%s' is not accepted: plain or sub", opt, val);
+                return -1;
+            }
+            s->sub = !strcmp(val, "sub");
         } else if (!strcmp(key, "orders_max")) {
             if (msg_long(err, n, opt, val, 1, 512, &seen->orders_max))
                 return -1;
@@ -129,7 +135,7 @@ static int parse_lines(FILE *f, const char *path, nbt_scene *s, seen_t *seen, ch
             }
         } else {
             snprintf(err, n, "%s:%d: unknown key '%s': accepted are kappa_t, kappa_s, distance, g, basis, phase, "
-                     "airlight, diffuse, phong, tol, half, orders_max", path, line, key);
+                     "airlight, diffuse, phong, tol, half, orders_max, form", path, line, key);
             return -1;
         }
     }

@@ -87,6 +87,11 @@ nbt_status nbt_scene_check(const nbt_scene *s, char *err, size_t errlen)
     if (s->basis == 2 && !(s->g[0] < s->g[1]))
         return failf(err, errlen, NBT_EINVAL, "basis = slices needs a g range lo < hi (g = %g is one value: phase = "
                      "hg:g=%g is exact for it)", s->g[0], s->g[0]);
+    if (s->sub != 0 && s->sub != 1)
+        return failf(err, errlen, NBT_EINVAL, "form: sub = %d is not accepted: 0 (plain) or 1 (sub)", s->sub);
+    if (s->sub && s->have_g && s->g[0] < s->g[1] && s->basis != 1)
+        return failf(err, errlen, NBT_EINVAL, "form = sub is for 2-D tables: with a g range it needs basis = legendre "
+                     "(g slices have no form sub)");
     if (s->have_g && !range_ok(s->g, -0.99, 0.99))
         return failf(err, errlen, NBT_EDOM, "g = %g:%g is not accepted: -0.99 <= lo <= hi <= 0.99", s->g[0], s->g[1]);
     if (s->kappa_s[1] >= 0 && s->kappa_s[1] > s->kappa_t[1])
@@ -539,7 +544,7 @@ nbt_status nbt_plan_scene(const nbt_scene *s, unsigned nthreads, nbt_plan **out,
     nbt_plan_request rq[2 + NBT_SCENE_MAX_PHONG];
     size_t n = 0;
     nbt_plan_request base = {NBT_TABLE_H, 0, s->have_g ? leg.nterms : 0, s->have_g ? NULL : s->phase, xmax,
-                             s->have_g ? leg.table_tol : s->tol, {0, 0}, s->half, 0};
+                             s->have_g ? leg.table_tol : s->tol, {0, 0}, s->half, s->sub};
     if (s->airlight)
         rq[n++] = base;
     base.kind = NBT_TABLE_J;

@@ -651,5 +651,35 @@ for f in H J1 J20; do
   inf=$("$NBT_GEN" info "$tmp/nbt-tables/$f.exr" | awk '/^axis[01] / { printf "%s%s:%s", n++ ? " " : "", $2, $3 }')
   [ -n "$want" ] && [ "$inf" = "$want" ] && ok || bad "info $f.exr: axes '$inf', the summary line says '$want'"
 done
+# form sub (issue 21, doc/tables.md "33^2 at 1e-3"): 33x33 tables of the value minus its closed form
+for f in H J1 J20; do
+  "$NBT_GEN" info "$tmp/nbt-tables/$f.exr" >"$tmp/info"
+  grep -q '^form  *sub' "$tmp/info" && [ "$(grep -c '^axis[01] .* 33 nodes$' "$tmp/info")" -eq 2 ] && ok ||
+    bad "default scene $f.exr: not form sub at 33x33: $(grep '^form\|^axis' "$tmp/info" | tr '\n' ' ')"
+done
+# read back through the EXR, S added back: the 4-order tables against the 4-term series (HG g = 0.5) within
+# the bound the tables print (their recorded error; beyond it the series' truncation, which the 4-term series
+# shares); a reader that dropped S would be off by about the value itself (2e-3 against a 4e-4 bound)
+ga="--g 0.5 --kappa-s 0.15 --kappa-t 0.2 --I0 2.385 --dsv 3.1 --gamma 1.2 --dvp inf"
+gs="--g 0.5 --kappa-s 0.15 --kappa-t 0.2 --I0 2.385 --dsp 6.1 --theta-s 0.45 --theta-r 0.3 --kd 0.7 --ks 0.3 --n 20"
+for q in "airlight $ga|H.exr" "surface $gs|J1.exr $tmp/nbt-tables/J20.exr"; do
+  geo=${q%%|*}; tabs="$tmp/nbt-tables/${q#*|}"
+  words 2 "$NBT_GEN" eval $geo --method table --tables $tabs 2>/dev/null; set -- $w; tv=$1; tb=$2
+  words 2 "$NBT_GEN" eval $geo --method series --terms 4 2>/dev/null; set -- $w
+  awk -v a="$tv" -v b="$1" -v e="$tb" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(e != "" && d <= e + 1e-12) }' && ok ||
+    bad "default scene, eval ${geo%% *} from the sub tables: $tv (bound $tb) vs the series $1"
+done
+# a scene file's form key: sub writes form-sub tables (a fixed phase here); other values, and sub with a
+# g range that could be served by g slices, are refused before anything is written
+printf 'kappa_t = 0.2\ndistance = 50\nphase = hg:g=0.5\nphong = 20\nform = sub\n' >"$tmp/sub.scene"
+"$NBT_GEN" scene "$tmp/sub.scene" -o "$tmp/subsc" >/dev/null 2>&1 && [ "$(ls "$tmp/subsc" | grep -c '\.exr$')" -eq 3 ] &&
+  (for f in "$tmp/subsc"/*.exr; do "$NBT_GEN" info "$f" | grep -q '^form  *sub' || exit 1; done) && ok ||
+  bad "scene with form = sub: $(ls "$tmp/subsc" 2>&1 | tr '\n' ' ')"
+printf 'kappa_t = 0.2\ndistance = 50\nphase = iso\nform = thick\n' >"$tmp/bad.scene"
+expect_usage "form = thick" "form = 'thick' is not accepted: plain or sub" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/subbad"
+printf 'kappa_t = 0.2\ndistance = 50\ng = 0:0.8\nform = sub\n' >"$tmp/bad.scene"
+expect_usage "form = sub with a g range" "needs basis = legendre" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/subbad"
+[ ! -e "$tmp/subbad" ] && ok || bad "a refused scene wrote $tmp/subbad"
+rm -rf "$tmp/subsc" "$tmp/sub.scene" "$tmp/bad.scene" "$tmp/info"
 
 finish

@@ -64,6 +64,9 @@ typedef struct {
     int half;                 /* store half floats */
     int basis;                /* with g: nbt_basis (nbt/gslice.h): 0 auto, 1 Legendre packs, 2 g slices;
                                  nbt_plan_scene plans Legendre packs, nbt_scene_basis chooses */
+    int sub;                  /* 1: 2-D tables of form sub (NBT_FORM_SUB: the value minus its closed
+                                 form; the default scene at 1e-3 fits 33^2), 0: plain (default); not
+                                 with g slices (a g range needs basis legendre) */
 } nbt_scene;
 
 /* Defaults: airlight and diffuse on, tol 1e-3, orders_max 16, kappa_s not
