@@ -707,6 +707,117 @@ static double sub_noise(const nbt_table *t, const double step[3], double scale, 
            unit_noise(&t->axis[1], x1) * (double)(t->axis[1].n - 1) * step[1] + 16 * FLT_EPSILON * sub_scale(t, c);
 }
 
+/* nbt_airlight (H packs in nbt_H0..) or nbt_surface (J packs in both the J^1 and J^n slots) of the
+ * program in use at W x H random geometries (u or T: a quarter in the last cell, an eighth beyond
+ * the axis; d_vp infinite for a third: v1 = pi/2, the last node) against the CPU formula on
+ * nbt_table_lookup (1e-5 relative for the float exponentials plus each lookup's sub_noise) and the
+ * exact series of the same npk x 4 orders within 1.25x the tables' recorded error */
+static void sub_shade(GLuint p, nbt_table *const *tp, size_t npk, int n, const double *b, const float *w, float *pt,
+                      float *px, const char *what)
+{
+    const nbt_table *t = tp[0];
+    int isH = t->kind == NBT_TABLE_H;
+    size_t K = 4 * npk;
+    double step[2][3], scale[2], wsum = 0, tscale = 0;
+    for (size_t pk = 0; pk < npk; pk++) {
+        table_steps(tp[pk], step[pk]);
+        scale[pk] = data_maxabs(tp[pk]);
+    }
+    for (size_t k = 0; k < K; k++)
+        wsum += fabs(w[k]);
+    for (size_t c = 0; c < 4; c++)
+        tscale = fmax(tscale, t->max_abs[c]);
+    double worst = 0, wex = 0, wabs = 0, wexabs = 0;
+    for (int i = 0; i < W * H; i++) {
+        double x = fmax(sub_coord(&t->axis[0], i, 0), 1e-3);
+        if (i % 8 == 2)
+            x = t->axis[0].hi * (1 + 0.3 * t_uniform());
+        float *q = pt + 4 * i;
+        if (isH) {
+            /* d_sv <= 65 (as the plain test's 40): airlight within float range */
+            double gam = 0.05 + (M_PI - 0.1) * t_uniform(), dsv = x / (KT * sin(gam));
+            if (dsv > 60) {
+                double sg = fmin(x / (KT * 60), 1);
+                gam = gam < M_PI_2 ? asin(sg) : M_PI - asin(sg);
+                dsv = x / (KT * sin(gam));
+            }
+            q[0] = (float)dsv;
+            q[1] = (float)gam;
+            q[2] = (float)(i % 3 == 0 ? 1e30 : q[0] * (0.05 + 3 * t_uniform()));
+            q[3] = 0;
+        } else {
+            q[0] = (float)(x / KT);
+            q[1] = (float)sub_coord(&t->axis[1], i / 8, 0);
+            q[2] = (float)sub_coord(&t->axis[1], i / 64 + 1, 0);
+            q[3] = (float)n;
+        }
+    }
+    glActiveTexture(GL_TEXTURE5);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, pt);
+    glUniform1i(glGetUniformLocation(p, "which"), isH ? 3 : 4);
+    gl_draw_fullscreen();
+    glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
+    for (int i = 0; i < W * H; i++) {
+        const float *q = pt + 4 * i;
+        double cpu, ex, pre, xa[2], ya[2], sa[2] = {1, 1}, ee[8], exv[8], e = 0;
+        if (isH) {
+            nbt_airlight_geom ag = {KS, KT, I0, q[0], q[1], q[2]};
+            double h = ag.dsv * sin(ag.gamma), tt = ag.dsv * cos(ag.gamma);
+            cpu = lookup_airlight(tp, npk, b, &ag);
+            nbt_airlight_series(b, K, &ag, 1e-10, &ex, &e);
+            pre = KS * I0 * exp(-KT * tt) / (4 * M_PI * h);
+            xa[0] = xa[1] = KT * h;
+            ya[0] = ag.gamma - M_PI_2;
+            ya[1] = atan2(ag.dvp - tt, h);
+        } else {
+            double T = KT * q[0], lk[4], js[2] = {0, 0}, jx[2] = {0, 0};
+            xa[0] = xa[1] = T;
+            ya[0] = q[1];
+            ya[1] = q[2];
+            sa[0] = KD;
+            sa[1] = KSP;
+            pre = KS * I0 / (4 * M_PI * q[0]);
+            for (int s = 0; s < 2; s++) {
+                nbt_jk(K - 1, n, T, ya[s], 1e-10, exv, ee);
+                for (size_t pk = 0; pk < npk; pk++) {
+                    nbt_table_lookup(tp[pk], T, ya[s], lk);
+                    for (size_t c = 0; c < 4; c++)
+                        js[s] += w[4 * pk + c] * lk[c];
+                }
+                for (size_t k = 0; k < K; k++) {
+                    jx[s] += w[k] * exv[k];
+                    e += pre * sa[s] * fabs(w[k]) * ee[k];
+                }
+            }
+            double direct = I0 * exp(-T) / (q[0] * q[0]) *
+                            (KD * fmax(cos(q[1]), 0.0) + KSP * pow(fmax(cos(q[2]), 0.0), q[3]));
+            cpu = direct + pre * (KD * js[0] + KSP * js[1]);
+            ex = direct + pre * (KD * jx[0] + KSP * jx[1]);
+        }
+        /* H: two lookups subtracted (sa = 1 each); J: kd and ks times one lookup each */
+        double tol = 1e-5 * fabs(cpu), bound = e;
+        for (int s = 0; s < 2; s++)
+            for (size_t pk = 0; pk < npk; pk++)
+                for (size_t c = 0; c < 4; c++) {
+                    double wk = pre * sa[s] * fabs(w[4 * pk + c]);
+                    tol += wk * sub_noise(tp[pk], step[pk], scale[pk], c, xa[s], ya[s]);
+                    bound += wk * tp[pk]->max_err[c];
+                }
+        double v = px[4 * i];
+        worst = fmax(worst, fabs(v - cpu) / tol);
+        wex = fmax(wex, (fabs(v - ex) - tol) / bound);
+        wabs = fmax(wabs, fabs(v - cpu) / (pre * wsum * tscale));
+        wexabs = fmax(wexabs, fabs(v - ex) / (pre * wsum * tscale));
+    }
+    t_true(worst <= 1, "%s: %s = the CPU formula on nbt_table_lookup within 1e-5 + float lookup noise "
+           "(worst %.2f of it; largest difference %.2e of the scattered term's scale)", what,
+           isH ? "nbt_airlight" : "nbt_surface", worst, wabs);
+    /* the recorded bilinear maxima bound cell midpoints; 1.25 as in test_plan */
+    t_true(wex <= 1.25, "%s: %s within 1.25x the tables' recorded error of the exact series "
+           "(worst %.2f of the bound; largest difference %.2e of the scattered term's scale)", what,
+           isH ? "nbt_airlight" : "nbt_surface", wex, wexabs);
+}
+
 /* The default scene's three sets (H, J^1, J^20, 4 orders each, tol 1e-3) built with sub = 1: 33^2
  * (tests/test_plan.c). For each set, at W x H points (a quarter in the last cell of each axis,
  * some beyond the ends): the raw pack lookup nbt_lookup_sub (through nbt_J1_0 and nbt_Jn_0 for
@@ -808,96 +919,56 @@ static void test_sub(void)
                    "(worst %.2f of it, %.2e of the scale; last cells %.2f)", si,
                    which == 0 ? "nbt_H0" : which == 1 ? "nbt_J1_0" : "nbt_Jn_0", worst, wabs, wlast);
         }
-        /* the shading functions */
-        double worst = 0, wex = 0, wabs = 0, wexabs = 0, wsum = fabs(w[0]) + fabs(w[1]) + fabs(w[2]) + fabs(w[3]);
-        for (int i = 0; i < W * H; i++) {
-            /* u or T: a quarter in the last cell, an eighth beyond hi, else uniform (>= 1e-3) */
-            double x = fmax(sub_coord(&t->axis[0], i, 0), 1e-3);
-            if (i % 8 == 2)
-                x = t->axis[0].hi * (1 + 0.3 * t_uniform());
-            float *q = pt + 4 * i;
-            if (isH) {
-                /* d_sv <= 65 (as the plain test's 40): airlight within float range */
-                double gam = 0.05 + (M_PI - 0.1) * t_uniform(), dsv = x / (KT * sin(gam));
-                if (dsv > 60) {
-                    double sg = fmin(x / (KT * 60), 1);
-                    gam = gam < M_PI_2 ? asin(sg) : M_PI - asin(sg);
-                    dsv = x / (KT * sin(gam));
-                }
-                q[0] = (float)dsv;
-                q[1] = (float)gam;
-                q[2] = (float)(i % 3 == 0 ? 1e30 : q[0] * (0.05 + 3 * t_uniform())); /* 1e30: v1 = pi/2, the last node */
-                q[3] = 0;
-            } else {
-                q[0] = (float)(x / KT);
-                q[1] = (float)sub_coord(&t->axis[1], i / 8, 0);
-                q[2] = (float)sub_coord(&t->axis[1], i / 64 + 1, 0);
-                q[3] = (float)rq[si].n;
-            }
-        }
-        glActiveTexture(GL_TEXTURE5);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, pt);
-        glUniform1i(glGetUniformLocation(p, "which"), isH ? 3 : 4);
-        gl_draw_fullscreen();
-        glReadPixels(0, 0, W, H, GL_RGBA, GL_FLOAT, px);
-        for (int i = 0; i < W * H; i++) {
-            const float *q = pt + 4 * i;
-            double cpu, ex, tol, bound, pre, xa[2], ya[2], sa[2] = {1, 1}, ee[4], exv[4], e = 0;
-            if (isH) {
-                nbt_airlight_geom ag = {KS, KT, I0, q[0], q[1], q[2]};
-                double h = ag.dsv * sin(ag.gamma), tt = ag.dsv * cos(ag.gamma);
-                cpu = lookup_airlight(ts.t, 1, b, &ag);
-                nbt_airlight_series(b, 4, &ag, 1e-10, &ex, &e);
-                pre = KS * I0 * exp(-KT * tt) / (4 * M_PI * h);
-                xa[0] = xa[1] = KT * h;
-                ya[0] = ag.gamma - M_PI_2;
-                ya[1] = atan2(ag.dvp - tt, h);
-            } else {
-                double T = KT * q[0], lk[2][4], js[2] = {0, 0}, jx[2] = {0, 0};
-                xa[0] = xa[1] = T;
-                ya[0] = q[1];
-                ya[1] = q[2];
-                sa[0] = KD;
-                sa[1] = KSP;
-                pre = KS * I0 / (4 * M_PI * q[0]);
-                for (int s = 0; s < 2; s++) {
-                    nbt_table_lookup(t, T, ya[s], lk[s]);
-                    nbt_jk(3, t->n, T, ya[s], 1e-10, exv, ee);
-                    for (int k = 0; k < 4; k++) {
-                        js[s] += w[k] * lk[s][k];
-                        jx[s] += w[k] * exv[k];
-                        e += pre * sa[s] * fabs(w[k]) * ee[k];
-                    }
-                }
-                double direct = I0 * exp(-T) / (q[0] * q[0]) *
-                                (KD * fmax(cos(q[1]), 0.0) + KSP * pow(fmax(cos(q[2]), 0.0), q[3]));
-                cpu = direct + pre * (KD * js[0] + KSP * js[1]);
-                ex = direct + pre * (KD * jx[0] + KSP * jx[1]);
-            }
-            /* H: two lookups subtracted (sa = 1 each); J: kd and ks times one lookup each */
-            tol = 1e-5 * fabs(cpu);
-            bound = e;
-            for (int s = 0; s < 2; s++)
-                for (size_t c = 0; c < 4; c++) {
-                    tol += pre * sa[s] * fabs(w[c]) * sub_noise(t, step, scale, c, xa[s], ya[s]);
-                    bound += pre * sa[s] * fabs(w[c]) * t->max_err[c];
-                }
-            double v = px[4 * i];
-            worst = fmax(worst, fabs(v - cpu) / tol);
-            wex = fmax(wex, (fabs(v - ex) - tol) / bound);
-            wabs = fmax(wabs, fabs(v - cpu) / (pre * wsum * ts.scale));
-            wexabs = fmax(wexabs, fabs(v - ex) / (pre * wsum * ts.scale));
-        }
-        t_true(worst <= 1, "set %zu: %s = the CPU formula on nbt_table_lookup within 1e-5 + float lookup noise "
-               "(worst %.2f of it; largest difference %.2e of the scattered term's scale)", si,
-               isH ? "nbt_airlight" : "nbt_surface", worst, wabs);
-        /* the recorded bilinear maxima bound cell midpoints; 1.25 as in test_plan */
-        t_true(wex <= 1.25, "set %zu: %s within 1.25x the tables' recorded error of the exact series "
-               "(worst %.2f of the bound; largest difference %.2e of the scattered term's scale)", si,
-               isH ? "nbt_airlight" : "nbt_surface", wex, wexabs);
+        char label[64];
+        snprintf(label, sizeof label, "set %zu", si);
+        sub_shade(p, ts.t, 1, rq[si].n, b, w, pt, px, label);
         glDeleteTextures(2, tex);
         nbt_tableset_free(&ts);
     }
+    /* packs 1 too: the same sets with 8 orders (two packs each, on the planned axes) in a program
+     * with two packs per kind */
+    GLuint p2 = config_program(&(nbt_gl_config){2, 2, 2, 0, 0, 0, 0}, SUBM, "form-sub shader, two packs");
+    double b8[8];
+    float w8[8];
+    nbt_phase_moments(hg, 7, b8);
+    nbt_gl_weights(b8, 8, 2, w8);
+    for (size_t si = 0; p2 && si < 3; si++) {
+        const nbt_plan_set *ps = nbt_plan_get(plan, si);
+        nbt_table *tp[2];
+        int isH = rq[si].kind == NBT_TABLE_H;
+        for (int pk = 0; pk < 2; pk++) {
+            tp[pk] = nbt_table_alloc(rq[si].kind, &ps->axis[0], &ps->axis[1], 4);
+            for (int c = 0; c < 4; c++)
+                tp[pk]->k[c] = 4 * pk + c;
+            tp[pk]->n = isH ? 0 : rq[si].n;
+            tp[pk]->form = NBT_FORM_SUB;
+        }
+        nbt_build_opts o = {1e-10, 1, 0};
+        st = isH ? nbt_h_table_build_set(tp, 2, NULL, &o) : nbt_j_table_build_set(tp, 2, NULL, &o);
+        t_true(st == NBT_OK, "set %zu, 8 orders: two form-sub packs built at %zux%zu", si, ps->axis[0].n, ps->axis[1].n);
+        if (st == NBT_OK) {
+            static const char *const nh[2] = {"nbt_H0", "nbt_H1"}, *const n1[2] = {"nbt_J1_0", "nbt_J1_1"},
+                                     *const nn[2] = {"nbt_Jn_0", "nbt_Jn_1"};
+            GLuint tex[4] = {0, 0, 0, 0};
+            glUseProgram(p2);
+            glUniform4fv(glGetUniformLocation(p2, "nbt_hw"), 2, w8);
+            glUniform1i(glGetUniformLocation(p2, "pts"), 5);
+            for (int pk = 0; pk < 2; pk++) {
+                tex[pk] = nbt_gl_bind_table(p2, isH ? nh[pk] : n1[pk], tp[pk], (unsigned)pk);
+                if (!isH)
+                    tex[2 + pk] = nbt_gl_bind_table(p2, nn[pk], tp[pk], 2 + (unsigned)pk);
+            }
+            nbt_gl_set_table_axes(p2, isH ? "nbt_H" : "nbt_J", tp[0]);
+            char label[64];
+            snprintf(label, sizeof label, "set %zu, two packs", si);
+            sub_shade(p2, tp, 2, rq[si].n, b8, w8, pt, px, label);
+            glDeleteTextures(4, tex);
+        }
+        nbt_table_free(tp[0]);
+        nbt_table_free(tp[1]);
+    }
+    if (p2)
+        glDeleteProgram(p2);
     glDeleteTextures(1, &ptex);
     glDeleteProgram(p);
     free(pt);
