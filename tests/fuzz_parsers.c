@@ -177,7 +177,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (scene_parse(put(f_txt, d, n), &sc, &ph, err, sizeof err) == 0) {
             if (!(sc.kappa_t[1] > 0) || !(sc.distance[1] > 0) || sc.nphong > NBT_SCENE_MAX_PHONG ||
                 !(sc.tol >= 1e-7 && sc.tol <= 0.5) || sc.orders_max < 1 || sc.orders_max > 512 ||
-                sc.kappa_s[1] > sc.kappa_t[1] || sc.have_g == (sc.phase != NULL))
+                sc.kappa_s[1] > sc.kappa_t[1] || sc.have_g == (sc.phase != NULL) || (sc.sub != 0 && sc.sub != 1))
                 abort(); /* accepted, but not what the format allows */
             nbt_phase_free(ph);
         } else if (!err[0] || strchr(err, '\n')) {
