@@ -136,6 +136,10 @@ mkdir d.exr
 E 1 "-o: cannot write '$tmp/d.exr': Is a directory" "$G" airlight --size 5x4 -o "$tmp/d.exr"
 [ -z "$(ls -A d.exr)" ] && ok || bad "a refused run wrote into d.exr"
 E 2 "unknown command '--bogus'" "$G" --bogus
+# nbt-gen alone builds the default tables; --quiet is its one option: the message names the other one
+E 2 "nbt-gen: unknown option '--foo' (see 'nbt-gen --help')" "$G" --quiet --foo
+E 2 "nbt-gen: unknown option '--foo' (see 'nbt-gen --help')" "$G" -q -q --foo
+[ ! -e nbt-tables ] && ok || bad "a refused nbt-gen --quiet run made nbt-tables"
 
 # ---- nbt-gen info
 O "$G" info --bogus hf.exr
