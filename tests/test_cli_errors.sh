@@ -157,6 +157,11 @@ E 2 "-o: '$o/k.txt' is not accepted: the output must end in .exr" "$G" kernel --
 E 2 "--model: 'foo' is not accepted: moments" "$G" kernel --B 0.1 --model foo
 E 2 "kernel: --B B (the phase function's spread, > 0) is required" "$G" kernel -o "$o/k.exr"
 E 2 "--B: '1000.1' is not accepted: expected a number in (0, 1000]" "$G" kernel --B 1000.1 -o "$o/k.exr"
+# a range of one value is no axis: LO = HI refused for each, naming it; a range just wider passes (then -o stops it)
+E 2 "--tau: '0.5:0.5' is not accepted: the table's axis needs a range LO:HI with LO < HI" "$G" kernel --B 0.1 --tau 0.5:0.5 -o "$o/k.exr"
+E 2 "--albedo: '0.5:0.5' is not accepted: the table's axis needs a range LO:HI with LO < HI" "$G" kernel --B 0.1 --albedo 0.5:0.5 -o "$o/k.exr"
+E 2 "--albedo: '0.5' is not accepted" "$G" kernel --B 0.1 --albedo 0.5 -o "$o/k.exr"
+E 2 "-o: '$o/k.txt' is not accepted" "$G" kernel --B 0.1 --tau 0.5:0.5000001 --albedo 0.5:0.5000001 -o "$o/k.txt"
 E 2 "kernel: --correction applies to the moment kernel, not to --model fitted" "$G" kernel --B 0.1 --model fitted --correction corr.txt -o "$o/k.exr"
 E 2 "kernel: --infinite and --beam-model apply to --model fitted only" "$G" kernel --B 0.1 --infinite -o "$o/k.exr"
 E 2 "--beam-model: beam model 'corr.txt' line 1: expected 'half|infinite P0..P4'" "$G" kernel --B 0.1 --model fitted --beam-model corr.txt -o "$o/k.exr"
