@@ -462,11 +462,12 @@ int cmd_eval(int argc, char **argv)
             ph.ag.dvp = need(&a, O_DVP, "--dvp", 0, 1, INFINITY, 1);
         if (ph.ag.kappa_t < ph.ag.kappa_s)
             die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.ag.kappa_t, ph.ag.kappa_s);
-        if (nfiles) {
-            if (nbt_airlight_check(&ph.ag) != NBT_OK)
-                die_usage("eval: the ray must not run through the source (gamma = 0 with dvp > dsv)");
+        /* the one geometry libnbt refuses beyond the bounds above (nbt_airlight_check) */
+        if (ph.ag.gamma == 0 && ph.ag.dvp >= ph.ag.dsv)
+            die_usage("--dvp: '%s' is not accepted with --gamma 0: the ray would run through the source (dvp >= "
+                      "dsv = %g); give dvp < dsv or gamma > 0", a.arg[O_DVP], ph.ag.dsv);
+        if (nfiles)
             return eval_from_tables(0, &ph.ag, files, nfiles, a.arg[O_G], a.arg[O_PHASE]);
-        }
         return eval_phys(&a, &ph);
     }
     if (!strcmp(what, "surface")) {

@@ -79,12 +79,14 @@ E 2 "--dsv: '0' is not accepted: expected a number in (0, inf)" "$G" eval airlig
 E 2 "--tol: '0.11' is not accepted: expected a number in [1e-15, 0.1]" "$G" eval airlight --g 0.3 $A --tol 0.11
 E 2 "--terms: '2049' is not accepted: expected an integer in [1, 2048]" "$G" eval airlight --g 0.3 $A --method series --terms 2049
 # gamma = 0 looks along the line to the source: dvp >= dsv crosses it (infinite), dvp < dsv does not
-E 2 "the ray must not run through the source" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 1
+E 2 "--dvp: '1' is not accepted with --gamma 0: the ray would run through the source (dvp >= dsv = 1)" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 1
+E 2 "--dvp: 'inf' is not accepted with --gamma 0" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp inf
 words 2 "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 0.999
 # ---- eval --method table --tables: the files' kinds, count and coverage
 T="--method table --tables"
 E 2 "--tables: --terms and --tol do not apply (the files fix both)" "$G" eval airlight --g 0.3 $A $T hf.exr --tol 1e-3
-E 2 "the ray must not run through the source" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 2 $T hf.exr
+E 2 "--dvp: '1' is not accepted with --gamma 0: the ray would run through the source (dvp >= dsv = 1)" "$G" eval airlight --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 1 $T hf.exr
+words 2 "$G" eval airlight --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 0.999 $T hf.exr 2>/dev/null
 E 2 "--tables: eval airlight takes one fixed-phase H table, 2 given" "$G" eval airlight $A $T hf.exr hf.exr
 E 2 "--tables: eval airlight takes one g-sliced H table, 2 given" "$G" eval airlight --g 0.3 $A $T hs.exr hs.exr
 E 2 "--tables: no fixed-phase J table for the specular lobe" "$G" eval surface $SF --kd 0.5 --ks 0.5 --n 3 $T jf1.exr
