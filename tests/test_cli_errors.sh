@@ -210,7 +210,9 @@ E 2 "uneven.csv: every plane must have the same number of bins" "$F" model uneve
 M="--albedo 0.9 --sigma-t 1 --B 0.1"
 O "$F" mc --bogus
 E 2 "mc: unexpected argument 'extra'" "$F" mc $M --photons 100 -o "$o/x.csv" extra
-E 2 "--photons" "$F" mc $M -o "$o/x.csv"
+E 2 "mc: --photons N is required (--albedo, --sigma-t and --photons are)" "$F" mc $M -o "$o/x.csv"
+E 2 "mc: --albedo A is required" "$F" mc --sigma-t 1 --B 0.1 --photons 64 -o "$o/x.csv"
+E 2 "mc: --sigma-t S is required" "$F" mc --albedo 0.9 --B 0.1 --photons 64 -o "$o/x.csv"
 E 2 "--slab and --density exclude each other" "$F" mc $M --photons 100 --slab 1 --density d.txt
 E 2 "--z-cut: '0' is not accepted: expected a number in (0, 1e+15]" "$F" mc $M --photons 100 --z-cut 0 -o "$o/x.csv"
 E 2 "--r-max-scale: '0' is not accepted: expected a number in (0, 1e+06]" "$F" mc $M --photons 100 --r-max-scale 0 -o "$o/x.csv"
