@@ -177,12 +177,14 @@ E 2 "noeq.scene:2: expected 'key = value', got 'distance 8'" "$G" scene noeq.sce
 printf 'kappa_t = 0.5\ndistance = 0\n' >d0.scene
 E 2 "d0.scene:2: distance = '0' is not accepted: the largest distance must be > 0" "$G" scene d0.scene -o "$o/t"
 printf 'kappa_t = 0.5\nphase = iso\n' >nod.scene
-E 2 "nod.scene: kappa_t and distance are required" "$G" scene nod.scene -o "$o/t"
+E 2 "nod.scene: no 'distance = ...' line: kappa_t and distance are required" "$G" scene nod.scene -o "$o/t"
+printf 'distance = 8\nphase = iso\n' >nokt.scene
+E 2 "nokt.scene: no 'kappa_t = ...' line: kappa_t and distance are required" "$G" scene nokt.scene -o "$o/t"
 printf 'kappa_t = 0.5\ndistance = 8\nphase = foo\n' >ph.scene
 E 2 "ph.scene: phase: unknown phase 'foo'" "$G" scene ph.scene -o "$o/t"
 # 16 Phong exponents are accepted (the file then misses distance), 17 are not
 printf 'kappa_t = 0.5\nphong = 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17\n' >p16.scene
-E 2 "p16.scene: kappa_t and distance are required" "$G" scene p16.scene -o "$o/t"
+E 2 "p16.scene: no 'distance = ...' line" "$G" scene p16.scene -o "$o/t"
 printf 'kappa_t = 0.5\nphong = 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18\n' >p17.scene
 E 2 "p17.scene:2: phong: at most 16 Phong exponents" "$G" scene p17.scene -o "$o/t"
 E 2 "scene: expected exactly one scene file" "$G" scene yn.scene noeq.scene
