@@ -124,9 +124,10 @@ int cmd_screenmodel(int argc, char **argv)
         case 'a': na = parse_list("--albedo", optarg, alb, 0, 1); break;
         case 't': nt = parse_list("--tau", optarg, tau, 0, 1e4); break;
         case 'G':
-            geos[0] = strstr(optarg, "inside") != NULL;
-            geos[1] = strstr(optarg, "entering") != NULL;
-            if ((!geos[0] && !geos[1]) || strspn(optarg, "insdeterg,") != strlen(optarg))
+            /* exactly the listed words: a substring test took 'inside,tide' for inside */
+            geos[0] = !strcmp(optarg, "inside") || !strcmp(optarg, "inside,entering");
+            geos[1] = !strcmp(optarg, "entering") || !strcmp(optarg, "inside,entering");
+            if (!geos[0] && !geos[1])
                 die_usage("--geometry: '%s' is not accepted: expected inside, entering or inside,entering", optarg);
             break;
         case 'n': photons = opt_double("--photons", optarg, 16, 0, 1e12, 0); break;

@@ -228,6 +228,12 @@ E 2 "phase: unexpected argument 'extra'" "$F" phase --target iso --terms 2 extra
 O "$F" screenmodel --bogus
 E 2 "screenmodel: unexpected argument 'extra'" "$F" screenmodel extra
 E 2 "--geometry: 'foo' is not accepted: expected inside, entering or inside,entering" "$F" screenmodel --geometry foo -o "$o/m.txt"
+for v in inside,tide ,inside insideinside entering,; do
+  E 2 "--geometry: '$v' is not accepted: expected inside, entering or inside,entering" "$F" screenmodel --geometry $v -o "$o/m.txt"
+done
+for v in inside entering inside,entering; do   # accepted: the run goes on to refuse --tau 1
+  E 2 "--tau: " "$F" screenmodel --geometry $v --tau 1 -o "$o/m.txt"
+done
 E 2 "--phase and --g exclude each other" "$F" screenmodel --phase iso --g 0.3 -o "$o/m.txt"
 E 2 "screenmodel: -o MODEL.txt is required (or --check MODEL.txt)" "$F" screenmodel
 E 2 "screenmodel: --check writes nothing; drop -o" "$F" screenmodel --check default -o "$o/m.txt"
