@@ -237,13 +237,13 @@ done
 E 2 "--phase and --g exclude each other" "$F" screenmodel --phase iso --g 0.3 -o "$o/m.txt"
 E 2 "screenmodel: -o MODEL.txt is required (or --check MODEL.txt)" "$F" screenmodel
 E 2 "screenmodel: --check writes nothing; drop -o" "$F" screenmodel --check default -o "$o/m.txt"
-E 2 "--tau: a model needs two or more depths" "$F" screenmodel --tau 1 -o "$o/m.txt"
+E 2 "--tau: '1' is not accepted: a model needs two or more depths" "$F" screenmodel --tau 1 -o "$o/m.txt"
 E 2 "--phase: unknown phase 'foo'" "$F" screenmodel --phase foo -o "$o/m.txt"
 E 2 "--check: screen model 'empty.csv' line 1: unknown line" "$F" screenmodel --check empty.csv
 E 2 "--g: '0.5,0.3' is not accepted: expected increasing numbers in (-1, 1)" "$F" screenmodel --g 0.5,0.3 -o "$o/m.txt"
 # at most 64 values in a list: 64 pass (the run then stops at --tau), 65 do not
 l64=$(i=1; while [ $i -le 64 ]; do printf '0.%02d,' $i; i=$((i + 1)); done)
-E 2 "--tau: a model needs two or more depths" "$F" screenmodel --g "${l64%,}" --tau 1 -o "$o/m.txt"
+E 2 "--tau: '1' is not accepted" "$F" screenmodel --g "${l64%,}" --tau 1 -o "$o/m.txt"
 E 2 "expected a comma-separated list of at most 64 numbers" "$F" screenmodel --g "${l64}0.99" --tau 1 -o "$o/m.txt"
 
 # ---- nbt-scatter scene
