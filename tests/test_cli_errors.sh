@@ -328,6 +328,12 @@ if [ -n "$D" ]; then
   E 2 "nbt-demo: --width 4097 is not accepted: an integer 16..4096" "$D" "$o/d.png" --width 4097
   E 2 "nbt-demo: '$o/d.exr' is not accepted: the output must be a file name ending in .png" "$D" "$o/d.exr" --width 4096
   E 2 "nbt-demo: '$o/d.exr' is not accepted" "$D" "$o/d.exr" --width 16
+  # the picture cannot be written (ulimit -f 0, after the rendering): one line naming it and why, no
+  # rendering report (it said the picture was made), no temporary left
+  _r=$(cd "$o" && sh -c 'trap "" XFSZ; ulimit -f 0 || exit 99; ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0 "$@" 2>&1 >/dev/null; echo "exit $?"' sh "$D" d.png --width 16)
+  [ "$_r" = "nbt-demo: cannot write 'd.png': File too large
+exit 1" ] && ok || bad "nbt-demo under ulimit -f 0: $_r"
+  left "nbt-demo under ulimit -f 0"
   [ "$("$D" --version 2>&1)" = "nbt-demo (nbt) $("$G" --version | sed 's/.* //')" ] && ok || bad "nbt-demo --version: $("$D" --version 2>&1)"
 fi
 
