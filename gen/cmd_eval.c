@@ -143,8 +143,13 @@ static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed
     } else {
         double prev = NAN, pe = 0;
         size_t N = 4;
+        int short_quad = 0; /* a quadrature short of tol (NBT_ETOL): more terms still help; said at the end */
         st = series_eval(ph, b, N, tol, &prev, &pe);
         for (;;) {
+            if (st == NBT_ETOL) {
+                short_quad = 1;
+                st = NBT_OK;
+            }
             size_t M = 2 * N;
             if (st != NBT_OK || M > cap) {
                 *v = prev;
@@ -160,13 +165,15 @@ static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed
             prev = cur;
             pe = ce + d; /* the last change bounds the rest of a decaying tail */
             N = M;
-            if (st == NBT_OK && d <= tol * fabs(cur)) {
+            if ((st == NBT_OK || st == NBT_ETOL) && d <= tol * fabs(cur)) {
                 *v = cur;
                 *e = pe;
                 *used = N;
                 break;
             }
         }
+        if (short_quad && st == NBT_OK)
+            st = NBT_ETOL;
     }
     free(b);
     return st;

@@ -82,6 +82,16 @@ E 2 "--terms: '2049' is not accepted: expected an integer in [1, 2048]" "$G" eva
 E 2 "--dvp: '1' is not accepted with --gamma 0: the ray would run through the source (dvp >= dsv = 1)" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 1
 E 2 "--dvp: 'inf' is not accepted with --gamma 0" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp inf
 words 2 "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 0 --dvp 0.999
+# a --tol the quadrature cannot reach (1e-14 relative: NBT_ETOL from the first, 4-term series) must not stop the
+# series there: it stopped at 4 terms, 0.00410 with a claimed error 4.6e-17 for 0.00449 (g = 0.6). The value
+# must agree with the direct integral (default tol 1e-8) within the sum of both reported errors, and the
+# warning is given
+words 2 "$G" eval airlight --g 0.6 $A; set -- $w; vd=$1 ed=$2
+"$G" eval airlight --g 0.6 $A --method series --tol 1e-14 >out 2>err; set -- $(cat out)
+awk -v v="$1" -v e="$2" -v d="$vd" -v f="$ed" 'BEGIN { x = v - d; if (x < 0) x = -x; exit !(v != "" && e > 0 && x <= e + f) }' &&
+  grep -qF "warning: the requested tolerance was not reached" err && ok ||
+  bad "eval series at tol 1e-14: $(cat out err) vs direct $vd +- $ed"
+
 # ---- eval --method table --tables: the files' kinds, count and coverage
 T="--method table --tables"
 E 2 "--tables: --terms and --tol do not apply (the files fix both)" "$G" eval airlight --g 0.3 $A $T hf.exr --tol 1e-3
