@@ -51,6 +51,9 @@ printf '%s\n' $hdr >empty.csv
 printf 'x,y\n1,2\n' >badhdr.csv
 printf '%s\n' $hdr 1,0,0.1,1,0.1 1,0.1,0.2,1,0.1 2,0,0.1,1,0.1 >uneven.csv    # 3 rows, 2 planes
 printf '%s\n' $hdr 1,0,0.1,1,0.1 2,0,0.1,1,0.1 2,0.1,0.2,1,0.1 1,0.1,0.2,1,0.1 >split.csv  # 4 rows, planes 1 2 1
+printf '%s\n' $hdr 1,0,0.1,1,0.1 1,0.1,0.2,1,0.1 2,0,0.1,1,0.1 2,0.1,0.2,1,0.1 >ok.csv     # 2 planes of 2 bins
+z16="0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0"   # a beam model with the half-space coefficients only
+printf "half P0 $z16\nhalf P1 $z16\nhalf P2 $z16\nhalf P3 $z16\nhalf P4 $z16\n" >half.txt
 # a row with r_hi = r_lo after 1100 good rows (past the reader's first 1024-row block)
 { echo $hdr; i=0; while [ $i -lt 1100 ]; do echo "1,$i,$((i + 1)),1,0.1"; i=$((i + 1)); done; echo 1,5,5,1,0.1; } >late.csv
 
@@ -72,6 +75,8 @@ E 2 "--kappa-t: 0.2 is not accepted: extinction must be >= scattering (0.3)" "$G
 words 2 "$G" eval airlight --g 0.3 --kappa-s 0.2 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 1 --dvp 2
 E 2 "--model: 'lineint' is not accepted for moments: ishimaru or smallangle" "$G" eval moments --albedo 0.9 --sigma-t 1 --B 0.1 --z 1 --model lineint
 E 2 "--model: 'foo' is not accepted: ishimaru, smallangle, lineint, single, elek or fitted" "$G" eval psi --albedo 0.9 --sigma-t 1 --B 0.1 --z 1 --r 0.5 --model foo
+E 2 "--beam-model: 'half.txt' holds no coefficients for the infinite (--infinite) geometry" "$G" eval psi --albedo 0.9 --sigma-t 1 --B 0.1 --z 1 --r 0.5 --model fitted --beam-model half.txt --infinite
+"$G" eval --help | grep -q "^Usage: nbt-gen eval" && ok || bad "eval --help"
 E 2 "--g: '1' is not accepted: expected a number in (-1, 1)" "$G" eval airlight --g 1 $A
 E 2 "--g: '-1' is not accepted: expected a number in (-1, 1)" "$G" eval airlight --g -1 $A
 E 2 "--gamma: '3.1416' is not accepted: expected a number in [0, 3.14159]" "$G" eval airlight --g 0.3 --kappa-s 0.1 --kappa-t 0.2 --I0 1 --dsv 1 --gamma 3.1416 --dvp 2
@@ -132,6 +137,8 @@ E 2 "--kmax and --phase exclude each other" "$G" airlight --kmax 3 --phase iso
 E 2 "--g chooses the Legendre orders itself: it excludes --kmax and --phase" "$G" airlight --g 0:0.5 --kmax 3
 E 2 "--basis applies to a g range (--g LO:HI) only" "$G" airlight --basis slices
 E 2 "--basis slices sizes its table by --tol: --size is not accepted with it" "$G" airlight --basis slices --g 0:0.5 --size 5x5
+E 2 "-o: 'x' is not accepted" "$G" airlight --g 0:0.5 --size 5x4 -o x
+E 1 "--g: |g| up to 0.99 needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G" "$G" airlight --g 0.98:0.99 --basis legendre -o "$o/a.exr"
 E 2 "--kmax: '256' is not accepted: expected an integer in [0, 255]" "$G" airlight --kmax 256
 E 2 "-o: 'x' is not accepted" "$G" airlight --kmax 255 -o x
 E 2 "--tol: '1' is not accepted: expected a number in (0, 1)" "$G" airlight --tol 1
@@ -176,6 +183,7 @@ E 2 "--albedo: '0.5' is not accepted" "$G" kernel --B 0.1 --albedo 0.5 -o "$o/k.
 E 2 "-o: '$o/k.txt' is not accepted" "$G" kernel --B 0.1 --tau 0.5:0.5000001 --albedo 0.5:0.5000001 -o "$o/k.txt"
 E 2 "kernel: --correction applies to the moment kernel, not to --model fitted" "$G" kernel --B 0.1 --model fitted --correction corr.txt -o "$o/k.exr"
 E 2 "kernel: --infinite and --beam-model apply to --model fitted only" "$G" kernel --B 0.1 --infinite -o "$o/k.exr"
+E 2 "--beam-model: 'half.txt' holds no coefficients for the infinite geometry" "$G" kernel --B 0.1 --model fitted --beam-model half.txt --infinite -o "$o/k.exr"
 E 2 "--beam-model: beam model 'corr.txt' line 1: expected 'half|infinite P0..P4'" "$G" kernel --B 0.1 --model fitted --beam-model corr.txt -o "$o/k.exr"
 E 1 "-o: cannot write '$tmp/nodir/k.exr'" "$G" kernel --B 0.1 --size 5x4 -o "$tmp/nodir/k.exr"
 
@@ -205,6 +213,9 @@ O "$F" kernel --bogus
 E 2 "kernel: give at least one photon-counting file (nbt-fit mc -o FILE)" "$F" kernel -o "$o/k.csv"
 E 2 "--loss: 'foo' is not accepted: none, huber or cauchy" "$F" kernel --loss foo x.csv
 E 2 "--weight: 'foo' is not accepted: stderr (statistical) or rms (the RMS metric)" "$F" kernel --weight foo x.csv
+for v in "--loss none" "--loss huber" "--loss cauchy" "--weight stderr" "--weight rms"; do   # accepted: no file is the error
+  E 2 "kernel: give at least one photon-counting file" "$F" kernel $v -o "$o/k.csv"
+done
 E 2 "--correction and --apply exclude each other" "$F" kernel --correction "$o/c.txt" --apply b.txt x.csv
 E 2 "empty.csv: no data rows" "$F" kernel empty.csv -o "$o/k.csv"
 E 2 "badhdr.csv: expected the header z,r_lo,r_hi,psi,psi_stderr" "$F" kernel badhdr.csv -o "$o/k.csv"
@@ -216,6 +227,11 @@ O "$F" model --bogus
 E 2 "model: give at least one photon-counting file (nbt-fit mc -o FILE)" "$F" model -o "$o/m.txt"
 E 2 "model: --density applies to --apply only" "$F" model x.csv -o "$o/m.txt" --density d.txt
 E 2 "--ridge: '1000.5' is not accepted: expected a number in [0, 1000]" "$F" model --ridge 1000.5 x.csv -o "$o/m.txt"
+E 2 "--albedo: '1.01' is not accepted: expected a number in [0, 1]" "$F" model --albedo 1.01 ok.csv -o "$o/m.txt"
+E 2 "--sigma-t: '0' is not accepted: expected a number in (0, 1e+12]" "$F" model --sigma-t 0 ok.csv -o "$o/m.txt"
+E 2 "--B: '0' is not accepted: expected a number in (0, 1e+06]" "$F" model --B 0 ok.csv -o "$o/m.txt"
+E 2 "model: -o MODEL.txt is required" "$F" model --albedo 1 --sigma-t 1e12 --B 1e6 --ridge 1000 ok.csv
+E 2 "--density: badhdr.csv:1: density file: 'x,y' is not accepted" "$F" model --apply default --density badhdr.csv --albedo 0.9 --sigma-t 1 --B 0.1 ok.csv
 E 2 "uneven.csv: every plane must have the same number of bins" "$F" model uneven.csv -o "$o/m.txt"
 
 # ---- nbt-fit mc
@@ -250,6 +266,10 @@ E 2 "screenmodel: --check writes nothing; drop -o" "$F" screenmodel --check defa
 E 2 "--tau: '1' is not accepted: a model needs two or more depths" "$F" screenmodel --tau 1 -o "$o/m.txt"
 E 2 "--phase: unknown phase 'foo'" "$F" screenmodel --phase foo -o "$o/m.txt"
 E 2 "--check: screen model 'empty.csv' line 1: unknown line" "$F" screenmodel --check empty.csv
+"$F" screenmodel --help | grep -q "^Usage: nbt-fit screenmodel" && ok || bad "screenmodel --help"
+E 2 "--albedo: '0,0.5' is not accepted: expected increasing numbers in (0, 1)" "$F" screenmodel --albedo 0,0.5 -o "$o/m.txt"
+E 2 "--albedo: '0.5,1' is not accepted" "$F" screenmodel --albedo 0.5,1 -o "$o/m.txt"
+E 2 "--g: '0.5,0.5' is not accepted: expected increasing numbers in (-1, 1)" "$F" screenmodel --g 0.5,0.5 -o "$o/m.txt"
 E 2 "--g: '0.5,0.3' is not accepted: expected increasing numbers in (-1, 1)" "$F" screenmodel --g 0.5,0.3 -o "$o/m.txt"
 # at most 64 values in a list: 64 pass (the run then stops at --tau), 65 do not
 l64=$(i=1; while [ $i -le 64 ]; do printf '0.%02d,' $i; i=$((i + 1)); done)
@@ -271,6 +291,8 @@ E 1 "-o: cannot write '$tmp/nodir/s.exr'" "$S" scene --size 4x4 -o "$tmp/nodir/s
 # ---- nbt-scatter: option checks before reading the input
 SM="--fov-y 40 --sigma-t 0.1 --albedo 0.9 --B 0.01"
 E 2 "--geometry: 'sideways' is not accepted: expected inside (the camera in the medium) or entering" "$S" in.exr -o "$o/o.exr" $SM --geometry sideways
+E 2 "-o: 'x' is not accepted: the output is OpenEXR" "$S" in.exr --fov-y 40 --sigma-t 0.1 --albedo 0.9 --phase hg:g=0.5 --method elek --geometry entering -o x
+"$S" --help | grep -q "^Usage: nbt-scatter IN.exr" && ok || bad "nbt-scatter --help"
 E 2 "--display-window: '0,0,3' is not accepted: expected X0,Y0,X1,Y1" "$S" in.exr -o "$o/o.exr" $SM --display-window 0,0,3
 E 2 "--display-window: '3,0,2,3' is not accepted: X1 >= X0 and Y1 >= Y0" "$S" in.exr -o "$o/o.exr" $SM --display-window 3,0,2,3
 E 2 "--display-window: '0,3,3,2' is not accepted: X1 >= X0 and Y1 >= Y0" "$S" in.exr -o "$o/o.exr" $SM --display-window 0,3,3,2
@@ -307,6 +329,8 @@ E 2 "badhdr.csv" "$S" badhdr.csv -o "$o/o.exr" $SM --method ref-a
 E 2 "--model: " "$S" in.exr -o "$o/o.exr" --fov-y 40 --sigma-t 0.1 --albedo 0.9 --phase hg:g=0.5 --model empty.csv
 E 2 "--correction: " "$S" in.exr -o "$o/o.exr" $SM --method ref-a --kernel corrected --correction empty.csv
 E 2 "--compare: " "$S" in.exr -o "$o/o.exr" $SM --method ref-a --compare none.exr
+E 2 "--compare: in.exr has no nbt.sigma_t attribute: the reference must be an nbt-scatter output" "$S" in.exr -o "$o/o.exr" $SM --method ref-a --compare in.exr
+E 2 "--phase: the kernel model covers HG phases with g in [0, 0.95], not hg:g=-0.5" "$S" in.exr -o "$o/o.exr" --fov-y 40 --sigma-t 0.1 --albedo 0.9 --phase hg:g=-0.5
 
 # ---- nbt-gen info: a point outside the table is clamped, with a warning naming it
 "$G" info hf.exr --at 20,0.5 >/dev/null 2>err && grep -qF "warning: (20, 0.5) lies outside the table" err && ok || bad "info --at outside: $(cat err)"
@@ -347,6 +371,6 @@ exit 1" ] && ok || bad "nbt-demo under ulimit -f 0: $_r"
   [ "$("$D" --version 2>&1)" = "nbt-demo (nbt) $("$G" --version | sed 's/.* //')" ] && ok || bad "nbt-demo --version: $("$D" --version 2>&1)"
 fi
 
-ls -A "$tmp" | grep -v -e '^o$' -e '^d.exr$' -e '\.exr$' -e '\.csv$' -e '\.scene$' -e '^corr.txt$' -e '^stray$' -e '^out$' -e '^words$' -e '^err$' >"$tmp/stray"
+ls -A "$tmp" | grep -v -e '^o$' -e '^d.exr$' -e '\.exr$' -e '\.csv$' -e '\.scene$' -e '^corr.txt$' -e '^stray$' -e '^half.txt$' -e '^out$' -e '^words$' -e '^err$' >"$tmp/stray"
 [ ! -s "$tmp/stray" ] && ok || bad "files left in the working directory: $(cat "$tmp/stray")"
 finish
