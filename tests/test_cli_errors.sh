@@ -223,7 +223,9 @@ if "$F" kernel --help >/dev/null 2>&1; then
   E 2 "badhdr.csv: expected the header z,r_lo,r_hi,psi,psi_stderr" "$F" kernel badhdr.csv -o "$o/k.csv"
   E 2 "uneven.csv: every plane must have the same number of bins" "$F" kernel uneven.csv -o "$o/k.csv"
   E 2 "split.csv: every plane must have the same number of bins" "$F" kernel split.csv -o "$o/k.csv"
-  E 2 "late.csv line 1102: expected z > 0, 0 <= r_lo < r_hi" "$F" kernel late.csv -o "$o/k.csv"
+  E 2 "late.csv line 1102: '1,5,5,1,0.1' is not accepted: expected z > 0, 0 <= r_lo < r_hi" "$F" kernel late.csv -o "$o/k.csv"
+  printf '%s\r\n' $hdr 1,0,0.1,1,0.1 1,0.1,0.2,-1,0.1 >neg.csv   # CR LF line ends; a negative psi
+  E 2 "neg.csv line 3: '1,0.1,0.2,-1,0.1' is not accepted" "$F" model neg.csv -o "$o/m.txt"
   E 2 "hf.exr: not a PSI table (nbt-fit mc -o FILE.exr)" "$F" kernel hf.exr -o "$o/k.csv"
   O "$F" model --bogus
   E 2 "model: give at least one photon-counting file (nbt-fit mc -o FILE)" "$F" model -o "$o/m.txt"
