@@ -357,6 +357,14 @@ X "nbt-gen: cannot write 'k.exr'" "$G" kernel --B 0.1 --size 5x4 -o k.exr
 X "nbt-gen: cannot write 'k.exr'" "$G" kernel --B 0.1 --size 5x4 --model fitted -o k.exr
 X "nbt-gen: cannot write 'a_k0-3.exr'" "$G" airlight --kmax 7 --size 5x4 --no-preview -o a.exr
 X "nbt-gen: cannot write 'a.exr'" "$G" surface --phase iso --size 5x4 -o a.exr
+# with --quiet the failure is the whole of stderr: one line (libpng's own "libpng error: Write Error"
+# lines for the previews were printed beside it)
+for c in "airlight --kmax 7" "surface --phase iso"; do
+  _r=$(cd "$o" && sh -c 'trap "" XFSZ; ulimit -f 0 || exit 99; "$@" 2>&1 >/dev/null; echo "exit $?"' sh "$G" $c --size 5x4 --quiet -o a.exr)
+  case $_r in "nbt-gen: cannot write 'a"*".exr'
+exit 1") ok ;; *) bad "$c --quiet under ulimit -f 0: $_r" ;; esac
+  left "$c --quiet under ulimit -f 0"
+done
 X "nbt-fit: cannot write 'm.csv': File too large" "$F" mc --albedo 0.9 --sigma-t 1 --B 0.1 --photons 1000 -o m.csv
 X "nbt-fit: cannot write 'm.exr'" "$F" mc --albedo 0.9 --sigma-t 1 --B 0.1 --photons 1000 -o m.exr
 "$F" kernel --help >/dev/null 2>&1 && X "nbt-fit: cannot write 'p.txt': File too large" "$F" phase --target hg:g=0.5 --terms 2 -o p.txt
