@@ -139,7 +139,6 @@ E 2 "--g chooses the Legendre orders itself: it excludes --kmax and --phase" "$G
 E 2 "--basis applies to a g range (--g LO:HI) only" "$G" airlight --basis slices
 E 2 "--basis slices sizes its table by --tol: --size is not accepted with it" "$G" airlight --basis slices --g 0:0.5 --size 5x5
 E 2 "-o: 'x' is not accepted" "$G" airlight --g 0:0.5 --size 5x4 -o x
-E 1 "--g: |g| up to 0.99 needs more than 512 Legendre terms at this tolerance: use --phase hg:g=G" "$G" airlight --g 0.98:0.99 --basis legendre -o "$o/a.exr"
 E 2 "--kmax: '256' is not accepted: expected an integer in [0, 255]" "$G" airlight --kmax 256
 E 2 "-o: 'x' is not accepted" "$G" airlight --kmax 255 -o x
 E 2 "--tol: '1' is not accepted: expected a number in (0, 1)" "$G" airlight --tol 1
