@@ -10,6 +10,7 @@
 NBT_GEN=$(abspath "${NBT_GEN:-./nbt-gen}")
 NBT_FIT=$(abspath "${NBT_FIT:-./nbt-fit}")
 NBT_SCATTER=$(abspath "${NBT_SCATTER:-./nbt-scatter}")
+MK=$(abspath "${NBT_MKEXR:-./tests/mkexr}")
 G=$NBT_GEN F=$NBT_FIT S=$NBT_SCATTER D=
 [ -n "${NBT_DEMO:-}" ] && [ -x "$NBT_DEMO" ] && D=$(abspath "$NBT_DEMO")
 o=$tmp/o   # every refused command's output goes here: it must stay empty
@@ -327,6 +328,17 @@ E 2 "--quantize and --density: per-pixel kernels have no layers to quantise" "$S
 E 2 "--kernel corrected and --correction FILE go together" "$S" in.exr -o "$o/o.exr" $SM --kernel corrected
 E 2 "--phase: give one phase, or three (R, G, B in that order)" "$S" in.exr -o "$o/o.exr" --fov-y 40 --sigma-t 0.1 --albedo 0.9 --phase iso --phase iso --phase iso --phase iso
 E 2 "--sigma-t: '$(printf '%040d' 0)...' is too long" "$S" in.exr -o "$o/o.exr" --fov-y 40 --sigma-t "$(printf '%0300d' 1)" --albedo 0.9 --B 0.01
+# --density: the ray-march camera and the method checked before the input and the grid are read (the
+# camera check came after reading both, elek's after the per-pixel kernels were computed and printed);
+# the accepted view (0,1,0) x up (1,0,0) has only a z component
+DM="--fov-y 40 --sigma-t 0.5 --albedo 0.9 --B 0.01 --density c1.raw"
+E 2 "--look-at 0,0,0 from --camera 0,0,0: the view direction must be non-zero and not parallel to --up 0,1,0" "$S" none.exr -o "$o/o.exr" $DM --method ref-a --look-at 0,0,0
+E 2 "--look-at 0,2,0 from --camera 0,1,0: the view direction must be non-zero and not parallel to --up 0,1,0" "$S" none.exr -o "$o/o.exr" $DM --method ref-a --camera 0,1,0 --look-at 0,2,0
+E 2 "none.exr: cannot open" "$S" none.exr -o "$o/o.exr" $DM --method ref-a --camera 0,1,0 --look-at 0,2,0 --up 1,0,0
+[ $gl = 0 ] || E 2 "--method elek: Elek's W(s) is for homogeneous media, not --density" "$S" none.exr -o "$o/o.exr" $DM --method elek
+"$MK" c1.raw grid 1 >/dev/null 2>&1 && "$S" scene --size 8x6 --overscan 0.25 -o bo.exr blocks >/dev/null 2>&1 &&
+  [ -s c1.raw ] && [ -s bo.exr ] && ok || bad "a density grid (tests/mkexr) and an overscanned render"
+E 2 "--density with an overscanned render (data window larger than the display window): not supported" "$S" bo.exr -o "$o/o.exr" $DM --method ref-a
 # the input read after the checks: a missing, a garbage and a truncated EXR
 E 2 "none.exr: cannot open: No such file or directory" "$S" none.exr -o "$o/o.exr" $SM
 head -c 100 in.exr >trunc.exr
@@ -385,6 +397,6 @@ exit 1" ] && ok || bad "nbt-demo under ulimit -f 0: $_r"
   [ "$("$D" --version 2>&1)" = "nbt-demo (nbt) $("$G" --version | sed 's/.* //')" ] && ok || bad "nbt-demo --version: $("$D" --version 2>&1)"
 fi
 
-ls -A "$tmp" | grep -v -e '^o$' -e '^d.exr$' -e '\.exr$' -e '\.csv$' -e '\.scene$' -e '^corr.txt$' -e '^stray$' -e '^half.txt$' -e '^out$' -e '^words$' -e '^err$' >"$tmp/stray"
+ls -A "$tmp" | grep -v -e '^o$' -e '^d.exr$' -e '\.exr$' -e '\.csv$' -e '\.scene$' -e '^corr.txt$' -e '^stray$' -e '^half.txt$' -e '^c1.raw$' -e '^out$' -e '^words$' -e '^err$' >"$tmp/stray"
 [ ! -s "$tmp/stray" ] && ok || bad "files left in the working directory: $(cat "$tmp/stray")"
 finish
