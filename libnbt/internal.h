@@ -2,6 +2,7 @@
 #ifndef NBT_INTERNAL_H
 #define NBT_INTERNAL_H
 
+#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <nbt/error.h>
@@ -12,6 +13,14 @@
 
 #define NBT_PI 3.14159265358979323846
 #define NBT_PI_2 1.57079632679489661923
+
+/* The status of a failed fopen, read or write whose errno is e: NBT_ENOMEM
+ * when the C library ran out of memory (fopen's FILE, a stream's buffer),
+ * else NBT_EIO. */
+static inline nbt_status nbt__io_status(int e)
+{
+    return e == ENOMEM ? NBT_ENOMEM : NBT_EIO;
+}
 
 /* Report a failure to the error handler (if any) and return the status. */
 nbt_status nbt__fail(nbt_status s, const char *reason);

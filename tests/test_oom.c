@@ -91,6 +91,7 @@ static int inject_from(const void *caller)
         return 0;
     if (atomic_fetch_sub(&countdown, 1) == 1) {
         atomic_fetch_add(&injected, 1);
+        errno = ENOMEM; /* as glibc's malloc does: fopen and friends report it */
         if (trace) { /* OOM_TRACE=1: where each injected failure happens (debugging aid) */
             void *bt[24];
             backtrace_symbols_fd(bt, backtrace(bt, 24), 1);
@@ -256,8 +257,8 @@ static void run_case(const oom_case *c)
             nfail++;
             if (!inj || st != NBT_ENOMEM) {
                 if (bad_status++ < 3)
-                    printf("      %s: k = %ld: status %d (%s) with %d failures injected, want NBT_ENOMEM\n",
-                           c->name, k, st, nbt_strerror(st), inj);
+                    printf("      %s: k = %ld: status %d (%s) with %d failures injected, want NBT_ENOMEM (%s%s)\n",
+                           c->name, k, st, nbt_strerror(st), inj, err, reason);
             } else if (c->msg && !says_memory(err) && !says_memory(reason)) {
                 if (bad_msg++ < 3)
                     printf("      %s: k = %ld: reason \"%s\" / \"%s\" does not say memory\n", c->name, k, err,
