@@ -29,6 +29,40 @@ int nbt__exr_raw_plausible(const char *path, double raw_bytes)
     return raw_bytes <= 1e4 * (double)st.st_size + 16.0 * 1024 * 1024;
 }
 
+/* OpenEXR's allocations for nbt's contexts (their alloc_fn, free_fn): a
+ * failed one is remembered for the calling thread. The library reports
+ * running out of memory as a format or I/O error, or not at all: 3.1's
+ * header parser drops an attribute whose copy it cannot allocate and the
+ * read succeeds without it (tests/test_oom: an H table read without its
+ * nbt.max_err.G). The readers and writers clear the flag before they start
+ * and answer NBT_ENOMEM when it is set. */
+static _Thread_local int exr_nomem;
+
+static void *exr_alloc(size_t n)
+{
+    void *p = malloc(n);
+    if (!p)
+        exr_nomem = 1;
+    return p;
+}
+
+static void exr_free(void *p)
+{
+    free(p);
+}
+
+void nbt__exr_init(exr_context_initializer_t *init)
+{
+    init->alloc_fn = exr_alloc;
+    init->free_fn = exr_free;
+    exr_nomem = 0;
+}
+
+int nbt__exr_nomem(void)
+{
+    return exr_nomem;
+}
+
 /* ---- kept header attributes ---- */
 
 /* One attribute, its value flattened into bytes: POD and fixed-size

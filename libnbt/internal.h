@@ -248,6 +248,14 @@ nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nb
  * 13 GB). Nonzero when plausible. */
 int nbt__exr_raw_plausible(const char *path, double raw_bytes);
 
+/* OpenEXR contexts allocate through libnbt (image_exr.c): nbt__exr_init sets
+ * init's alloc_fn and free_fn and clears this thread's out-of-memory flag;
+ * nbt__exr_nomem is nonzero when an OpenEXR allocation has failed since. */
+#ifdef OPENEXR_CONTEXT_H
+void nbt__exr_init(exr_context_initializer_t *init);
+#endif
+int nbt__exr_nomem(void);
+
 
 /* Non-negative least squares: x >= 0 minimising |A x - b| (A m x n,
  * row-major; Lawson-Hanson); *resid (may be NULL) gets the final |A x - b|. */
