@@ -682,6 +682,23 @@ static size_t fin_plan_exec(int ok, double *out)
 }
 /* a g-sliced J^1 table: planned once beforehand (the planner builds a 33 x 33 x 3 proxy), built armed */
 static nbt_gslice_plan_t gplan;
+/* the planner itself: its rule and the proxy build (33 x 33 x 3) that times it */
+static nbt_gslice_plan_t gplan2;
+static nbt_status call_gslice_plan(char *err, size_t errlen)
+{
+    nbt_gslice_request r = {NBT_TABLE_J, 1, 3.0, {-0.3, 0.6}, 0, {5, 9, 3}, 0};
+    return nbt_gslice_plan(&r, 1, &gplan2, err, errlen);
+}
+static size_t fin_gslice_plan(int ok, double *out)
+{
+    size_t n = 0;
+    for (int a = 0; ok && a < 3; a++)
+        out[n++] = (double)gplan2.axis[a].n, out[n++] = gplan2.axis[a].lo, out[n++] = gplan2.axis[a].hi,
+        out[n++] = gplan2.axis[a].c, out[n++] = gplan2.axis[a].map;
+    if (ok)
+        out[n++] = gplan2.bytes, out[n++] = gplan2.pred_err;
+    return n;
+}
 static nbt_status call_gslice(char *err, size_t errlen)
 {
     return nbt_gslice_execute(&gplan, 1, &tab, err, errlen);
@@ -848,6 +865,7 @@ int main(void)
         {"mc_kernel_run", 1, setup_ph, call_mc_kernel, fin_mc_kernel, 0},
         {"plan_tables", 1, NULL, call_plan, fin_plan, 0},
         {"plan_execute_all", 1, NULL, call_plan_exec, fin_plan_exec, 0},
+        {"gslice_plan", 1, NULL, call_gslice_plan, fin_gslice_plan, 0},
         {"gslice_execute", 1, NULL, call_gslice, fin_table, 0},
         {"grid_write_raw+read_raw", 1, setup_grid, call_grid, fin_grid, 0},
         {"screen_kernel_phase+layered", 1, setup_hg, call_screen_layered, fin_screen, 1},
