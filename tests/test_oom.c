@@ -776,6 +776,141 @@ static size_t fin_screen(int ok, double *out)
     return n + fin_ph_vals(0, out);
 }
 
+
+/* ---- the screen model container: alloc, set, write (armed); read back (armed) ---- */
+static char path_model[128];
+static nbt_screen_model *smodel;
+static nbt_status make_model(void)
+{
+    static const double g[] = {0.5, 0.9}, alb[] = {0.6, 0.95}, tau[] = {0.5, 4.0};
+    smodel = nbt_screen_model_alloc(NULL, 2, g, 2, alb, 2, tau);
+    if (!smodel)
+        return NBT_ENOMEM;
+    for (int geo = 0; geo < 2; geo++)
+        for (size_t ip = 0; ip < 2; ip++)
+            for (size_t ia = 0; ia < 2; ia++)
+                for (size_t it = 0; it < 2; it++) {
+                    nbt_screen_shape sh;
+                    memset(&sh, 0, sizeof sh);
+                    double M = 0.01 * (1 + (double)ip) * (1 + 3 * (double)ia) * (1 + 7 * (double)it) * (1 + geo);
+                    sh.erfc[10 + ip + 2 * it] = 0.75 * M, sh.gauss[20 + ia] = 0.25 * M;
+                    nbt_status st = nbt_screen_model_set(smodel, (nbt_screen_geometry)geo, ip, ia, it, &sh);
+                    if (st != NBT_OK)
+                        return st;
+                }
+    return NBT_OK;
+}
+static void setup_model_write(void)
+{
+    dir_base = dir_entries();
+}
+static nbt_status call_model_write(char *err, size_t errlen)
+{
+    nbt_status st = make_model();
+    if (st == NBT_OK)
+        st = nbt_screen_model_write(smodel, path_out, "oom", err, errlen);
+    return st;
+}
+/* the model evaluated (HG 0.7 between the nodes, both geometries) */
+static size_t put_model(const nbt_screen_model *m, double *out)
+{
+    size_t n = 0;
+    nbt_phase *p7 = nbt_phase_hg(0.7);
+    for (int geo = 0; geo < 2; geo++) {
+        nbt_screen_shape o;
+        int ex = -1;
+        nbt_screen_model_eval(m, p7, (nbt_screen_geometry)geo, 0.8, 1.5, &o, &ex);
+        memcpy(out + n, o.erfc, sizeof o.erfc), n += NBT_SCREEN_NSLOTS;
+        memcpy(out + n, o.gauss, sizeof o.gauss), n += NBT_SCREEN_NSLOTS;
+        out[n++] = ex;
+    }
+    nbt_phase_free(p7);
+    return n;
+}
+static size_t fin_model_write(int ok, double *out)
+{
+    size_t n = 0;
+    nbt_screen_model_free(smodel);
+    smodel = NULL;
+    if (ok) {
+        char e[256];
+        if (nbt_screen_model_read(path_out, &smodel, e, sizeof e) == NBT_OK)
+            n = put_model(smodel, out);
+        nbt_screen_model_free(smodel);
+        smodel = NULL;
+    } else if (dir_entries() != dir_base) {
+        printf("      screen_model_write: a failed write left a file behind\n");
+        out[n++] = -1;
+    }
+    unlink(path_out);
+    return n;
+}
+static nbt_status call_model_read(char *err, size_t errlen)
+{
+    return nbt_screen_model_read(path_model, &smodel, err, errlen);
+}
+static size_t fin_model_read(int ok, double *out)
+{
+    size_t n = ok ? put_model(smodel, out) : 0;
+    nbt_screen_model_free(smodel);
+    smodel = NULL;
+    return n;
+}
+/* NNLS shape fit of radial masses */
+static nbt_status call_shape_fit(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    static const double edges[] = {0.05, 0.2, 0.5, 1.0, 2.0}, mass[] = {0.02, 0.05, 0.06, 0.04, 0.02, 0.005};
+    nbt_screen_shape sh;
+    nbt_status st = nbt_screen_shape_fit(5, edges, mass, NULL, 2, &sh, &vals[0]);
+    nvals = 1;
+    for (int i = 0; i < NBT_SCREEN_NSLOTS; i++)
+        vals[nvals++] = sh.erfc[i] + 2 * sh.gauss[i];
+    return st;
+}
+/* H tables: a set of two packs with the fixed phase and the Legendre orders, then the airlight from them */
+static nbt_table *hset[2];
+static void setup_hset(void)
+{
+    nbt_axis a0 = {0, 12, NBT_AXIS_SQRT, 0, 9}, a1 = {-1.5707963267948966, 1.5707963267948966, NBT_AXIS_COS, 0, 7};
+    for (int i = 0; i < 2; i++) {
+        hset[i] = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 4);
+        for (int c = 0; c < 4; c++)
+            hset[i]->k[c] = 4 * i + c;
+    }
+    ph = nbt_phase_hg(0.4);
+}
+static nbt_status call_hset(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    nbt_build_opts o = {1e-6, 1, 1};
+    nbt_status st = nbt_h_table_build_set(hset, 2, NULL, &o);
+    double b[8];
+    if (st == NBT_OK)
+        st = nbt_phase_moments(ph, 7, b);
+    if (st == NBT_OK) {
+        const nbt_table *const tp[2] = {hset[0], hset[1]};
+        st = nbt_airlight_table_e(tp, 2, b, 8, ph, &ageo, &vals[0], &vals[1]);
+        if (st == NBT_ETOL)
+            st = NBT_OK;
+    }
+    nvals = 2;
+    return st;
+}
+static size_t fin_hset(int ok, double *out)
+{
+    size_t n = 0;
+    for (int i = 0; i < 2; i++) {
+        if (ok)
+            n += put_table(hset[i], out + n);
+        nbt_table_free(hset[i]);
+        hset[i] = NULL;
+    }
+    if (ok)
+        out[n++] = vals[0], out[n++] = vals[1];
+    return n + fin_ph_vals(0, out);
+}
+
 /* inputs written once, unarmed */
 static int make_inputs(void)
 {
@@ -786,6 +921,7 @@ static int make_inputs(void)
     snprintf(path_img, sizeof path_img, "%s/img.exr", dir);
     snprintf(path_out, sizeof path_out, "%s/out.exr", dir);
     snprintf(path_txt, sizeof path_txt, "%s/phase.txt", dir);
+    snprintf(path_model, sizeof path_model, "%s/model.txt", dir);
     setup_tab_write();
     nbt_status st = nbt_table_write_exr(tab, path_tab, NBT_EXR_ZIP);
     nbt_table_free(tab);
@@ -825,6 +961,10 @@ static int make_inputs(void)
         printf("planning: %s\n", e);
         return -1;
     }
+    if (make_model() != NBT_OK || nbt_screen_model_write(smodel, path_model, "oom", e, sizeof e) != NBT_OK)
+        return -1;
+    nbt_screen_model_free(smodel);
+    smodel = NULL;
     FILE *f = fopen(path_txt, "w");
     if (!f)
         return -1;
@@ -868,12 +1008,17 @@ int main(void)
         {"gslice_plan", 1, NULL, call_gslice_plan, fin_gslice_plan, 0},
         {"gslice_execute", 1, NULL, call_gslice, fin_table, 0},
         {"grid_write_raw+read_raw", 1, setup_grid, call_grid, fin_grid, 0},
+        {"screen_model_alloc+set+write", 1, setup_model_write, call_model_write, fin_model_write, 0},
+        {"screen_model_read", 1, NULL, call_model_read, fin_model_read, 0},
+        {"screen_shape_fit", 1, NULL, call_shape_fit, fin_vals, 0},
+        {"h_table_build_set+airlight_table_e", 1, setup_hset, call_hset, fin_hset, 0},
         {"screen_kernel_phase+layered", 1, setup_hg, call_screen_layered, fin_screen, 1},
         {"screen_kernel_phase+brute", 1, setup_hg, call_screen_brute, fin_screen, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
         run_case(&cases[i]);
     nbt_plan_free(xplan);
+    unlink(path_model);
     unlink(path_tab), unlink(path_img), unlink(path_txt), unlink(path_out);
     rmdir(dir);
     return t_done();
