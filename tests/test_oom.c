@@ -911,6 +911,72 @@ static size_t fin_hset(int ok, double *out)
     return n + fin_ph_vals(0, out);
 }
 
+
+/* ---- the path-traced screen reference on the 9 x 5 image (4 spp, one pass) ---- */
+static float sZ[SW * SH];
+static double sse[SW * SH * 3];
+static nbt_status call_screen_path(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    nbt_screen_world w = {SW, SH, srgb, sZ, 0.1, 4.3, 2.2, 1, 0, SW - 2, SH};
+    nbt_screen_path_medium m = {.sigma_t = {1, 0.5, 2}, .albedo = {0.9, 0.7, 0.5}, .phase = ph, .radius = INFINITY};
+    nbt_screen_path_opts o = {.spp = 4, .seed = 1, .nthreads = 1};
+    unsigned long done = 0;
+    memset(sS, 0, sizeof sS);
+    nbt_status st = nbt_screen_path(&w, &m, &o, sS, sse, &done);
+    vals[0] = (double)done;
+    return st;
+}
+static size_t fin_screen_path(int ok, double *out)
+{
+    size_t n = 0;
+    if (ok) {
+        memcpy(out, sS, sizeof sS);
+        memcpy(out + SW * SH * 3, sse, sizeof sse);
+        n = SW * SH * 6;
+        out[n++] = vals[0];
+    }
+    return n + fin_ph_vals(0, out);
+}
+/* per-pixel moment kernels through a layered density (beam.c's layered moments) */
+static double slab_rho(const double q[3], void *ctx)
+{
+    (void)ctx;
+    return q[2] > 0.5 ? 2.0 : 0.5;
+}
+static nbt_screen_pixkern spix[SW * SH];
+static nbt_status call_medium_kernels(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    static const double z[2] = {0, 1.5}, rho[2] = {1, 0.25};
+    nbt_beam_medium m = nbt_beam_homogeneous(0.8, 0.9, 0.05);
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    nbt_screen_input in = {SW, SH, srgb, sD, 0.02, NULL};
+    nbt_camera cam = {{0, 0, 0}, {0, 0.2, 1}, {0, 1, 0}};
+    double me = 0;
+    nbt_status st = nbt_screen_medium_kernels(&in, &m, slab_rho, NULL, &cam, 0.25, NULL, 1, spix, &me);
+    nvals = 0;
+    for (size_t i = 0; i < SW * SH; i++)
+        vals[nvals++] = spix[i].T + 3 * spix[i].M0 + 7 * spix[i].beta_px;
+    vals[nvals++] = me;
+    return st;
+}
+/* Psi of a two-layer medium by the line integral and Ishimaru's moments */
+static nbt_status call_beam_psi(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    static const double z[2] = {0, 0.7}, rho[2] = {1, 3};
+    nbt_beam_medium m = nbt_beam_homogeneous(1.2, 0.8, 0.08);
+    m.nlayers = 2, m.z = z, m.rho = rho;
+    nvals = 6;
+    nbt_status st = nbt_beam_psi(&m, NBT_PSI_LINEINT, 1.3, 0.2, &vals[0], &vals[1]);
+    if (st == NBT_OK)
+        st = nbt_beam_psi(&m, NBT_PSI_ISHIMARU, 1.3, 0.2, &vals[2], &vals[3]);
+    if (st == NBT_OK)
+        st = nbt_beam_moments(&m, NBT_BEAM_SMALLANGLE, 1.1, &vals[4], &vals[5], &vals[5]);
+    return st;
+}
+
 /* inputs written once, unarmed */
 static int make_inputs(void)
 {
@@ -951,6 +1017,7 @@ static int make_inputs(void)
     for (size_t i = 0; i < SW * SH; i++) { /* near layer at 2.5 on the left, far at 7 on the right, sky top right */
         size_t x = i % SW, y = i / SW;
         sD[i] = x < 4 ? 2.5f : (x > 6 && y < 2) ? INFINITY : 7.0f;
+        sZ[i] = x < 4 ? 2.0f : (x > 6 && y < 2) ? INFINITY : 5.5f;
         for (int c = 0; c < 3; c++)
             srgb[3 * i + c] = (float)(0.2 + 0.1 * c + 0.05 * (double)x - 0.03 * (double)y);
     }
@@ -1012,6 +1079,9 @@ int main(void)
         {"screen_model_read", 1, NULL, call_model_read, fin_model_read, 0},
         {"screen_shape_fit", 1, NULL, call_shape_fit, fin_vals, 0},
         {"h_table_build_set+airlight_table_e", 1, setup_hset, call_hset, fin_hset, 0},
+        {"screen_path", 1, setup_hg, call_screen_path, fin_screen_path, 0},
+        {"screen_medium_kernels", 1, NULL, call_medium_kernels, fin_vals, 0},
+        {"beam_psi+beam_moments", 1, NULL, call_beam_psi, fin_vals, 0},
         {"screen_kernel_phase+layered", 1, setup_hg, call_screen_layered, fin_screen, 1},
         {"screen_kernel_phase+brute", 1, setup_hg, call_screen_brute, fin_screen, 0},
     };
