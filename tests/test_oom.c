@@ -309,6 +309,14 @@ static nbt_status call_table_dup(char *err, size_t errlen)
         t->data[i] = (float)(i * 0.25 - 3.0);
     for (size_t i = 0; i < 3 * 3; i++)
         t->cell_err[i] = 1e-3 * (double)(i + 1);
+    if (nbt_table_row_err_alloc(t) != NBT_OK || nbt_table_theta_err_alloc(t, 1) != NBT_OK) {
+        nbt_table_free(t);
+        return NBT_ENOMEM;
+    }
+    for (size_t i = 0; i < nbt_table_row_err_len(t); i++)
+        t->row_err[i] = 2e-3 * (double)(i + 1);
+    for (size_t i = 0; i < nbt_table_theta_err_len(t); i++)
+        t->theta_err[i] = 5e-4 * (double)(i % 7);
     tab = nbt_table_dup(t);
     nbt_table_free(t);
     return tab ? NBT_OK : NBT_ENOMEM;
