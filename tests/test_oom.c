@@ -986,6 +986,54 @@ static nbt_status call_beam_psi(char *err, size_t errlen)
     return st;
 }
 
+
+/* an RGB kernel (moment kernels, a sigma_t per channel), the brute-force operator and its
+ * scores against a made-up reference */
+static double cref[SW * SH * 3];
+static void setup_compare(void)
+{
+    for (size_t i = 0; i < SW * SH * 3; i++)
+        cref[i] = 0.01 * (double)(i % 13) + 0.002 * (double)i;
+}
+static nbt_status call_compare(char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    nbt_screen_input in = {SW, SH, srgb, sD, 0.02, NULL};
+    nbt_beam_medium mr = nbt_beam_homogeneous(0.3, 0.8, 0.05), mg = mr, mb = mr;
+    mg.sigma_t = 0.5, mb.sigma_t = 0.9;
+    nbt_screen_kernel *r = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &mr, NULL),
+                      *g = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &mg, NULL),
+                      *b = nbt_screen_kernel_alloc(NBT_SKERNEL_MOMENT, &mb, NULL);
+    if (!r || !g || !b) {
+        nbt_screen_kernel_free(r), nbt_screen_kernel_free(g), nbt_screen_kernel_free(b);
+        return NBT_ENOMEM;
+    }
+    nbt_screen_kernel *k = nbt_screen_kernel_rgb(r, g, b); /* takes r, g, b, also on failure */
+    if (!k)
+        return NBT_ENOMEM;
+    nbt_screen_metrics m = {0};
+    nbt_status st = nbt_screen_brute(&in, k, NBT_SCREEN_NEAR, 1e-6, 1, sS, sT);
+    if (st == NBT_OK)
+        st = nbt_screen_compare(&in, k, sS, cref, &m);
+    nbt_screen_kernel_free(k);
+    nvals = 6;
+    vals[0] = m.rel_l1, vals[1] = m.rel_rms, vals[2] = m.edge, vals[3] = m.bias, vals[4] = m.max;
+    vals[5] = (double)m.edge_pixels;
+    return st;
+}
+static size_t fin_compare(int ok, double *out)
+{
+    size_t n = 0;
+    if (ok) {
+        memcpy(out, sS, sizeof sS);
+        memcpy(out + SW * SH * 3, sT, sizeof sT);
+        n = SW * SH * 4;
+    }
+    if (ok)
+        memcpy(out + n, vals, nvals * sizeof *out), n += nvals;
+    return n;
+}
+
 /* inputs written once, unarmed */
 static int make_inputs(void)
 {
@@ -1091,6 +1139,7 @@ int main(void)
         {"screen_path", 1, setup_hg, call_screen_path, fin_screen_path, 0},
         {"screen_medium_kernels", 1, NULL, call_medium_kernels, fin_vals, 0},
         {"beam_psi+beam_moments", 1, NULL, call_beam_psi, fin_vals, 0},
+        {"screen_kernel_rgb+brute+compare", 1, setup_compare, call_compare, fin_compare, 0},
         {"screen_kernel_phase+layered", 1, setup_hg, call_screen_layered, fin_screen, 1},
         {"screen_kernel_phase+brute", 1, setup_hg, call_screen_brute, fin_screen, 0},
     };
