@@ -8,14 +8,16 @@
  * until the call makes fewer than k allocations (so none failed), it checks:
  *   - an injected failure gives the documented status (NBT_ENOMEM, or NULL
  *     for the allocating constructors), never a crash;
- *   - the reason (err buffer or the error handler's) says "memory";
+ *   - the reason says "memory" (in err for a call that takes err and
+ *     errlen, else through the error handler);
  *   - nothing leaks: the live allocation count after the call (and after
  *     freeing what the caller owns) equals the count before it;
  *   - a call that succeeds (with no failure injected, or one the code
  *     recovered from) gives bit for bit the result of a reference call
  *     made without injection, so a mutant in the success path shows too.
  * Every call runs with one thread: the k-th allocation is then the same one
- * on every run.
+ * on every run. FFTW's own allocations are exempt (its planner aborts on a
+ * failed one). OOM_TRACE=1 prints a backtrace at each injected failure.
  *
  * ASan (configure --enable-sanitizers) replaces malloc itself, so the
  * injector cannot work there: the test then exits 77 (SKIP). */
