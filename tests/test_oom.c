@@ -659,8 +659,8 @@ static nbt_plan *plan;
 static nbt_tableset tsets[2];
 static nbt_status call_plan(char *err, size_t errlen)
 {
-    nbt_plan_request rq[2] = {{NBT_TABLE_H, 0, 6, NULL, 5.0, 0.0, {9, 5}, 0},
-                              {NBT_TABLE_J, 1, 2, NULL, 4.0, 0.0, {5, 9}, 0}};
+    nbt_plan_request rq[2] = {{NBT_TABLE_H, 0, 6, NULL, 5.0, 0.0, {9, 5}, 0, 0},
+                              {NBT_TABLE_J, 1, 2, NULL, 4.0, 0.0, {5, 9}, 0, 0}};
     return nbt_plan_tables(rq, 2, 1, &plan, err, errlen);
 }
 static size_t fin_plan(int ok, double *out)
@@ -1080,8 +1080,8 @@ static int make_inputs(void)
         for (int c = 0; c < 3; c++)
             srgb[3 * i + c] = (float)(0.2 + 0.1 * c + 0.05 * (double)x - 0.03 * (double)y);
     }
-    nbt_plan_request rq[2] = {{NBT_TABLE_H, 0, 6, NULL, 5.0, 0.0, {9, 5}, 0},
-                              {NBT_TABLE_J, 1, 2, NULL, 4.0, 0.0, {5, 9}, 0}};
+    nbt_plan_request rq[2] = {{NBT_TABLE_H, 0, 6, NULL, 5.0, 0.0, {9, 5}, 0, 0},
+                              {NBT_TABLE_J, 1, 2, NULL, 4.0, 0.0, {5, 9}, 0, 0}};
     nbt_gslice_request gr = {NBT_TABLE_J, 1, 3.0, {-0.3, 0.6}, 0, {5, 9, 3}, 0};
     if (nbt_plan_tables(rq, 2, 1, &xplan, e, sizeof e) != NBT_OK || nbt_gslice_plan(&gr, 1, &gplan, e, sizeof e) != NBT_OK) {
         printf("planning: %s\n", e);
