@@ -381,18 +381,24 @@ int main(int argc, char **argv)
     for (int i = 0; i < 3; i++)
         nbt_table_free(t[i]);
     /* written to the temporary and renamed: never a half-written picture */
-    int rc = write_png(fo, img, W, H);
-    rc = fclose(fo) != 0 || rc != 0 || rename(tmp_path, out) != 0;
-    if (rc == 0)
+    errno = 0;
+    int rc = write_png(fo, img, W, H), e = 0;
+    if (fclose(fo) != 0 || rc != 0)
+        e = errno ? errno : EIO;
+    else if (rename(tmp_path, out) != 0)
+        e = errno;
+    rc = e != 0;
+    if (rc == 0) { /* the report only for a picture that was written */
         tmp_path[0] = '\0';
-    fprintf(stderr, "nbt-demo: %s (%dx%d): %d panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
-            "(%s, CPU figures are for relative comparisons only); g = 0.9 from g-sliced tables differs from the "
-            "fixed-phase panel by at most %d/255\n", out, W, H, 2 * NCOL,
-            (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER), dmax);
+        fprintf(stderr, "nbt-demo: %s (%dx%d): %d panels; tables and rendering %.2f s CPU, of which drawing %.3f s "
+                "(%s, CPU figures are for relative comparisons only); g = 0.9 from g-sliced tables differs from the "
+                "fixed-phase panel by at most %d/255\n", out, W, H, 2 * NCOL,
+                (double)clock() / CLOCKS_PER_SEC - t0, t_render, (const char *)glGetString(GL_RENDERER), dmax);
+    }
     free(img);
     free(px);
     egl_headless_close();
     if (rc)
-        fprintf(stderr, "nbt-demo: cannot write '%s'\n", out);
+        fprintf(stderr, "nbt-demo: cannot write '%s': %s\n", out, strerror(e));
     return rc;
 }

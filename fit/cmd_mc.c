@@ -227,8 +227,10 @@ int cmd_mc(int argc, char **argv)
     }
     if (optind < argc)
         die_usage("mc: unexpected argument '%s'", argv[optind]);
-    if (!have[0] || !have[1] || !have[2])
-        die_usage("mc: --albedo, --sigma-t and --photons are required");
+    static const char *const need[3] = {"--albedo A", "--sigma-t S", "--photons N"};
+    for (int i = 0; i < 3; i++)
+        if (!have[i])
+            die_usage("mc: %s is required (--albedo, --sigma-t and --photons are)", need[i]);
     if ((B > 0) == (phase != NULL))
         die_usage("mc: give the phase function with exactly one of --B B and --phase SPEC");
     if (tau > 0 && density)

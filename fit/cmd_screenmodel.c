@@ -107,7 +107,7 @@ int cmd_screenmodel(int argc, char **argv)
                                        {"photons", 1, 0, 'n'}, {"seed", 1, 0, 's'},   {"threads", 1, 0, 'j'},
                                        {"check", 1, 0, 'c'},  {"quiet", 0, 0, 'q'},   {"help", 0, 0, 'h'},
                                        {0, 0, 0, 0}};
-    const char *out = NULL, *spec = NULL, *check = NULL;
+    const char *out = NULL, *spec = NULL, *check = NULL, *tau_arg = NULL;
     double g[MAXL] = {0, 0.3, 0.5, 0.65, 0.75, 0.82, 0.87, 0.9, 0.93, 0.95};
     double alb[MAXL] = {0.2, 0.5, 0.75, 0.9, 0.95, 0.98, 0.99, 0.995, 0.999};
     double tau[MAXL] = {0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64};
@@ -122,11 +122,12 @@ int cmd_screenmodel(int argc, char **argv)
         case 'p': spec = optarg; break;
         case 'g': ng = parse_list("--g", optarg, g, -1, 1); gset = 1; break;
         case 'a': na = parse_list("--albedo", optarg, alb, 0, 1); break;
-        case 't': nt = parse_list("--tau", optarg, tau, 0, 1e4); break;
+        case 't': nt = parse_list("--tau", optarg, tau, 0, 1e4); tau_arg = optarg; break;
         case 'G':
-            geos[0] = strstr(optarg, "inside") != NULL;
-            geos[1] = strstr(optarg, "entering") != NULL;
-            if ((!geos[0] && !geos[1]) || strspn(optarg, "insdeterg,") != strlen(optarg))
+            /* exactly the listed words: a substring test took 'inside,tide' for inside */
+            geos[0] = !strcmp(optarg, "inside") || !strcmp(optarg, "inside,entering");
+            geos[1] = !strcmp(optarg, "entering") || !strcmp(optarg, "inside,entering");
+            if (!geos[0] && !geos[1])
                 die_usage("--geometry: '%s' is not accepted: expected inside, entering or inside,entering", optarg);
             break;
         case 'n': photons = opt_double("--photons", optarg, 16, 0, 1e12, 0); break;
@@ -147,7 +148,7 @@ int cmd_screenmodel(int argc, char **argv)
     if (check && out)
         die_usage("screenmodel: --check writes nothing; drop -o");
     if (nt < 2 && !check)
-        die_usage("--tau: a model needs two or more depths");
+        die_usage("--tau: '%s' is not accepted: a model needs two or more depths", tau_arg);
     if (seed < 0)
         seed = check ? 101 : 1;
     char err[512];

@@ -117,9 +117,11 @@ static int read_csv(const char *path, psi_data *d, char *err, size_t errlen)
         return 1;
     }
     if (bad || n == 0 || n % np) {
-        if (bad)
-            snprintf(err, errlen, "%s line %d: expected z > 0, 0 <= r_lo < r_hi, psi >= 0, psi_stderr >= 0 (finite)",
-                     path, bad);
+        if (bad) {
+            line[strcspn(line, "\r\n")] = '\0'; /* the refused row, quoted */
+            snprintf(err, errlen, "%s line %d: '%.60s' is not accepted: expected z > 0, 0 <= r_lo < r_hi, psi >= 0, "
+                     "psi_stderr >= 0 (finite)", path, bad, line);
+        }
         else if (n == 0)
             snprintf(err, errlen, "%s: no data rows", path);
         else

@@ -143,8 +143,13 @@ static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed
     } else {
         double prev = NAN, pe = 0;
         size_t N = 4;
+        int short_quad = 0; /* a quadrature short of tol (NBT_ETOL): more terms still help; said at the end */
         st = series_eval(ph, b, N, tol, &prev, &pe);
         for (;;) {
+            if (st == NBT_ETOL) {
+                short_quad = 1;
+                st = NBT_OK;
+            }
             size_t M = 2 * N;
             if (st != NBT_OK || M > cap) {
                 *v = prev;
@@ -160,13 +165,15 @@ static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed
             prev = cur;
             pe = ce + d; /* the last change bounds the rest of a decaying tail */
             N = M;
-            if (st == NBT_OK && d <= tol * fabs(cur)) {
+            if ((st == NBT_OK || st == NBT_ETOL) && d <= tol * fabs(cur)) {
                 *v = cur;
                 *e = pe;
                 *used = N;
                 break;
             }
         }
+        if (short_quad && st == NBT_OK)
+            st = NBT_ETOL;
     }
     free(b);
     return st;
@@ -462,11 +469,12 @@ int cmd_eval(int argc, char **argv)
             ph.ag.dvp = need(&a, O_DVP, "--dvp", 0, 1, INFINITY, 1);
         if (ph.ag.kappa_t < ph.ag.kappa_s)
             die_usage("--kappa-t: %g is not accepted: extinction must be >= scattering (%g)", ph.ag.kappa_t, ph.ag.kappa_s);
-        if (nfiles) {
-            if (nbt_airlight_check(&ph.ag) != NBT_OK)
-                die_usage("eval: the ray must not run through the source (gamma = 0 with dvp > dsv)");
+        /* the one geometry libnbt refuses beyond the bounds above (nbt_airlight_check) */
+        if (ph.ag.gamma == 0 && ph.ag.dvp >= ph.ag.dsv)
+            die_usage("--dvp: '%s' is not accepted with --gamma 0: the ray would run through the source (dvp >= "
+                      "dsv = %g); give dvp < dsv or gamma > 0", a.arg[O_DVP], ph.ag.dsv);
+        if (nfiles)
             return eval_from_tables(0, &ph.ag, files, nfiles, a.arg[O_G], a.arg[O_PHASE]);
-        }
         return eval_phys(&a, &ph);
     }
     if (!strcmp(what, "surface")) {

@@ -123,15 +123,15 @@ int cmd_kernel(int argc, char **argv)
     const char *fit_path = NULL;
     double B = 0, t0 = 0.01, t1 = 20, a0 = 0.01, a1 = 1;
     size_t W = 129, H = 65;
-    const char *corr_path = NULL, *out = "kernel.exr";
+    const char *corr_path = NULL, *out = "kernel.exr", *tau_arg = NULL, *alb_arg = NULL;
     int o;
     optind = 1;
     while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
         switch (o) {
         case 'B': B = opt_double("--B", optarg, 0, 1, 1e3, 0); break;
         case 'c': corr_path = optarg; break;
-        case 't': opt_range("--tau", optarg, 1e-6, 1e4, &t0, &t1); break;
-        case 'a': opt_range("--albedo", optarg, 1e-6, 1, &a0, &a1); break;
+        case 't': opt_range("--tau", optarg, 1e-6, 1e4, &t0, &t1); tau_arg = optarg; break;
+        case 'a': opt_range("--albedo", optarg, 1e-6, 1, &a0, &a1); alb_arg = optarg; break;
         case 's': {
             char extra;
             long w, h;
@@ -174,8 +174,10 @@ int cmd_kernel(int argc, char **argv)
         die_usage("kernel: unexpected argument '%s'", argv[optind]);
     if (!(B > 0))
         die_usage("kernel: --B B (the phase function's spread, > 0) is required");
-    if (!(t1 > t0) || !(a1 > a0))
-        die_usage("kernel: --tau and --albedo need LO < HI");
+    if (!(t1 > t0))
+        die_usage("--tau: '%s' is not accepted: the table's axis needs a range LO:HI with LO < HI", tau_arg);
+    if (!(a1 > a0))
+        die_usage("--albedo: '%s' is not accepted: the table's axis needs a range LO:HI with LO < HI", alb_arg);
     size_t n = strlen(out);
     if (n < 5 || strcmp(out + n - 4, ".exr"))
         die_usage("-o: '%s' is not accepted: the output must end in .exr", out);

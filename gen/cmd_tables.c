@@ -600,9 +600,11 @@ int cmd_tables(int argc, char **argv)
 
 int cmd_default(int argc, char **argv)
 {
-    int quiet = argc == 2 && (!strcmp(argv[1], "--quiet") || !strcmp(argv[1], "-q"));
-    if (argc > 1 && !quiet)
-        die_usage("unknown option '%s' (see 'nbt-gen --help')", argv[1]);
+    /* only --quiet (-q) is taken; the message names the first other argument */
+    int quiet = argc > 1;
+    for (int i = 1; i < argc; i++)
+        if (strcmp(argv[i], "--quiet") && strcmp(argv[i], "-q"))
+            die_usage("unknown option '%s' (see 'nbt-gen --help')", argv[i]);
     const char *dir = "nbt-tables";
     check_writable_dir("nbt-gen", dir);
     if (mkdir(dir, 0777) == 0)

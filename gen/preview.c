@@ -30,11 +30,25 @@ static void ramp(double x, unsigned char *rgb)
         rgb[k] = (unsigned char)(c[i][k] + f * (c[i + 1][k] - c[i][k]) + 0.5);
 }
 
+/* libpng's default handlers print "libpng error: Write Error" beside the
+ * caller's one message naming the file: these only return to the setjmp */
+static void png_quiet_error(png_structp png, png_const_charp msg)
+{
+    (void)msg;
+    png_longjmp(png, 1);
+}
+
+static void png_quiet_warning(png_structp png, png_const_charp msg)
+{
+    (void)png;
+    (void)msg;
+}
+
 /* libpng reports errors by longjmp: keep that to a function whose locals do
  * not change after setjmp. */
 static int write_png(FILE *f, const unsigned char *img, size_t W, size_t H)
 {
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, png_quiet_error, png_quiet_warning);
     if (!png)
         return -1;
     png_infop info = png_create_info_struct(png);

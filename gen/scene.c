@@ -157,7 +157,8 @@ int scene_parse(const char *path, nbt_scene *s, nbt_phase **ph, char *err, size_
     if (rc)
         return -1;
     if (!seen.have_kt || !seen.have_d) {
-        snprintf(err, n, "%s: kappa_t and distance are required", path);
+        snprintf(err, n, "%s: no '%s = ...' line: kappa_t and distance are required", path,
+                 !seen.have_kt ? "kappa_t" : "distance");
         return -1;
     }
     s->orders_max = (size_t)seen.orders_max;

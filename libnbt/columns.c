@@ -19,8 +19,9 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
     *no = 0;
     FILE *f = fopen(path, "r");
     if (!f) {
-        snprintf(err, errlen, "%s '%s' cannot be opened: %s", what, path, strerror(errno));
-        return NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "%s '%s' cannot be opened: %s", what, path, strerror(e));
+        return nbt__io_status(e);
     }
     size_t n = 0, cap = 64;
     double *x = malloc(cap * sizeof(double)), *y = malloc(cap * sizeof(double));
@@ -88,8 +89,9 @@ nbt_status nbt__read_columns(const char *path, const char *what, const char *nam
         n++;
     }
     if (st == NBT_OK && ferror(f)) {
-        snprintf(err, errlen, "%s '%s' cannot be read: %s", what, path, strerror(errno));
-        st = NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "%s '%s' cannot be read: %s", what, path, strerror(e));
+        st = nbt__io_status(e);
     }
     fclose(f);
     if (st == NBT_OK && n == 0) {

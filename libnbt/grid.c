@@ -78,8 +78,9 @@ nbt_status nbt_grid_read_raw(const char *path, nbt_grid **out, char *err, size_t
     *out = NULL;
     FILE *f = fopen(path, "rb");
     if (!f) {
-        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(e));
+        return nbt__io_status(e);
     }
     char line[512];
     unsigned long long nx, ny, nz;
@@ -97,11 +98,15 @@ nbt_status nbt_grid_read_raw(const char *path, nbt_grid **out, char *err, size_t
                  path);
         return NBT_EFORMAT;
     }
+    errno = 0;
     nbt_grid *g = nbt_grid_alloc((size_t)nx, (size_t)ny, (size_t)nz, o, vox);
     if (!g) {
+        /* NULL for a size that is 0 or overflows (no allocation tried: errno stays 0) or no memory */
+        int nomem = errno == ENOMEM;
         fclose(f);
-        snprintf(err, errlen, "%s: grid size %llux%llux%llu cannot be allocated", path, nx, ny, nz);
-        return NBT_ENOMEM;
+        snprintf(err, errlen, "%s: grid size %llux%llux%llu: %s", path, nx, ny, nz,
+                 nomem ? "out of memory" : "a size is 0 or the grid exceeds the address space");
+        return nomem ? NBT_ENOMEM : NBT_EFORMAT;
     }
     size_t n = g->nx * g->ny * g->nz, got = fread(g->data, sizeof(float), n, f);
     int more = fgetc(f) != EOF;
@@ -135,9 +140,10 @@ nbt_status nbt_grid_write_raw(const nbt_grid *g, const char *path, char *err, si
     snprintf(tmp, len, "%s.tmp%ld", path, (long)getpid());
     FILE *f = fopen(tmp, "wb");
     if (!f) {
-        snprintf(err, errlen, "%s: cannot write: %s", path, strerror(errno));
+        int e = errno;
+        snprintf(err, errlen, "%s: cannot write: %s", path, strerror(e));
         free(tmp);
-        return NBT_EIO;
+        return nbt__io_status(e);
     }
     int ok = fprintf(f, "NBTGRID 1 %zu %zu %zu %.17g %.17g %.17g %.17g\n", g->nx, g->ny, g->nz, g->origin[0],
                      g->origin[1], g->origin[2], g->voxel) > 0;
@@ -150,13 +156,17 @@ nbt_status nbt_grid_write_raw(const nbt_grid *g, const char *path, char *err, si
             ok = fwrite(&v, sizeof v, 1, f) == 1;
         }
     }
-    ok = fclose(f) == 0 && ok && rename(tmp, path) == 0;
+    int e = ok ? 0 : errno; /* the first failure's reason (ENOMEM: the stream's buffer) */
+    if (fclose(f) != 0 && ok)
+        ok = 0, e = errno;
+    if (ok && rename(tmp, path) != 0)
+        ok = 0, e = errno;
     if (!ok) {
-        snprintf(err, errlen, "%s: cannot write: %s", path, strerror(errno));
+        snprintf(err, errlen, "%s: cannot write: %s", path, strerror(e));
         unlink(tmp);
     }
     free(tmp);
-    return ok ? NBT_OK : NBT_EIO;
+    return ok ? NBT_OK : nbt__io_status(e);
 }
 
 double nbt_grid_density(const double p[3], void *grid)

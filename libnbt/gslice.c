@@ -362,7 +362,8 @@ static size_t ladder_at_least(const size_t *lad, size_t n, double want)
     return lad[n - 1];
 }
 
-static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0)
+static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0,
+                            char *err, size_t errlen)
 {
     int H = r->kind == NBT_TABLE_H;
     size_t n0 = r->size[0] > 0 ? r->size[0] : H ? 97 : 65, n1 = r->size[1] > 0 ? r->size[1] : H ? 193 : 257;
@@ -395,7 +396,7 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     tp = now_s() - tp;
     nbt_table_free(proxy);
     if (st != NBT_OK)
-        return nbt__failf(NULL, 0, st, "g-sliced table: the proxy build failed");
+        return nbt__failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
     out->pred_seconds = tp * (double)n0 * (double)n1 * (double)ng / (33.0 * 33.0 * 3.0);
     out->bytes = (double)n0 * (double)n1 * (double)ng * (H ? 2.0 : 1.0) * (r->half ? 2.0 : 4.0);
     out->plan_seconds = now_s() - t0;
@@ -411,7 +412,7 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
-    return plan_rule(r, nthreads, out, t0);
+    return plan_rule(r, nthreads, out, t0, err, errlen);
 }
 
 static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,

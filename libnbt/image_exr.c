@@ -29,6 +29,50 @@ int nbt__exr_raw_plausible(const char *path, double raw_bytes)
     return raw_bytes <= 1e4 * (double)st.st_size + 16.0 * 1024 * 1024;
 }
 
+/* OpenEXR's allocations for nbt's contexts (their alloc_fn, free_fn): a
+ * failed one is remembered for the calling thread. The library reports
+ * running out of memory as a format or I/O error, or not at all: 3.1's
+ * header parser drops an attribute whose copy it cannot allocate and the
+ * read succeeds without it (tests/test_oom: an H table read without its
+ * nbt.max_err.G). The readers and writers clear the flag before they start
+ * and answer NBT_ENOMEM when it is set. */
+static _Thread_local int exr_nomem;
+
+static void *exr_alloc(size_t n)
+{
+    void *p = malloc(n);
+    if (!p)
+        exr_nomem = 1;
+    return p;
+}
+
+static void exr_free(void *p)
+{
+    free(p);
+}
+
+void nbt__exr_init(exr_context_initializer_t *init)
+{
+    init->alloc_fn = exr_alloc;
+    init->free_fn = exr_free;
+    exr_nomem = 0;
+}
+
+int nbt__exr_nomem(void)
+{
+    return exr_nomem;
+}
+
+/* rv, noting a failure for lack of memory: the library's own code, or
+ * errno ENOMEM (cleared before the call) from zlib, which allocates with
+ * malloc rather than through the context. */
+static exr_result_t noted(exr_result_t rv)
+{
+    if (rv == EXR_ERR_OUT_OF_MEMORY || (rv != EXR_ERR_SUCCESS && errno == ENOMEM))
+        exr_nomem = 1;
+    return rv;
+}
+
 /* ---- kept header attributes ---- */
 
 /* One attribute, its value flattened into bytes: POD and fixed-size
@@ -204,7 +248,12 @@ __attribute__((format(printf, 5, 6)))
 static nbt_status fail(nbt_status s, const char *path, char *err, size_t errlen, const char *fmt, ...)
 {
     char line[1024];
-    int n = snprintf(line, sizeof line, "%s: ", path ? path : "(no path)");
+    /* after an allocation failed in OpenEXR (the flag is cleared when a read or write starts), the
+     * failure it caused is reported as what it is */
+    int nomem = exr_nomem && (s == NBT_EFORMAT || s == NBT_EIO || s == NBT_EINVAL);
+    if (nomem)
+        s = NBT_ENOMEM;
+    int n = snprintf(line, sizeof line, "%s: %s", path ? path : "(no path)", nomem ? "out of memory: " : "");
     if (n < 0 || (size_t)n >= sizeof line)
         n = 0;
     va_list ap;
@@ -653,6 +702,7 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
         *out = NULL;
     if (err && errlen)
         err[0] = '\0';
+    exr_nomem = 0;
     if (!path || !out)
         return fail(NBT_EINVAL, path, err, errlen, "nbt_image_read_exr: no path or no output pointer");
     struct stat sb;
@@ -661,16 +711,20 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
     if (S_ISDIR(sb.st_mode))
         return fail(NBT_EIO, path, err, errlen, "cannot open: %s", strerror(EISDIR));
     FILE *probe = fopen(path, "rb");
-    if (!probe)
-        return fail(NBT_EIO, path, err, errlen, "cannot open: %s", strerror(errno));
+    if (!probe) {
+        int e = errno;
+        return fail(nbt__io_status(e), path, err, errlen, "cannot open: %s", strerror(e));
+    }
     fclose(probe);
 
     char libmsg[LIBMSG_LEN] = "";
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = capture;
     init.user_data = libmsg;
+    nbt__exr_init(&init);
     exr_context_t ctx = NULL;
-    exr_result_t rv = exr_start_read(&ctx, path, &init);
+    errno = 0;
+    exr_result_t rv = noted(exr_start_read(&ctx, path, &init));
     if (rv != EXR_ERR_SUCCESS) {
         if (ctx)
             exr_finish(&ctx);
@@ -776,8 +830,9 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
                 (ci.start_y < dw.min.y || ci.height < 1 || ci.width != (int32_t)w ||
                  (uint64_t)((int64_t)ci.start_y - dw.min.y) + (uint64_t)ci.height > h))
                 rv = EXR_ERR_BAD_CHUNK_LEADER;
+            errno = 0;
             if (rv == EXR_ERR_SUCCESS)
-                rv = decode_chunk(&rd, &ci, 0, (size_t)((int64_t)ci.start_y - dw.min.y));
+                rv = noted(decode_chunk(&rd, &ci, 0, (size_t)((int64_t)ci.start_y - dw.min.y)));
             if (rv != EXR_ERR_SUCCESS) {
                 st = fail(NBT_EFORMAT, path, err, errlen, "cannot decode scan line %lld: truncated or corrupt (%s)",
                           (long long)y, lib_detail(libmsg, rv));
@@ -803,8 +858,9 @@ nbt_status nbt_image_read_exr(const char *path, nbt_image **out, char *err, size
                 if (rv == EXR_ERR_SUCCESS && (ci.width < 1 || ci.height < 1 || x0 + (size_t)ci.width > w ||
                                               y0 + (size_t)ci.height > h))
                     rv = EXR_ERR_BAD_CHUNK_LEADER;
+                errno = 0;
                 if (rv == EXR_ERR_SUCCESS)
-                    rv = decode_chunk(&rd, &ci, x0, y0);
+                    rv = noted(decode_chunk(&rd, &ci, x0, y0));
                 if (rv != EXR_ERR_SUCCESS) {
                     st = fail(NBT_EFORMAT, path, err, errlen, "cannot decode tile (%zu, %zu): truncated or corrupt (%s)",
                               tx, ty, lib_detail(libmsg, rv));
@@ -819,6 +875,8 @@ done:
     if (rd.started)
         exr_decoding_destroy(ctx, &rd.dec);
     exr_finish(&ctx);
+    if (st == NBT_OK && exr_nomem) /* 3.1's header parser drops an attribute it cannot copy and succeeds */
+        st = fail(NBT_ENOMEM, path, err, errlen, "out of memory reading the header");
     if (st != NBT_OK) {
         nbt_image_free(im);
         return st;
@@ -923,6 +981,7 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
         o = &none;
     if (err && errlen)
         err[0] = '\0';
+    exr_nomem = 0;
     if (!path || !*path)
         return fail(NBT_EINVAL, path, err, errlen, "%s: no path", legacy ? "nbt_image_write_exr" : "nbt_image_write_exr_ex");
     if (!im || !im->rgb || im->w == 0 || im->h == 0)
@@ -1075,6 +1134,7 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = capture_write;
     capture_write_buf = libmsg;
+    nbt__exr_init(&init);
     exr_context_t ctx = NULL;
     int part = 0;
     const nbt_image_attrs *ka = legacy || o->drop_attrs ? NULL : im->attrs;
@@ -1101,6 +1161,7 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
         longnames |= strlen(o->attrs[2 * i]) > 31;
     for (size_t i = 0; ka && i < ka->n; i++)
         longnames |= strlen(ka->a[i].name) > 31;
+    errno = 0; /* from here an ENOMEM is an allocation's (noted) */
     exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rv == EXR_ERR_SUCCESS && longnames)
         rv = exr_set_longname_support(ctx, 1);
@@ -1168,14 +1229,19 @@ static nbt_status write_any(const nbt_image *im, const char *path, const nbt_exr
         }
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+        errno = 0;
         if (rv == EXR_ERR_SUCCESS)
-            rv = exr_encoding_run(ctx, part, &enc);
+            rv = noted(exr_encoding_run(ctx, part, &enc));
     }
+    noted(rv);
     if (started)
         exr_encoding_destroy(ctx, &enc);
-    exr_result_t fr = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
+    exr_result_t fr = ctx ? noted(exr_finish(&ctx)) : EXR_ERR_SUCCESS;
     capture_write_buf = NULL;
-    if (bad_attr < o->nattrs) {
+    if (exr_nomem) { /* whatever the library made of it */
+        unlink(tmp);
+        st = fail(NBT_ENOMEM, path, err, errlen, "out of memory writing OpenEXR data");
+    } else if (bad_attr < o->nattrs) {
         unlink(tmp);
         st = fail(NBT_EINVAL, path, err, errlen, "attribute \"%s\" cannot be set (%s)", o->attrs[2 * bad_attr],
                   lib_detail(libmsg, rv));

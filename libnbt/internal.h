@@ -2,6 +2,7 @@
 #ifndef NBT_INTERNAL_H
 #define NBT_INTERNAL_H
 
+#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <nbt/error.h>
@@ -12,6 +13,14 @@
 
 #define NBT_PI 3.14159265358979323846
 #define NBT_PI_2 1.57079632679489661923
+
+/* The status of a failed fopen, read or write whose errno is e: NBT_ENOMEM
+ * when the C library ran out of memory (fopen's FILE, a stream's buffer),
+ * else NBT_EIO. */
+static inline nbt_status nbt__io_status(int e)
+{
+    return e == ENOMEM ? NBT_ENOMEM : NBT_EIO;
+}
 
 /* Report a failure to the error handler (if any) and return the status. */
 nbt_status nbt__fail(nbt_status s, const char *reason);
@@ -241,6 +250,14 @@ nbt_status nbt__j_table_build_set_gc(nbt_table *const *ts, size_t ntab, const nb
  * mean a corrupt or hostile header (found by fuzzing: a 1 kB file asked for
  * 13 GB). Nonzero when plausible. */
 int nbt__exr_raw_plausible(const char *path, double raw_bytes);
+
+/* OpenEXR contexts allocate through libnbt (image_exr.c): nbt__exr_init sets
+ * init's alloc_fn and free_fn and clears this thread's out-of-memory flag;
+ * nbt__exr_nomem is nonzero when an OpenEXR allocation has failed since. */
+#ifdef OPENEXR_CONTEXT_H
+void nbt__exr_init(exr_context_initializer_t *init);
+#endif
+int nbt__exr_nomem(void);
 
 
 /* Non-negative least squares: x >= 0 minimising |A x - b| (A m x n,

@@ -494,8 +494,12 @@ static nbt_status read_table_file(const char *path, nbt_phase **out, char *err, 
     nbt_status st = nbt__read_columns(path, "phase table", "mu p", NULL, &mu, &p, &n, err, errlen);
     if (st != NBT_OK)
         return st;
+    errno = 0; /* the constructor returns NULL for bad rows and for no memory (malloc sets ENOMEM) */
     *out = nbt_phase_tabulated(n, mu, p);
-    if (!*out) {
+    if (!*out && errno == ENOMEM) {
+        snprintf(err, errlen, "phase table '%s': out of memory", path);
+        st = NBT_ENOMEM;
+    } else if (!*out) {
         snprintf(err, errlen,
                  "phase table '%s': need >= 2 rows 'mu p' with mu strictly increasing from -1 to 1 "
                  "and p >= 0, not all zero (got %zu rows)", path, n);
@@ -555,9 +559,15 @@ nbt_status nbt_phase_parse(const char *spec, nbt_phase **out, char *err, size_t 
         nbt_status st = nbt__read_columns(spec + 4, "sum-of-Gaussians file", "w B", NULL, &w, &B, &n, err, errlen);
         if (st != NBT_OK)
             return st;
+        errno = 0; /* NULL for bad rows and for no memory (malloc sets ENOMEM) */
         *out = nbt_phase_sog(n, w, B);
+        int nomem = errno == ENOMEM;
         free(w);
         free(B);
+        if (!*out && nomem) {
+            snprintf(err, errlen, "phase '%s': out of memory", spec);
+            return NBT_ENOMEM;
+        }
         if (!*out) {
             snprintf(err, errlen, "phase '%s': need rows 'w B' with w >= 0 (not all 0) and 0 < B <= %g", spec,
                      NBT_PHASE_GAUSS_BMAX);

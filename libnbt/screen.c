@@ -125,9 +125,12 @@ nbt_screen_kernel *nbt_screen_kernel_phase(nbt_skernel_kind kind, double sigma_t
 
 nbt_screen_kernel *nbt_screen_kernel_rgb(nbt_screen_kernel *r, nbt_screen_kernel *g, nbt_screen_kernel *b)
 {
-    nbt_screen_kernel *k = r && g && b && !r->ch[0] && !g->ch[0] && !b->ch[0] ? kernel_new() : NULL;
+    int args_ok = r && g && b && !r->ch[0] && !g->ch[0] && !b->ch[0];
+    nbt_screen_kernel *k = args_ok ? kernel_new() : NULL;
     if (!k) {
-        if (r && g && b)
+        if (args_ok) /* kernel_new ran out of memory */
+            nbt__fail(NBT_ENOMEM, "screen: out of memory");
+        else if (r && g && b)
             nbt__fail(NBT_EINVAL, "screen: an RGB kernel takes three single-channel kernels");
         else
             nbt__fail(NBT_EINVAL, "screen: an RGB kernel needs three kernels");

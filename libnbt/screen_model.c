@@ -147,8 +147,10 @@ nbt_status nbt_screen_model_write(const nbt_screen_model *m, const char *path, c
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
     FILE *f = fopen(tmp, "w");
-    if (!f)
-        return nbt__failf(err, errlen, NBT_EIO, "screen model '%s' cannot be written: %s", path, strerror(errno));
+    if (!f) {
+        int e = errno;
+        return nbt__failf(err, errlen, nbt__io_status(e), "screen model '%s' cannot be written: %s", path, strerror(e));
+    }
     fprintf(f, "# nbt screen kernel model: higher scattering orders (nbt/screen.h, doc/screenspace.md)\n");
     if (comment)
         for (const char *c = comment; *c;) {
@@ -196,8 +198,9 @@ nbt_status nbt_screen_model_write(const nbt_screen_model *m, const char *path, c
     }
     int bad = ferror(f);
     if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
+        int e = errno;
         remove(tmp);
-        return nbt__failf(err, errlen, NBT_EIO, "screen model '%s' cannot be written: %s", path, strerror(errno));
+        return nbt__failf(err, errlen, nbt__io_status(e), "screen model '%s' cannot be written: %s", path, strerror(e));
     }
     return NBT_OK;
 }
@@ -362,8 +365,10 @@ nbt_status nbt_screen_model_read(const char *path, nbt_screen_model **out, char 
 {
     *out = NULL;
     FILE *f = fopen(path, "rb");
-    if (!f)
-        return nbt__failf(err, errlen, NBT_EIO, "screen model '%s' cannot be opened: %s", path, strerror(errno));
+    if (!f) {
+        int e = errno;
+        return nbt__failf(err, errlen, nbt__io_status(e), "screen model '%s' cannot be opened: %s", path, strerror(e));
+    }
     size_t cap = 1 << 16, n = 0;
     char *text = malloc(cap);
     while (text) {

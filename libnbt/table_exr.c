@@ -123,6 +123,7 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
     }
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = quiet;
+    nbt__exr_init(&init);
     exr_context_t ctx = NULL;
     exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
     int part = 0;
@@ -226,6 +227,7 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         rv = exr_get_scanlines_per_chunk(ctx, part, &lpc);
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     int first = 1;
+    errno = 0; /* zlib allocates with malloc, not through the context: ENOMEM here is its failure */
     for (int32_t y = 0; y < (int32_t)ny && rv == EXR_ERR_SUCCESS; y += lpc) {
         exr_chunk_info_t ci;
         rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
@@ -253,16 +255,21 @@ nbt_status nbt_table_write_exr_progress(const nbt_table *t, const char *path, nb
         if (rv == EXR_ERR_SUCCESS && progress)
             progress(y + lpc >= (int32_t)ny ? 1.0 : (double)(y + lpc) / (double)ny, data);
     }
+    int zlib_nomem = rv != EXR_ERR_SUCCESS && errno == ENOMEM;
     if (!first)
         exr_encoding_destroy(ctx, &enc);
     exr_result_t fr = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
     free(pix);
     nbt_status st = NBT_OK;
-    if (rv != EXR_ERR_SUCCESS || fr != EXR_ERR_SUCCESS || rename(tmp, path) != 0) {
-        unlink(tmp);
+    if (rv == EXR_ERR_OUT_OF_MEMORY || fr == EXR_ERR_OUT_OF_MEMORY || nbt__exr_nomem() || zlib_nomem)
+        st = NBT_ENOMEM; /* whatever the library made of it */
+    else if (rv != EXR_ERR_SUCCESS || fr != EXR_ERR_SUCCESS || rename(tmp, path) != 0)
         st = NBT_EIO;
-    }
+    if (st != NBT_OK)
+        unlink(tmp);
     free(tmp);
+    if (st == NBT_ENOMEM)
+        NBT_FAIL(st, "EXR: out of memory writing the table");
     if (st != NBT_OK)
         NBT_FAIL(st, "EXR: writing the table failed");
     return NBT_OK;
@@ -294,20 +301,28 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
     *out = NULL;
     FILE *probe = fopen(path, "rb");
     if (!probe) {
-        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(e));
+        return nbt__io_status(e);
     }
     fclose(probe);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = quiet;
     init.flags = EXR_CONTEXT_FLAG_SILENT_HEADER_PARSE;
+    nbt__exr_init(&init);
     exr_context_t ctx = NULL;
-    if (exr_start_read(&ctx, path, &init) != EXR_ERR_SUCCESS) {
+    exr_result_t rv0 = exr_start_read(&ctx, path, &init);
+    if (rv0 != EXR_ERR_SUCCESS) {
         if (ctx)
             exr_finish(&ctx);
+        if (rv0 == EXR_ERR_OUT_OF_MEMORY || nbt__exr_nomem()) {
+            snprintf(err, errlen, "%s: out of memory", path);
+            return NBT_ENOMEM;
+        }
         return rd_fail(err, errlen, path, "not an OpenEXR file");
     }
     nbt_status st = NBT_OK;
+    exr_result_t rv = EXR_ERR_SUCCESS;
     nbt_table *t = NULL;
     uint8_t *pix = NULL;
     const char *s;
@@ -366,7 +381,13 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         st = rd_fail(err, errlen, path, "the data window is more than the file can hold: corrupt header");
         goto done;
     }
+    errno = 0; /* NULL for bad axes (errno stays 0) or no memory (ENOMEM) */
     t = nbt_table_alloc3(kind, &ax[0], &ax[1], &ax[2], nc);
+    if (!t && errno == ENOMEM) {
+        st = NBT_ENOMEM;
+        snprintf(err, errlen, "%s: out of memory", path);
+        goto done;
+    }
     if (!t) {
         st = rd_fail(err, errlen, path, "bad table axes or size");
         goto done;
@@ -504,7 +525,7 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
     exr_get_scanlines_per_chunk(ctx, 0, &lpc);
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     int first = 1;
-    exr_result_t rv = EXR_ERR_SUCCESS;
+    errno = 0; /* zlib allocates with malloc, not through the context: ENOMEM here is its failure */
     for (int32_t y = dw.min.y; y <= dw.max.y && rv == EXR_ERR_SUCCESS; y += lpc) {
         exr_chunk_info_t ci;
         rv = exr_read_scanline_chunk_info(ctx, 0, y, &ci);
@@ -534,8 +555,12 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_decoding_run(ctx, 0, &dec);
     }
+    if (rv != EXR_ERR_SUCCESS && errno == ENOMEM)
+        rv = EXR_ERR_OUT_OF_MEMORY;
     if (!first)
         exr_decoding_destroy(ctx, &dec);
+    if (rv == EXR_ERR_OUT_OF_MEMORY)
+        goto done; /* NBT_ENOMEM below */
     if (rv != EXR_ERR_SUCCESS) {
         st = rd_fail(err, errlen, path, "pixel data cannot be decoded (truncated or corrupt, or channels not R/G/B/A)");
         goto done;
@@ -551,6 +576,11 @@ nbt_status nbt_table_read_exr(const char *path, nbt_table **out, char *err, size
 done:
     free(pix);
     exr_finish(&ctx);
+    if (nbt__exr_nomem() || rv == EXR_ERR_OUT_OF_MEMORY) {
+        /* whatever the library made of it: a failed decode, or a header without the attribute it could not copy */
+        st = NBT_ENOMEM;
+        snprintf(err, errlen, "%s: out of memory", path);
+    }
     if (st != NBT_OK) {
         nbt_table_free(t);
         return st;

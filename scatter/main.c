@@ -428,6 +428,18 @@ static void parse(int argc, char **argv, opts *o)
     if (o->density && (o->method == 1 || o->kernel != NBT_SKERNEL_MOMENT))
         die_usage("--density: heterogeneous media use operator A with the moment kernel (eq. 28/29): "
                   "--method ref-a or a GL method, --kernel moment");
+    if (o->density && o->method == 2 && o->gl_method == NBT_GLS_ELEK)
+        die_usage("--method elek: Elek's W(s) is for homogeneous media, not --density; use --method shinya, naive or "
+                  "ref-a");
+    if (o->density) { /* the camera of the ray march: checked before the input and the grid are read */
+        double f[3] = {o->look[0] - o->cam[0], o->look[1] - o->cam[1], o->look[2] - o->cam[2]};
+        double cr[3] = {f[1] * o->up[2] - f[2] * o->up[1], f[2] * o->up[0] - f[0] * o->up[2],
+                        f[0] * o->up[1] - f[1] * o->up[0]};
+        if (!(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2] > 0))
+            die_usage("--look-at %g,%g,%g from --camera %g,%g,%g: the view direction must be non-zero and not parallel "
+                      "to --up %g,%g,%g", o->look[0], o->look[1], o->look[2], o->cam[0], o->cam[1], o->cam[2], o->up[0],
+                      o->up[1], o->up[2]);
+    }
     if ((o->kernel == NBT_SKERNEL_CORRECTED) != (o->corr_path != NULL))
         die_usage("--kernel corrected and --correction FILE go together");
     if (o->extend >= 0 && (o->method > 1 || o->density))
@@ -539,11 +551,7 @@ static nbt_screen_pixkern *medium_kernels(const opts *o, const nbt_grid *g, cons
         cam.fwd[a] = o->look[a] - o->cam[a];
         cam.up[a] = o->up[a];
     }
-    double cr[3] = {cam.fwd[1] * cam.up[2] - cam.fwd[2] * cam.up[1], cam.fwd[2] * cam.up[0] - cam.fwd[0] * cam.up[2],
-                    cam.fwd[0] * cam.up[1] - cam.fwd[1] * cam.up[0]};
-    if (!(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2] > 0))
-        die_usage("--look-at/--up: the view direction must be non-zero and not parallel to up");
-    nbt_grid_box(g, lo, hi);
+    nbt_grid_box(g, lo, hi); /* the view direction was checked with the options */
     for (int a = 0; a < 3; a++)
         if (!(o->cam[a] >= lo[a] - slack && o->cam[a] <= hi[a] + slack))
             die_usage("--density: the grid's box [%g,%g]x[%g,%g]x[%g,%g] does not hold the camera (%g,%g,%g): it must "
@@ -595,9 +603,7 @@ static void run_gl(const opts *o, const nbt_screen_input *in, const nbt_screen_k
     /* elek: its Gaussian (mass and deviation) from the ELEK kernel (for a phase: k itself) */
     nbt_screen_kernel *ke = NULL;
     const nbt_screen_kernel *kel = NULL;
-    if (o->gl_method == NBT_GLS_ELEK) {
-        if (in->pix)
-            die_usage("--method elek: Elek's W(s) is for homogeneous media; use --method shinya, naive or ref-a");
+    if (o->gl_method == NBT_GLS_ELEK) { /* homogeneous only: --density refused with the options */
         kel = o->kernel == NBT_SKERNEL_ELEK ? k : (ke = medium_kernel(&o->med, NBT_SKERNEL_ELEK, NULL));
         sig = malloc(np * sizeof *sig);
         if (!sig)

@@ -486,9 +486,9 @@ if "$NBT_FIT" kernel --help >/dev/null 2>&1; then
   expect_usage "phase --against missing" "$enoent" timeout 10 "$NBT_FIT" phase --target hg:g=0.9 --terms 16 --against $miss.exr
   # malformed photon counts: the line named, nothing fitted
   printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.1,0.5,0.01\n1,0.1,0.2,-0.3,0.01\n' >"$tmp/neg.csv"
-  expect_usage "kernel CSV with a negative psi" "neg.csv line 3: expected .*psi >= 0" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
+  expect_usage "kernel CSV with a negative psi" "neg.csv line 3: '1,0.1,0.2,-0.3,0.01' is not accepted: expected .*psi >= 0" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
   printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0.2,0.1,0.5,0.01\n' >"$tmp/neg.csv"
-  expect_usage "kernel CSV with r_hi < r_lo" "neg.csv line 2: expected" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
+  expect_usage "kernel CSV with r_hi < r_lo" "neg.csv line 2: '1,0.2,0.1,0.5,0.01' is not accepted: expected" "$NBT_FIT" kernel "$tmp/neg.csv" --albedo 0.5 --sigma-t 1 --B 0.1
   rm -f "$tmp/neg.csv"
 fi
 [ ! -e "$tmp/x.csv" ] && ok || bad "missing inputs left output"
@@ -505,7 +505,7 @@ expect_usage "kernel: erfc on 2 bins" "2 bins per plane: this shape needs at lea
 expect_usage "kernel: erfc2 on 3 bins" "3 bins per plane: this shape needs at least 5$" "$NBT_FIT" kernel "$tmp/b3.csv" $K --shape erfc2
 # a counts CSV with an infinite r_hi (each of the five fields must be finite): refused naming the line
 printf 'z,r_lo,r_hi,psi,psi_stderr\n1,0,0.1,2.5,0.1\n1,0.1,inf,1.5,0.1\n' >"$tmp/rinf.csv"
-expect_usage "counts CSV with r_hi = inf" "rinf.csv line 3: expected .* (finite)" "$NBT_FIT" kernel "$tmp/rinf.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685
+expect_usage "counts CSV with r_hi = inf" "rinf.csv line 3: '1,0.1,inf,1.5,0.1' is not accepted: expected .* (finite)" "$NBT_FIT" kernel "$tmp/rinf.csv" --albedo 0.7 --sigma-t 1.3 --B 0.0685
 # --photons: the closed range [64, 1e15]: 64 counts, 63 is refused with the range
 "$NBT_FIT" mc --albedo 0.9 --sigma-t 1 --B 0.0685 --photons 64 --z-planes 1:2:2 -o "$tmp/p64.csv" >/dev/null 2>&1 &&
   [ -s "$tmp/p64.csv" ] && ok || bad "mc --photons 64 (the smallest accepted)"

@@ -579,6 +579,12 @@ static void test_medium(void)
     nbt_grid_write_raw(g, path, err2, sizeof err2);
     t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EFORMAT && strstr(err2, "(3, 1, 0)") && !g2,
            "grid: a negative voxel is refused and named: %s", err2);
+    /* a header with a zero size: a format error naming the size (it was NBT_ENOMEM, "cannot be allocated") */
+    FILE *fz = fopen(path, "wb");
+    fprintf(fz, "NBTGRID 1 3 0 2 0 0 0 1\n");
+    fclose(fz);
+    t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EFORMAT && strstr(err2, "3x0x2") && !g2,
+           "grid: a zero size in the header is a format error: %s", err2);
     unlink(path);
     t_true(nbt_grid_read_raw(path, &g2, err2, sizeof err2) == NBT_EIO, "grid: missing file");
     /* nbt/grid.h: the origin must be finite, each of its three coordinates (a raw header's
