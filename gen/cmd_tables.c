@@ -249,9 +249,11 @@ static void print_table_line(const nbt_tableset *ts, const nbt_table *t, const c
         axis_desc(&t->axis[2], nbt_table_axis_name(t->kind, 2), d2 + 1, sizeof d2 - 1);
         d2[0] = ' ';
     }
-    printf("%-22s %4zux%-4zu%s%.0zu %s %s%s  max interp err %.2e (rel %.2e)  quad err %.1e\n", path, t->axis[0].n,
+    /* form sub says so: a shader of its own that reads the texels as values would miss the closed form */
+    printf("%-22s %4zux%-4zu%s%.0zu %s %s%s  max interp err %.2e (rel %.2e)  quad err %.1e%s\n", path, t->axis[0].n,
            t->axis[1].n, t->axis[2].n >= 2 ? "x" : "", t->axis[2].n >= 2 ? t->axis[2].n : 0, d0, d1, d2, e,
-           t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? e : ts->scale > 0 ? e / ts->scale : e, t->quad_err);
+           t->form == NBT_FORM_TAIL || t->form == NBT_FORM_LOG_ET ? e : ts->scale > 0 ? e / ts->scale : e, t->quad_err,
+           t->form == NBT_FORM_SUB ? "  form sub (lookups add a closed form back: doc/shaders.md)" : "");
     if (t->form == NBT_FORM_TAIL)
         print_tail_map(t);
 }
