@@ -147,17 +147,8 @@ static double fit_row0_w(const nbt_table *t)
                 mx = fmax(mx, fabs(val(t, 0, j, c)));
             }
             worst_res = fmax(worst_res, r / mx);
-        }
-        if (getenv("FITRES")) { /* the fit's largest residual, relative to the row's largest value */
-            double r = 0, mx = 0;
-            for (size_t j = 0; j < m; j++) {
-                double y = nbt_axis_node(&t->axis[1], j), s = 0;
-                for (int q = 0; q < M; q++)
-                    s += fitc[c][q] * basis(q, M, y);
-                r = fmax(r, fabs(s - val(t, 0, j, c)));
-                mx = fmax(mx, fabs(val(t, 0, j, c)));
-            }
-            fprintf(stderr, "fit ch %d: max residual %.3e of %.3e\n", c, r, mx);
+            if (getenv("FITRES")) /* the fit's largest residual, relative to the row's largest value */
+                fprintf(stderr, "fit ch %d: max residual %.3e of %.3e\n", c, r, mx);
         }
     }
     return worst_res;

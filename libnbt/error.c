@@ -37,7 +37,7 @@ nbt_status nbt__fail(nbt_status s, const char *reason)
 
 nbt_status nbt__failv(nbt_status s, const char *fmt, ...)
 {
-    char reason[256];
+    char reason[320];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(reason, sizeof reason, fmt, ap);

@@ -23,7 +23,6 @@
  * never slips between them. */
 #include <config.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -368,61 +367,50 @@ static nbt_status row_task(size_t j, unsigned thread, void *vp)
     return NBT_OK;
 }
 
-static nbt_status failf(nbt_status st, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static nbt_status failf(nbt_status st, const char *fmt, ...)
-{
-    char buf[320];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    return nbt__fail(st, buf);
-}
-
 static nbt_status check_args(const nbt_screen_world *W, const nbt_screen_path_medium *m, const nbt_screen_path_opts *o,
                              const double *S)
 {
     if (!W || !m || !o || !S)
-        return failf(NBT_EINVAL, "screen path: world, medium, options and S must not be NULL");
+        return nbt__failv(NBT_EINVAL, "screen path: world, medium, options and S must not be NULL");
     if (W->w == 0 || W->h == 0 || !W->rgb || !W->Z)
-        return failf(NBT_EINVAL, "screen path: empty world (w = %zu, h = %zu) or no colour/depth", W->w, W->h);
+        return nbt__failv(NBT_EINVAL, "screen path: empty world (w = %zu, h = %zu) or no colour/depth", W->w, W->h);
     if (!(W->dtheta > 0) || !isfinite(W->dtheta))
-        return failf(NBT_EDOM, "screen path: dtheta = %g must be finite and > 0", W->dtheta);
+        return nbt__failv(NBT_EDOM, "screen path: dtheta = %g must be finite and > 0", W->dtheta);
     if (!isfinite(W->cx) || !isfinite(W->cy))
-        return failf(NBT_EDOM, "screen path: the optical axis (%g, %g) must be finite", W->cx, W->cy);
+        return nbt__failv(NBT_EDOM, "screen path: the optical axis (%g, %g) must be finite", W->cx, W->cy);
     if (W->ow == 0 || W->oh == 0 || W->x0 > W->w || W->ow > W->w - W->x0 || W->y0 > W->h || W->oh > W->h - W->y0)
-        return failf(NBT_EINVAL,
+        return nbt__failv(NBT_EINVAL,
                      "screen path: the rendered rectangle %zux%zu at (%zu, %zu) must be non-empty and inside the "
                      "%zux%zu world",
                      W->ow, W->oh, W->x0, W->y0, W->w, W->h);
     for (int ch = 0; ch < 3; ch++) {
         if (!(m->sigma_t[ch] >= 0) || !isfinite(m->sigma_t[ch]))
-            return failf(NBT_EDOM, "screen path: sigma_t[%d] = %g must be finite and >= 0", ch, m->sigma_t[ch]);
+            return nbt__failv(NBT_EDOM, "screen path: sigma_t[%d] = %g must be finite and >= 0", ch, m->sigma_t[ch]);
         if (!(m->albedo[ch] >= 0 && m->albedo[ch] <= 1))
-            return failf(NBT_EDOM, "screen path: albedo[%d] = %g must lie in [0, 1]", ch, m->albedo[ch]);
+            return nbt__failv(NBT_EDOM, "screen path: albedo[%d] = %g must lie in [0, 1]", ch, m->albedo[ch]);
         if (!isfinite(m->sky[ch]))
-            return failf(NBT_EDOM, "screen path: sky[%d] = %g must be finite", ch, m->sky[ch]);
+            return nbt__failv(NBT_EDOM, "screen path: sky[%d] = %g must be finite", ch, m->sky[ch]);
     }
     if (!m->phase)
-        return failf(NBT_EINVAL, "screen path: no phase function");
+        return nbt__failv(NBT_EINVAL, "screen path: no phase function");
     if (!(m->radius > 0))
-        return failf(NBT_EDOM, "screen path: radius = %g must be > 0 (INFINITY: medium everywhere)", m->radius);
+        return nbt__failv(NBT_EDOM, "screen path: radius = %g must be > 0 (INFINITY: medium everywhere)", m->radius);
     if (o->spp < 2)
-        return failf(NBT_EDOM, "screen path: spp = %lu must be >= 2 (a standard error needs two samples)", o->spp);
+        return nbt__failv(NBT_EDOM, "screen path: spp = %lu must be >= 2 (a standard error needs two samples)", o->spp);
     if (!(o->target_noise >= 0) || !isfinite(o->target_noise))
-        return failf(NBT_EDOM, "screen path: target_noise = %g must be finite and >= 0 (0: one pass)",
+        return nbt__failv(NBT_EDOM, "screen path: target_noise = %g must be finite and >= 0 (0: one pass)",
                      o->target_noise);
     if (o->target_noise > 0 && o->max_spp && o->max_spp < o->spp)
-        return failf(NBT_EDOM, "screen path: max_spp = %lu must be >= spp = %lu (or 0)", o->max_spp, o->spp);
+        return nbt__failv(NBT_EDOM, "screen path: max_spp = %lu must be >= spp = %lu (or 0)", o->max_spp, o->spp);
     for (size_t i = 0; i < W->w * W->h; i++) {
         float z = W->Z[i];
         if (!(z > 0))
-            return failf(NBT_EDOM,
+            return nbt__failv(NBT_EDOM,
                          "screen path: depth %g at pixel (%zu, %zu) must be > 0 (>= 1e10 or inf: sky)", (double)z,
                          i % W->w, i / W->w);
         for (int ch = 0; ch < 3; ch++)
             if (!isfinite(W->rgb[3 * i + ch]))
-                return failf(NBT_EDOM, "screen path: colour %g at pixel (%zu, %zu) must be finite",
+                return nbt__failv(NBT_EDOM, "screen path: colour %g at pixel (%zu, %zu) must be finite",
                              (double)W->rgb[3 * i + ch], i % W->w, i / W->w);
     }
     return NBT_OK;
@@ -511,7 +499,7 @@ nbt_status nbt_screen_path(const nbt_screen_world *W, const nbt_screen_path_medi
     c.sum = calloc(N, sizeof *c.sum);
     c.sum2 = calloc(N, sizeof *c.sum2);
     if (!c.pick || !c.sum || !c.sum2) {
-        st = failf(NBT_ENOMEM, "screen path: out of memory");
+        st = nbt__failv(NBT_ENOMEM, "screen path: out of memory");
         goto done;
     }
     double total = 0.0;
@@ -533,7 +521,7 @@ nbt_status nbt_screen_path(const nbt_screen_world *W, const nbt_screen_path_medi
         c.lidx = malloc(c.nlights * sizeof *c.lidx);
         c.bslot = malloc(npix * sizeof *c.bslot);
         if (!c.cdf || !c.lidx || !c.bslot) {
-            st = failf(NBT_ENOMEM, "screen path: out of memory");
+            st = nbt__failv(NBT_ENOMEM, "screen path: out of memory");
             goto done;
         }
         /* the bright list: every light when there are few, else the (at most
@@ -592,7 +580,7 @@ nbt_status nbt_screen_path(const nbt_screen_world *W, const nbt_screen_path_medi
     unsigned long maxspp = o->target_noise > 0 ? (o->max_spp ? o->max_spp : 64ul) : o->spp, n = 0;
     double *tmpse = se ? se : malloc(N * sizeof *tmpse);
     if (!tmpse) {
-        st = failf(NBT_ENOMEM, "screen path: out of memory");
+        st = nbt__failv(NBT_ENOMEM, "screen path: out of memory");
         goto done;
     }
     for (c.pass = 0;; c.pass++) {

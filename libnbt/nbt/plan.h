@@ -85,8 +85,9 @@ typedef struct {
     double tol;               /* target: max_err / largest |value| of the first pack; 0: use size */
     size_t size[2];           /* nodes per axis (2..4096) when tol == 0 */
     int half;                 /* store half floats */
-    int sub;                  /* 1: tables of form NBT_FORM_SUB (nbt/table.h; the CPU lookup only, libnbt-gl
-                                 refuses them): the default scene's three sets meet 1e-3 at 33^2 */
+    int sub;                  /* 1: tables of form NBT_FORM_SUB (nbt/table.h; the CPU lookups and libnbt-gl's
+                                 shaders add the closed form back): the default scene's three sets meet 1e-3
+                                 at 33^2 */
 } nbt_plan_request;
 
 /* What the plan decided for one set. */

@@ -235,7 +235,7 @@ class Scene(ctypes.Structure):  # nbt_scene
     _fields_ = [("kappa_t", c_double * 2), ("kappa_s", c_double * 2), ("distance", c_double * 2), ("have_g", c_int),
                 ("g", c_double * 2), ("phase", c_void_p), ("airlight", c_int), ("diffuse", c_int),
                 ("phong", c_int * SCENE_MAX_PHONG), ("nphong", c_size_t), ("tol", c_double),
-                ("orders_max", c_size_t), ("half", c_int), ("basis", c_int)]
+                ("orders_max", c_size_t), ("half", c_int), ("basis", c_int), ("sub", c_int)]
 
 
 class PlanRequest(ctypes.Structure):  # nbt_plan_request
