@@ -506,6 +506,10 @@ expect_usage "negative kappa_t" "kappa_t" "$NBT_GEN" scene "$tmp/bad.scene" -o "
 printf 'kappa_t = 0.1\ndistance = 10\n' >"$tmp/bad.scene"
 expect_usage "no phase" "exactly one of g" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 [ ! -e "$tmp/scene2" ] && ok || bad "rejected scene left output"
+# a bad g refuses the scene at its own line, naming it, even with the keys that follow it valid
+printf 'kappa_t = 0.1\nphase = iso\ng = 1.5\ndistance = 10\n' >"$tmp/bad.scene"
+expect_usage "g = 1.5 in a scene" "bad.scene:3: g: '1.5' is not accepted" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+[ ! -e "$tmp/scene2" ] && ok || bad "scene with g = 1.5 left output"
 # an extinction range may start at 0 (clear air somewhere in the scene); only its top must be > 0
 printf 'kappa_t = 0:0.05\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/kt0.scene"
 "$NBT_GEN" scene "$tmp/kt0.scene" -o "$tmp/scene0" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/scene0/H_hg_g_0.8.exr" ] &&
