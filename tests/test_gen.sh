@@ -607,6 +607,20 @@ words 2 "$NBT_GEN" eval surface --g 0.21 $sg --method direct 2>/dev/null; set --
 awk -v t="$1" -v e="$2" -v d="$3" -v de="$4" 'BEGIN { x = t - d; exit !(e > 0 && (x < 0 ? -x : x) <= e + de) }' &&
   ok || bad "eval surface from a g-sliced J table at g 0.21 within its bound of direct: $*"
 rm -f "$tmp/gjs.exr"
+# a g-sliced J table (form log_et: ln(e^T J), its max interp err already relative) is judged by that error
+# itself: at tol 5e-3 it reaches 5.4e-3 (info), a miss (exit 1, nothing written; a warning with
+# --allow-tol-miss). Divided once more by max |ln(e^T J)| (3.1 here) it would pass as 1.7e-3.
+"$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 5e-3 --n 1 -o "$tmp/gjm.exr" --quiet --no-preview \
+  --allow-tol-miss >/dev/null 2>"$tmp/err"
+e=$("$NBT_GEN" info "$tmp/gjm.exr" 2>/dev/null | sed -n 's/^channel R .*max interp err \([0-9.e+-]*\)$/\1/p')
+awk -v e="$e" 'BEGIN { exit !(e > 5e-3) }' && grep -q "warning: the g-sliced J table's recorded lookup error is $(
+  printf '%.2e' "$e"), above tol 5.00e-03" "$tmp/err" && ok ||
+  bad "g-sliced J at tol 5e-3: a miss of its recorded error $e warned: $(cat "$tmp/err")"
+rm -f "$tmp/gjm.exr"
+"$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 5e-3 --n 1 -o "$tmp/gjm.exr" --quiet --no-preview >/dev/null \
+  2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && [ ! -e "$tmp/gjm.exr" ] && grep -q "error: the g-sliced J table's recorded lookup error" "$tmp/err" &&
+  ok || bad "g-sliced J missing tol 5e-3 refused: rc=$rc, $(cat "$tmp/err")"
 expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
 expect_usage "eval --tables: g-sliced with --phase" "run-time asymmetry with --g" "$NBT_GEN" eval airlight --phase iso $geo --method table --tables "$tmp/gs.exr"
