@@ -81,6 +81,11 @@ for c in 0 1; do
   "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-b.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp$c-a.exr" \
     2>/dev/null >"$tmp/lamp$c.cmp" || bad "lamp$c --compare"
 done
+# --compare refuses a reference made from another input (nbt.input hashes every channel and the depth):
+# the grey frame differs from lamp1 only in one pixel's G
+"$MK" "$tmp/grey.exr" grey || bad "grey frame"
+expect_usage "compare refuses an input that differs only in G" "nbt.input" "$S" "$tmp/grey.exr" -o "$tmp/x.exr" $M0 \
+  --method ref-b --no-png --compare "$tmp/lamp1-a.exr"
 words S.R:2 "$MK" "$tmp/lamp0-a.exr" mean S; sr=${w#* }; words S.G:2 "$MK" "$tmp/lamp1-a.exr" mean S; sg=${w#* }
 awk -v a="$sr" -v b="$sg" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 1 && d <= 1e-6 * a) }' && ok ||
   bad "red lamp's S.R $sr = green lamp's S.G $sg"
