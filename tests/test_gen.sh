@@ -218,6 +218,12 @@ for ks in 0.3 0; do
     x = e - w; if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(a > 0 && b > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
     bad "surface from fixed-phase tables, ks $ks: $1 +- $2 (bound from max_err $m1, $m20) vs direct $d"
 done
+# a lobe without its table is refused, naming that lobe: J^1 alone for ks > 0 (specular), J^20 alone for kd > 0 (diffuse)
+S="--kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks 0.3 --n 20"
+expect_usage "fixed-phase J^1 alone, ks > 0" "no fixed-phase J table for the specular lobe" "$NBT_GEN" eval surface $S \
+  --method table --tables "$tmp/j1p.exr"
+expect_usage "fixed-phase J^20 alone, kd > 0" "no fixed-phase J table for the diffuse lobe" "$NBT_GEN" eval surface $S \
+  --method table --tables "$tmp/j20p.exr"
 rm -f "$tmp/j1p.exr" "$tmp/j20p.exr"
 S=$S0; d=$d0
 words 2 "$NBT_GEN" eval surface $S --method table 2>/dev/null; set -- $w
@@ -499,6 +505,11 @@ nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 rm -rf "$tmp/g8" "$tmp/g8.scene" "$tmp/out" "$tmp/err"
 printf 'kappa_t = 0.1\ndistance = 10\ng = 0.5\norders_max = 0\n' >"$tmp/bad.scene"
 expect_usage "orders_max out of range" "orders_max" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+# the lower end itself, 1 (doc/scene-format.md: 1 ... 512), is accepted: a fixed phase needs no orders
+printf 'kappa_t = 0.1\ndistance = 10\nphase = iso\ndiffuse = no\ntol = 1e-2\norders_max = 1\n' >"$tmp/o1.scene"
+"$NBT_GEN" scene "$tmp/o1.scene" -o "$tmp/o1" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/o1/H_iso.exr" ] && ok ||
+  bad "orders_max = 1 accepted: $(cat "$tmp/err")"
+rm -rf "$tmp/o1" "$tmp/o1.scene"
 printf 'kappa_t = 0.1\ndistance = 10\nphase = hg:g=0.8\nfog = thick\n' >"$tmp/bad.scene"
 expect_usage "unknown scene key" "unknown key 'fog'" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 printf 'kappa_t = -0.1\ndistance = 10\nphase = iso\n' >"$tmp/bad.scene"
