@@ -131,6 +131,11 @@ expect_usage "negative colour" "-1e+06 at pixel (2, 7) channel B" "$S" "$tmp/neg
 expect_usage "output not .exr" "must end in .exr" "$S" "$tmp/l.exr" -o "$tmp/x.png" $H
 expect_usage "output is the input" "is the input render" "$S" "$tmp/l.exr" -o "$tmp/l.exr" $H
 expect_usage "spp without path" "--spp and --noise belong to --method path" "$S" "$tmp/l.exr" -o "$o" $H --spp 5
+# three phases, one per channel: the header's nbt.phase names them in R;G;B order (--compare checks it)
+"$S" "$tmp/l16.exr" -o "$tmp/p3.exr" --fov-y 40 --sigma-t 0.3 --albedo 0.9 --phase hg:g=0.3 --phase hg:g=0.5 \
+  --phase hg:g=0.7 --method ref-a --threads 2 --no-png --extend 0 2>/dev/null &&
+  LC_ALL=C grep -aq 'nbt\.phase.string.....hg:g=0\.3;hg:g=0\.5;hg:g=0\.7' "$tmp/p3.exr" && ok ||
+  bad "nbt.phase of three phases: $(LC_ALL=C grep -ao 'hg:g=[0-9.;hg:=]*' "$tmp/p3.exr" | head -n 1)"
 # the path tracer samples one phase: three that differ in R only (G = B) are refused too, not traced with G's
 expect_usage "path with R's phase apart" "one phase for all channels" "$S" "$tmp/l.exr" -o "$o" --fov-y 40 --sigma-t 0.3 \
   --albedo 0.95 --phase hg:g=0.5 --phase hg:g=0.9 --phase hg:g=0.9 --method path --threads 2 --no-png --spp 2
