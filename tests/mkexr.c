@@ -19,7 +19,7 @@
  * mkexr OUT.exr lamp0|lamp1|lamp2: the 16x12 grey render (0.5, depth 4)
  * with one lamp, 1000 in channel R, G or B at x = 1, y = 5 (near the left
  * edge, so the mirror continuation holds its image). mkexr OUT.exr
- * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15.
+ * greenred: pure green (0, 1, 0) in columns 0..9, pure red in 10..15; red: all pure red.
  * mkexr IN.exr noise B and mkexr IN.exr zsq OTHER.exr check a path-traced
  * output's Sse layer (below). mkexr OUT.exr halo SUM [ROW]: a frame with a pixel of R + G + B = SUM
  * (in row ROW, default 3) against --compare's lamp threshold; capband, capband-ext: a frame for nbt-scatter's mirrored-lamp cap, and
@@ -381,6 +381,9 @@ int main(int argc, char **argv)
         for (size_t i = 0; i < 16 * 12; i++)
             for (size_t c = 0; c < 3; c++)
                 im->rgb[3 * i + c] = c == (i % 16 < 10 ? 1u : 0u) ? 1.0f : 0.0f;
+    else if (!strcmp(kind, "red"))
+        for (size_t i = 0; i < 16 * 12; i++)
+            im->rgb[3 * i] = 1.0f, im->rgb[3 * i + 1] = im->rgb[3 * i + 2] = 0.0f;
     else if (!strcmp(kind, "border")) { /* a region render: the data window inside a larger display window */
         im->x0 = 4, im->y0 = 2;
         im->display.min_x = 0, im->display.min_y = 0, im->display.max_x = 31, im->display.max_y = 23;

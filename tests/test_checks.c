@@ -1,5 +1,6 @@
 /* tests/test_checks.c: the public argument checks (nbt_airlight_check,
- * nbt_surface_check, nbt_beam_check, nbt_screen_check) called directly, at
+ * nbt_surface_check, nbt_beam_check, nbt_screen_check, and nbt_screen_path's
+ * world check) called directly, at
  * every bound from both sides: the value just inside is accepted, the value
  * just outside (and NaN, inf) refused with NBT_EDOM and one line through the
  * error handler that names the field and the bad value. Before, these were
@@ -10,7 +11,9 @@
 #include <string.h>
 #include <nbt/airlight.h>
 #include <nbt/beam.h>
+#include <nbt/phase.h>
 #include <nbt/screen.h>
+#include <nbt/screen_path.h>
 #include <nbt/surface.h>
 #include "testutil.h"
 
@@ -236,6 +239,28 @@ static void test_screen(void)
     expect(nbt_screen_check(&in), NBT_EDOM, "pixel (1, 1)|M0 = inf", "screen: infinite M0 at (1, 1)");
 }
 
+/* nbt_screen_path's world: a bad depth or colour is named by its pixel (x, y) */
+static void test_screen_path(void)
+{
+    /* 3x2, non-square: pixel (1, 1) is index 4, (2, 1) index 5 */
+    float rgb[18], Z[6] = {1, 2, 3, 4, 5, INFINITY};
+    for (int i = 0; i < 18; i++)
+        rgb[i] = 0.1f * (float)i;
+    nbt_phase *p = nbt_phase_iso();
+    nbt_screen_world W = {3, 2, rgb, Z, 0.01, 1.5, 1.0, 0, 0, 3, 2};
+    nbt_screen_path_medium m = {{1, 1, 1}, {0.5, 0.5, 0.5}, p, INFINITY, {0, 0, 0}};
+    nbt_screen_path_opts o = {.spp = 2, .seed = 1, .nthreads = 1};
+    double S[18];
+    expect(nbt_screen_path(&W, &m, &o, S, NULL, NULL), NBT_OK, NULL, "screen path: a valid 3x2 world with a sky pixel");
+    Z[4] = 0;
+    expect(nbt_screen_path(&W, &m, &o, S, NULL, NULL), NBT_EDOM, "depth 0 at pixel (1, 1)", "screen path: depth 0 at (1, 1)");
+    Z[4] = 5;
+    rgb[3 * 5 + 1] = NAN;
+    expect(nbt_screen_path(&W, &m, &o, S, NULL, NULL), NBT_EDOM, "colour nan at pixel (2, 1)",
+           "screen path: NaN green at (2, 1)");
+    nbt_phase_free(p);
+}
+
 int main(void)
 {
     nbt_set_error_handler(handler);
@@ -243,5 +268,6 @@ int main(void)
     test_surface();
     test_beam();
     test_screen();
+    test_screen_path();
     return t_done();
 }

@@ -218,6 +218,12 @@ for ks in 0.3 0; do
     x = e - w; if (x < 0) x = -x; y = v - d; if (y < 0) y = -y; exit !(a > 0 && b > 0 && x <= 1e-3 * w && y <= e) }' && ok ||
     bad "surface from fixed-phase tables, ks $ks: $1 +- $2 (bound from max_err $m1, $m20) vs direct $d"
 done
+# a lobe without its table is refused, naming that lobe: J^1 alone for ks > 0 (specular), J^20 alone for kd > 0 (diffuse)
+S="--kappa-s 0.1 --kappa-t 0.2 --I0 2 --dsp 5 --theta-s 0.6 --theta-r 1.9 --kd 0.7 --ks 0.3 --n 20"
+expect_usage "fixed-phase J^1 alone, ks > 0" "no fixed-phase J table for the specular lobe" "$NBT_GEN" eval surface $S \
+  --method table --tables "$tmp/j1p.exr"
+expect_usage "fixed-phase J^20 alone, kd > 0" "no fixed-phase J table for the diffuse lobe" "$NBT_GEN" eval surface $S \
+  --method table --tables "$tmp/j20p.exr"
 rm -f "$tmp/j1p.exr" "$tmp/j20p.exr"
 S=$S0; d=$d0
 words 2 "$NBT_GEN" eval surface $S --method table 2>/dev/null; set -- $w
@@ -499,6 +505,11 @@ nt=$(sed -n 's/^# Legendre terms: \([0-9]*\) .*/\1/p' "$tmp/out")
 rm -rf "$tmp/g8" "$tmp/g8.scene" "$tmp/out" "$tmp/err"
 printf 'kappa_t = 0.1\ndistance = 10\ng = 0.5\norders_max = 0\n' >"$tmp/bad.scene"
 expect_usage "orders_max out of range" "orders_max" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+# the lower end itself, 1 (doc/scene-format.md: 1 ... 512), is accepted: a fixed phase needs no orders
+printf 'kappa_t = 0.1\ndistance = 10\nphase = iso\ndiffuse = no\ntol = 1e-2\norders_max = 1\n' >"$tmp/o1.scene"
+"$NBT_GEN" scene "$tmp/o1.scene" -o "$tmp/o1" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/o1/H_iso.exr" ] && ok ||
+  bad "orders_max = 1 accepted: $(cat "$tmp/err")"
+rm -rf "$tmp/o1" "$tmp/o1.scene"
 printf 'kappa_t = 0.1\ndistance = 10\nphase = hg:g=0.8\nfog = thick\n' >"$tmp/bad.scene"
 expect_usage "unknown scene key" "unknown key 'fog'" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 printf 'kappa_t = -0.1\ndistance = 10\nphase = iso\n' >"$tmp/bad.scene"
@@ -506,6 +517,10 @@ expect_usage "negative kappa_t" "kappa_t" "$NBT_GEN" scene "$tmp/bad.scene" -o "
 printf 'kappa_t = 0.1\ndistance = 10\n' >"$tmp/bad.scene"
 expect_usage "no phase" "exactly one of g" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
 [ ! -e "$tmp/scene2" ] && ok || bad "rejected scene left output"
+# a bad g refuses the scene at its own line, naming it, even with the keys that follow it valid
+printf 'kappa_t = 0.1\nphase = iso\ng = 1.5\ndistance = 10\n' >"$tmp/bad.scene"
+expect_usage "g = 1.5 in a scene" "bad.scene:3: g: '1.5' is not accepted" "$NBT_GEN" scene "$tmp/bad.scene" -o "$tmp/scene2"
+[ ! -e "$tmp/scene2" ] && ok || bad "scene with g = 1.5 left output"
 # an extinction range may start at 0 (clear air somewhere in the scene); only its top must be > 0
 printf 'kappa_t = 0:0.05\ndistance = 30\nphase = hg:g=0.8\ndiffuse = no\ntol = 0.01\n' >"$tmp/kt0.scene"
 "$NBT_GEN" scene "$tmp/kt0.scene" -o "$tmp/scene0" --quiet >/dev/null 2>"$tmp/err" && [ -s "$tmp/scene0/H_hg_g_0.8.exr" ] &&
@@ -603,6 +618,20 @@ words 2 "$NBT_GEN" eval surface --g 0.21 $sg --method direct 2>/dev/null; set --
 awk -v t="$1" -v e="$2" -v d="$3" -v de="$4" 'BEGIN { x = t - d; exit !(e > 0 && (x < 0 ? -x : x) <= e + de) }' &&
   ok || bad "eval surface from a g-sliced J table at g 0.21 within its bound of direct: $*"
 rm -f "$tmp/gjs.exr"
+# a g-sliced J table (form log_et: ln(e^T J), its max interp err already relative) is judged by that error
+# itself: at tol 5e-3 it reaches 5.4e-3 (info), a miss (exit 1, nothing written; a warning with
+# --allow-tol-miss). Divided once more by max |ln(e^T J)| (3.1 here) it would pass as 1.7e-3.
+"$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 5e-3 --n 1 -o "$tmp/gjm.exr" --quiet --no-preview \
+  --allow-tol-miss >/dev/null 2>"$tmp/err"
+e=$("$NBT_GEN" info "$tmp/gjm.exr" 2>/dev/null | sed -n 's/^channel R .*max interp err \([0-9.e+-]*\)$/\1/p')
+awk -v e="$e" 'BEGIN { exit !(e > 5e-3) }' && grep -q "warning: the g-sliced J table's recorded lookup error is $(
+  printf '%.2e' "$e"), above tol 5.00e-03" "$tmp/err" && ok ||
+  bad "g-sliced J at tol 5e-3: a miss of its recorded error $e warned: $(cat "$tmp/err")"
+rm -f "$tmp/gjm.exr"
+"$NBT_GEN" surface --g -0.4:0.5 --basis slices --tol 5e-3 --n 1 -o "$tmp/gjm.exr" --quiet --no-preview >/dev/null \
+  2>"$tmp/err"; rc=$?
+[ $rc -eq 1 ] && [ ! -e "$tmp/gjm.exr" ] && grep -q "error: the g-sliced J table's recorded lookup error" "$tmp/err" &&
+  ok || bad "g-sliced J missing tol 5e-3 refused: rc=$rc, $(cat "$tmp/err")"
 expect_usage "eval --tables: H table for surface" "eval surface takes J tables" "$NBT_GEN" eval surface --g 0.2 --kappa-s 0.3 --kappa-t 0.5 --I0 2 --dsp 3 --theta-s 0.5 --theta-r 0.5 --kd 0.5 --ks 0 --n 1 --method table --tables "$tmp/gs.exr"
 expect_usage "eval --tables: missing file" "nofile.exr" "$NBT_GEN" eval airlight --g 0.2 $geo --method table --tables "$tmp/nofile.exr"
 expect_usage "eval --tables: g-sliced with --phase" "run-time asymmetry with --g" "$NBT_GEN" eval airlight --phase iso $geo --method table --tables "$tmp/gs.exr"

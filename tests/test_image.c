@@ -1062,6 +1062,13 @@ static void test_overscan(void)
     t_true(c && nbt_image_copy_meta(c, im) == NBT_OK && c->x0 == X0 && c->nchannels == 3 &&
                nbt_image_attr_count(c) == 11 && nbt_image_copy_meta(c2, im) == NBT_EINVAL,
            "copy_meta: same size copied, other size refused");
+    /* one side differing is enough: the channel data copied are w x h of the source */
+    nbt_image *cw = nbt_image_alloc((size_t)w, (size_t)h + 1, 0), *cx = nbt_image_alloc((size_t)w - 1, (size_t)h, 0);
+    t_true(cw && cx && nbt_image_copy_meta(cw, im) == NBT_EINVAL && nbt_image_copy_meta(cx, im) == NBT_EINVAL &&
+               cw->nchannels == 0 && cx->nchannels == 0,
+           "copy_meta: 45 x 32 and 44 x 31 refused for a 45 x 31 source, nothing copied");
+    nbt_image_free(cw);
+    nbt_image_free(cx);
     if (c) {
         memcpy(c->rgb, im->rgb, n * 3 * sizeof(float));
         memset(&wo, 0, sizeof wo);

@@ -81,6 +81,11 @@ for c in 0 1; do
   "$S" "$tmp/lamp$c.exr" -o "$tmp/lamp$c-b.exr" $M0 --method ref-b --no-png --compare "$tmp/lamp$c-a.exr" \
     2>/dev/null >"$tmp/lamp$c.cmp" || bad "lamp$c --compare"
 done
+# --compare refuses a reference made from another input (nbt.input hashes every channel and the depth):
+# the grey frame differs from lamp1 only in one pixel's G
+"$MK" "$tmp/grey.exr" grey || bad "grey frame"
+expect_usage "compare refuses an input that differs only in G" "nbt.input" "$S" "$tmp/grey.exr" -o "$tmp/x.exr" $M0 \
+  --method ref-b --no-png --compare "$tmp/lamp1-a.exr"
 words S.R:2 "$MK" "$tmp/lamp0-a.exr" mean S; sr=${w#* }; words S.G:2 "$MK" "$tmp/lamp1-a.exr" mean S; sg=${w#* }
 awk -v a="$sr" -v b="$sg" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a > 1 && d <= 1e-6 * a) }' && ok ||
   bad "red lamp's S.R $sr = green lamp's S.G $sg"
@@ -169,6 +174,14 @@ words 1 "${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 13 5 1 1 "$tmp/gr-out.png
 awk -v g="$lg" -v r="$lr" 'BEGIN { v = 0.18 / 0.7152; v = v / (1 + v); e = 255 * (1.055 * exp(log(v) / 2.4) - 0.055)
   dg = g / 0.587 - e; dr = r / 0.299 - e; exit !(dg * dg <= 1.01 && dr * dr <= 1.01) }' && ok ||
   bad "preview tone map: green pixel luma $lg, red $lr (0.587 and 0.299 x 124 expected)"
+# an all-red frame: its median luminance is red's 0.2126, so R = 255 sRGB(v / (1 + v)), v = 0.18 / 0.2126
+# (180); a luminance that read R from another pixel's channel gave the median 0 and exposure 1 (188)
+"$MK" "$tmp/red.exr" red && "$S" "$tmp/red.exr" -o "$tmp/red-out.exr" --fov-y 35 --sigma-t 1e-9 --albedo 0 --B 0.01 \
+  --depth ray --method ref-a 2>/dev/null || bad "all-red run"
+words 1 "${NBT_PNGCHECK:-./tests/pngcheck}" --max-luma 7 5 1 1 "$tmp/red-out.png"; lr=$w
+awk -v r="$lr" 'BEGIN { v = 0.18 / 0.2126; v = v / (1 + v); e = 255 * (1.055 * exp(log(v) / 2.4) - 0.055)
+  dr = r / 0.299 - e; exit !(dr * dr <= 1.01) }' && ok ||
+  bad "preview tone map: all-red frame, red pixel luma $lr (0.299 x 180 expected)"
 # --display-window X0,Y0,X1,Y1 (inclusive) makes the frame: 12 x 10 of the 16 x 12 render, as its preview shows
 "$S" "$tmp/lamp0.exr" -o "$tmp/dw.exr" $M --display-window 2,1,13,10 2>/dev/null &&
   [ "$("${NBT_PNGCHECK:-./tests/pngcheck}" "$tmp/dw.png")" = "12 10" ] && ok || bad "--display-window 2,1,13,10: a 12x10 frame"

@@ -65,13 +65,17 @@ words relL1:16 "$S" "$tmp/l.exr" -o "$tmp/rf.exr" --fov-y 40 $R --phase hg:g=0.8
   --compare "$tmp/rp.exr" 2>/dev/null; line=$w
 within_ref "rgb medium vs path" 0.03 "$line"
 # the direct part per channel: the T layer's mean over the 56x40 frame against exp(-sigma_c Z sqrt(1 + u^2 + v^2)),
-# Z = 6, pixel angle from the frame's height (from its width would be 29% off in u, v)
-"$MK" "$tmp/rf.exr" mean T >"$tmp/T" || bad "mean of the T layer"
-for c in R:0.4 G:0.3 B:0.15; do
-  want=$(awk -v s="${c#*:}" 'BEGIN { dt = 2 * sin(20 * atan2(1, 1) / 45) / cos(20 * atan2(1, 1) / 45) / 40; m = 0
-    for (y = 0; y < 40; y++) for (x = 0; x < 56; x++) { u = (x + 0.5 - 28) * dt; v = (y + 0.5 - 20) * dt
-      m += exp(-s * 6 * sqrt(1 + u * u + v * v)) } printf "%.9g", m / (56 * 40) }')
-  close "$(awk -v n="T.${c%%:*}" '$1 == n { print $2 }' "$tmp/T")" "$want" 1e-6 "T.${c%%:*}: the direct part of an RGB medium"
+# Z = 6, pixel angle from the frame's height (from its width would be 29% off in u, v); the same for the
+# path tracer's output (rp), whose T layer once came from an array only the screen-space methods fill
+for f in rf rp; do
+  "$MK" "$tmp/$f.exr" mean T >"$tmp/T" || bad "mean of the T layer ($f)"
+  for c in R:0.4 G:0.3 B:0.15; do
+    want=$(awk -v s="${c#*:}" 'BEGIN { dt = 2 * sin(20 * atan2(1, 1) / 45) / cos(20 * atan2(1, 1) / 45) / 40; m = 0
+      for (y = 0; y < 40; y++) for (x = 0; x < 56; x++) { u = (x + 0.5 - 28) * dt; v = (y + 0.5 - 20) * dt
+        m += exp(-s * 6 * sqrt(1 + u * u + v * v)) } printf "%.9g", m / (56 * 40) }')
+    close "$(awk -v n="T.${c%%:*}" '$1 == n { print $2 }' "$tmp/T")" "$want" 1e-6 \
+      "T.${c%%:*}: the direct part of an RGB medium ($f.exr)"
+  done
 done
 # a grey run is not the RGB one: the reference's attributes say so
 expect_usage "compare refuses another medium" "nbt.sigma_t" "$S" "$tmp/l.exr" -o "$tmp/x.exr" $H --compare "$tmp/rp.exr"
@@ -127,6 +131,11 @@ expect_usage "negative colour" "-1e+06 at pixel (2, 7) channel B" "$S" "$tmp/neg
 expect_usage "output not .exr" "must end in .exr" "$S" "$tmp/l.exr" -o "$tmp/x.png" $H
 expect_usage "output is the input" "is the input render" "$S" "$tmp/l.exr" -o "$tmp/l.exr" $H
 expect_usage "spp without path" "--spp and --noise belong to --method path" "$S" "$tmp/l.exr" -o "$o" $H --spp 5
+# three phases, one per channel: the header's nbt.phase names them in R;G;B order (--compare checks it)
+"$S" "$tmp/l16.exr" -o "$tmp/p3.exr" --fov-y 40 --sigma-t 0.3 --albedo 0.9 --phase hg:g=0.3 --phase hg:g=0.5 \
+  --phase hg:g=0.7 --method ref-a --threads 2 --no-png --extend 0 2>/dev/null &&
+  LC_ALL=C grep -aq 'nbt\.phase.string.....hg:g=0\.3;hg:g=0\.5;hg:g=0\.7' "$tmp/p3.exr" && ok ||
+  bad "nbt.phase of three phases: $(LC_ALL=C grep -ao 'hg:g=[0-9.;hg:=]*' "$tmp/p3.exr" | head -n 1)"
 # the path tracer samples one phase: three that differ in R only (G = B) are refused too, not traced with G's
 expect_usage "path with R's phase apart" "one phase for all channels" "$S" "$tmp/l.exr" -o "$o" --fov-y 40 --sigma-t 0.3 \
   --albedo 0.95 --phase hg:g=0.5 --phase hg:g=0.9 --phase hg:g=0.9 --method path --threads 2 --no-png --spp 2

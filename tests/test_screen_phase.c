@@ -428,7 +428,7 @@ static void test_mc_albedos(void)
     t_true(nbt_mc_kernel_run(&cfg, &r1) == NBT_OK, "mc kernel run, albedo 0.6 alone");
     if (r3 && r1) {
         size_t nb = r3->nbins, same = 1;
-        double worst = 0;
+        double worst = 0, worst_se = 0, worst_b = 0, N = 20000;
         for (size_t j = 0; j < 2; j++)
             for (size_t o = 0; o < 2; o++)
                 for (size_t b = 0; b < nb; b++) {
@@ -436,10 +436,22 @@ static void test_mc_albedos(void)
                     for (size_t k = 1; o == 0 && k < 3; k++) {
                         double m1 = r3->mass[((j * 3 + 0) * 2 + 0) * nb + b], mk = r3->mass[((j * 3 + k) * 2 + 0) * nb + b];
                         worst = fmax(worst, fabs(mk - alb2[k] * m1) / fmax(m1, 1e-300));
+                        /* each photon's first-order tally at albedo a is a times its tally at albedo 1,
+                         * so the standard error scales by a too */
+                        double s1 = r3->mass_se[((j * 3 + 0) * 2 + 0) * nb + b], sk = r3->mass_se[((j * 3 + k) * 2 + 0) * nb + b];
+                        worst_se = fmax(worst_se, fabs(sk - alb2[k] * s1) / fmax(s1, 1e-300));
+                    }
+                    if (o == 0) { /* at albedo 1 a photon adds 0 or 1 to a first-order cell: Bernoulli */
+                        double m1 = r3->mass[((j * 3 + 0) * 2 + 0) * nb + b], s1 = r3->mass_se[((j * 3 + 0) * 2 + 0) * nb + b];
+                        worst_b = fmax(worst_b, fabs(s1 - sqrt(m1 * (1 - m1) / (N - 1))) / fmax(s1, 1e-300));
                     }
                 }
         t_true(same, "albedo 0.6 among three = albedo 0.6 alone, bit for bit (same seed and order cap)");
         t_true(worst < 1e-12, "first order at albedo a = a x first order at albedo 1 (worst %.2g)", worst);
+        /* rounding of 20000-term sums: ~1e-12 relative in a variance, the SE's square root halves it */
+        t_true(worst_se < 1e-9, "first-order standard error at albedo a = a x at albedo 1 (worst %.2g)", worst_se);
+        t_true(worst_b < 1e-9, "first-order standard error at albedo 1 = sqrt(m (1 - m) / (N - 1)) (worst %.2g)",
+               worst_b);
     }
     nbt_mc_kernel_result_free(r3);
     nbt_mc_kernel_result_free(r1);
