@@ -5,32 +5,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <nbt/gslice.h>
 #include <nbt/plan.h>
 #include "internal.h"
 #include "gslice_tail.h"
 #include "gslice_j.h"
 
-static double cpu_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
 /* a predicted wall time as the CPU time it stands for, by the CPU/wall
  * ratio of the planning that measured it (its proxy builds) */
 static double as_cpu(double pred_wall, double cpu, double wall)
 {
     return cpu > 0 && wall > 0 ? pred_wall * cpu / wall : pred_wall;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 int nbt_table_is_gslice(const nbt_table *t)
@@ -391,15 +376,15 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     nbt_axis p0 = out->axis[0], p1 = out->axis[1];
     p0.n = p1.n = 33;
     nbt_table *proxy;
-    double tp = now_s();
+    double tp = nbt__now_s();
     nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, NULL, &proxy);
-    tp = now_s() - tp;
+    tp = nbt__now_s() - tp;
     nbt_table_free(proxy);
     if (st != NBT_OK)
         return nbt__failf(err, errlen, st, "g-sliced table: the proxy build failed: %s", nbt_strerror(st));
     out->pred_seconds = tp * (double)n0 * (double)n1 * (double)ng / (33.0 * 33.0 * 3.0);
     out->bytes = (double)n0 * (double)n1 * (double)ng * (H ? 2.0 : 1.0) * (r->half ? 2.0 : 4.0);
-    out->plan_seconds = now_s() - t0;
+    out->plan_seconds = nbt__now_s() - t0;
     return NBT_OK;
 }
 
@@ -408,7 +393,7 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
 {
     memset(out, 0, sizeof *out);
     out->req = *r;
-    double t0 = now_s();
+    double t0 = nbt__now_s();
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
@@ -453,13 +438,13 @@ static nbt_status build_gc(const nbt_gslice_request *r, unsigned nthreads, nbt__
                            double *seconds, char *err, size_t errlen)
 {
     *out = NULL;
-    double t0 = now_s();
+    double t0 = nbt__now_s();
     nbt_gslice_plan_t p;
     nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
     if (st == NBT_OK)
         st = execute(&p, nthreads, gc, out, err, errlen);
     if (seconds)
-        *seconds = now_s() - t0;
+        *seconds = nbt__now_s() - t0;
     return st;
 }
 
@@ -593,11 +578,11 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
             nbt_plan_request q = {r->kind, r->kind == NBT_TABLE_J ? r->n : 0, leg.nterms, NULL, r->xmax,
                                   leg.table_tol, {0, 0}, r->half, 0};
             nbt_plan *plan = NULL;
-            double w0 = now_s(), c0 = cpu_s();
+            double w0 = nbt__now_s(), c0 = nbt__cpu_s();
             if ((st = nbt_plan_tables(&q, 1, nthreads, &plan, err, errlen)) != NBT_OK)
                 return st;
-            leg_wall = now_s() - w0;
-            leg_cpu = cpu_s() - c0;
+            leg_wall = nbt__now_s() - w0;
+            leg_cpu = nbt__cpu_s() - c0;
             const nbt_plan_set *ps = nbt_plan_get(plan, 0);
             out->leg_seconds = ps->pred_seconds;
             out->leg_err = ps->pred_err;
@@ -609,11 +594,11 @@ nbt_status nbt_basis_choose(const nbt_gslice_request *r, size_t orders_max, nbt_
     }
     if (want != NBT_BASIS_LEGENDRE) {
         nbt_gslice_plan_t p;
-        double w0 = now_s(), c0 = cpu_s();
+        double w0 = nbt__now_s(), c0 = nbt__cpu_s();
         if ((st = nbt_gslice_plan(r, nthreads, &p, err, errlen)) != NBT_OK)
             return st;
-        sl_wall = now_s() - w0;
-        sl_cpu = cpu_s() - c0;
+        sl_wall = nbt__now_s() - w0;
+        sl_cpu = nbt__cpu_s() - c0;
         out->sl_seconds = p.pred_seconds;
         out->sl_bytes = p.bytes;
         out->sl_err = p.pred_err;

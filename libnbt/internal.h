@@ -30,6 +30,11 @@ nbt_status nbt__failv(nbt_status s, const char *fmt, ...) __attribute__((format(
 
 /* Format a one-line reason into err (if given) and return st; no handler
  * (the planners' errors go to the caller's buffer). Defined in plan.c. */
+/* Wall-clock seconds (monotonic) and the process's CPU seconds, all threads
+ * (the work, whatever else runs on the machine); defined in plan.c. */
+double nbt__now_s(void);
+double nbt__cpu_s(void);
+
 nbt_status nbt__failf(char *err, size_t errlen, nbt_status st, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 

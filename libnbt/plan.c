@@ -26,15 +26,14 @@ struct nbt_plan {
  * the default scene's builds ~10 MB; past the cap rows are recomputed. */
 #define JCACHE_BYTES ((size_t)64 << 20)
 
-static double now_s(void)
+double nbt__now_s(void)
 {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* CPU time of the process, all threads (the work, whatever else runs on the machine) */
-static double cpu_s(void)
+double nbt__cpu_s(void)
 {
     struct timespec t;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
@@ -406,10 +405,10 @@ static nbt_status plan_set(const nbt_plan_request *r, unsigned nthreads, nbt__jc
             break;
         nbt_table **t = cache + q * NBT_PLAN_MAX_PACKS;
         nbt_axis a0 = make_axis(r, 0, pn[q]), a1 = make_axis(r, 1, pn[q]);
-        double t0 = now_s(), c0 = cpu_s();
+        double t0 = nbt__now_s(), c0 = nbt__cpu_s();
         nbt_status st = build_packs(r, ps->npacks, &a0, &a1, QUAD_TOL, nthreads, gc, t);
-        secs[q] = now_s() - t0;
-        cpu[q] = cpu_s() - c0;
+        secs[q] = nbt__now_s() - t0;
+        cpu[q] = nbt__cpu_s() - c0;
         if (st != NBT_OK)
             return st;
         e[q] = set_error(t, ps->npacks);
@@ -613,7 +612,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
     const nbt_plan_set *ps = &p->sets[i];
     const nbt_plan_request *r = &ps->req;
     nbt_axis a0 = ps->axis[0], a1 = ps->axis[1];
-    double t0 = now_s(), prev_err = 0;
+    double t0 = nbt__now_s(), prev_err = 0;
     size_t prev_n = 0;
     for (;;) {
         nbt_status st = NBT_OK;
@@ -668,7 +667,7 @@ nbt_status nbt_plan_execute(const nbt_plan *p, size_t i, nbt_tableset *out, char
         nbt_tableset_free(out);
         a0.n = a1.n = next;
     }
-    out->seconds = now_s() - t0;
+    out->seconds = nbt__now_s() - t0;
     return NBT_OK;
 }
 
