@@ -47,6 +47,8 @@ fi
 
 status=0
 make -j"$jobs" check || status=$?
+# a failing program's failed checks (CI shows only the end of the output)
+[ $status -eq 0 ] || grep -H "^FAIL: " tests/*.log examples/*.log 2>/dev/null | head -40
 # one plain line over all test programs (each prints "N passed, M failed")
 cat tests/*.log 2>/dev/null | awk '/^[0-9]+ passed, [0-9]+ failed$/ { p += $1; f += $3 }
   END { printf "%d passed, %d failed\n", p, f }'

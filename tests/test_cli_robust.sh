@@ -64,38 +64,47 @@ fi
 # ---- a signal during a multi-file write removes the run's files: the
 # temporaries (PATH.tmpPID) and the finished files of the set and of the
 # sets before it, and the directory the run created; the exit is by the signal.
-# wait_for COND PID: poll (50 ms, at most 60 s) until the shell test COND holds
+# The moment is fixed by a FIFO in place of one temporary: the writer's open
+# blocks on it (no reader), so the run waits there, whatever the machine's speed.
+# wait_for COND PID: poll (10 ms, at most 60 s) until the shell test COND holds
 wait_for() {
   i=0
-  while [ $i -lt 1200 ] && kill -0 "$2" 2>/dev/null; do
+  while [ $i -lt 6000 ] && kill -0 "$2" 2>/dev/null; do
     if eval "$1"; then return 0; fi
-    sleep 0.05; i=$((i + 1))
+    sleep 0.01; i=$((i + 1))
   done
   return 1
 }
-# (1) between sets: set 1 (H) written, set 2 (J^20) being built
+# (1) set 1 (H) written, set 2 (J^20) blocked on its first file. The run creates
+# the directory, so the FIFO goes in as soon as it appears (set 1's build, its
+# writing and set 2's build, ~1 s, are the margin).
 printf 'kappa_t = 0.5\ndistance = 20\ng = 0:0.5\nbasis = legendre\ndiffuse = no\nphong = 20\ntol = 1e-3\n' >"$tmp/sig.scene"
 "$NBT_GEN" scene "$tmp/sig.scene" -o "$tmp/sig" >"$tmp/sig.out" 2>"$tmp/sig.err" &
 pid=$!
-if wait_for '[ -s "$tmp/sig/H_k0-3.png" ] && grep -q "set 2/2 J20: building" "$tmp/sig.err"' $pid; then
+if wait_for '[ -d "$tmp/sig" ]' $pid && mkfifo "$tmp/sig/J20_k0-3.exr.tmp$pid" &&
+  wait_for '[ -s "$tmp/sig/H_k0-3.png" ] && [ "$(grep -c "writing 8 file" "$tmp/sig.err")" -eq 2 ] && [ -s "$tmp/sig/J20_k4-7.png" ]' $pid; then
   kill -TERM $pid; wait $pid; rc=$?
   [ $rc -eq 143 ] && [ ! -e "$tmp/sig" ] && grep -q "interrupted: the files of this run were removed" "$tmp/sig.err" && ok ||
     bad "SIGTERM between sets: rc=$rc, left: $(ls "$tmp/sig" 2>&1 | tr '\n' ' ')"
 else
-  wait $pid; bad "SIGTERM between sets: the moment was missed: $(cat "$tmp/sig.err")"
+  kill -TERM $pid 2>/dev/null; wait $pid; bad "SIGTERM between sets: the FIFO came too late: $(cat "$tmp/sig.err")"
 fi
-# (2) while writing: some of a 16-file set finished, others still temporaries; the
-# directory existed before, so it stays (empty)
+# (2) a 16-file set: the fifth file's temporary is a FIFO made before nbt-gen
+# starts (exec keeps the shell's PID); the other writers (one per CPU) finish the
+# other 15 (with one CPU: the four before it), then the signal. The directory
+# existed before, so it stays (empty).
 mkdir "$tmp/sigw"
-"$NBT_GEN" airlight --kmax 63 --size 385x385 --max 4 -o "$tmp/sigw/h.exr" >"$tmp/sig.out" 2>"$tmp/sig.err" &
+[ "$(getconf _NPROCESSORS_ONLN)" -ge 2 ] && nexr=15 npng=16 || nexr=4 npng=4
+sh -c 'mkfifo "$1/h_k16-19.exr.tmp$$" && shift && exec "$@"' sh "$tmp/sigw" \
+  "$NBT_GEN" airlight --kmax 63 --size 385x385 --max 4 -o "$tmp/sigw/h.exr" >"$tmp/sig.out" 2>"$tmp/sig.err" &
 pid=$!
-if wait_for 'ls "$tmp/sigw" | grep -q "[.]tmp[0-9]" && ls "$tmp/sigw" | grep -q "[.]exr\$"' $pid; then
-  seen=$(ls "$tmp/sigw" | tr '\n' ' ')
+if wait_for '[ "$(ls "$tmp/sigw" | grep -c "[.]exr\$")" -eq $nexr ] && [ "$(ls "$tmp/sigw" | grep -c "[.]png\$")" -eq $npng ]' $pid; then
+  seen=$(ls "$tmp/sigw" | wc -l)
   kill -TERM $pid; wait $pid; rc=$?
   [ $rc -eq 143 ] && [ -d "$tmp/sigw" ] && [ -z "$(ls -A "$tmp/sigw")" ] && ok ||
-    bad "SIGTERM while writing: rc=$rc, seen: $seen, left: $(ls -A "$tmp/sigw" | tr '\n' ' ')"
+    bad "SIGTERM while writing: rc=$rc, $seen files seen, left: $(ls -A "$tmp/sigw" | tr '\n' ' ')"
 else
-  wait $pid; bad "SIGTERM while writing: the moment was missed: $(cat "$tmp/sig.err"), $(ls "$tmp/sigw" | wc -l) files"
+  kill -TERM $pid 2>/dev/null; wait $pid; bad "SIGTERM while writing: the run did not stop at the FIFO: $(cat "$tmp/sig.err"), $(ls "$tmp/sigw" | tr '\n' ' ')"
 fi
 
 # ---- eval psi --model fitted: no per-point bound, so the error column is nan (it
