@@ -292,7 +292,7 @@ int cmd_kernel(int argc, char **argv)
     fo.covariance = 1;
     int o;
     optind = 1;
-    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((o = getopt_long_only(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (o) {
         case 'o': out = optarg; break;
         case 'a': albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); break;
@@ -331,7 +331,7 @@ int cmd_kernel(int argc, char **argv)
         case 'A': apply = optarg; break;
         case 'T': strict = 1; break;
         case 'h': help(); return 0;
-        default: die_usage("see 'nbt-fit kernel --help'");
+        default: die_bad_option(o, argv, "nbt-fit kernel");
         }
     }
     size_t nruns = (size_t)(argc - optind);

@@ -193,7 +193,7 @@ int cmd_mc(int argc, char **argv)
     int have[4] = {0}, gpu = 0, quiet = 0;
     int o;
     optind = 1;
-    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((o = getopt_long_only(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (o) {
         case 'a': c.albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); have[0] = 1; break;
         case 's': c.sigma_t = opt_double("--sigma-t", optarg, 0, 1, 1e12, 0); have[1] = 1; break;
@@ -222,7 +222,7 @@ int cmd_mc(int argc, char **argv)
         case 'q': quiet = 1; break;
         case 'o': out = optarg; break;
         case 'h': help(); return 0;
-        default: die_usage("see 'nbt-fit mc --help'");
+        default: die_bad_option(o, argv, "nbt-fit mc");
         }
     }
     if (optind < argc)

@@ -355,7 +355,7 @@ int cmd_model(int argc, char **argv)
     double albedo = NAN, sigma_t = NAN, B = NAN, ridge = 1e-3;
     int infinite = 0, strict = 0, o;
     optind = 1;
-    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((o = getopt_long_only(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (o) {
         case 'o': out = optarg; break;
         case 'a': albedo = opt_double("--albedo", optarg, 0, 0, 1, 0); break;
@@ -367,7 +367,7 @@ int cmd_model(int argc, char **argv)
         case 'T': strict = 1; break;
         case 'd': density = optarg; break;
         case 'h': help(); return 0;
-        default: die_usage("see 'nbt-fit model --help'");
+        default: die_bad_option(o, argv, "nbt-fit model");
         }
     }
     size_t nruns = (size_t)(argc - optind);

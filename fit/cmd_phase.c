@@ -226,7 +226,7 @@ int cmd_phase(int argc, char **argv)
     int K = 0, o, strict = 0;
     double tol = 0.01;
     optind = 1;
-    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((o = getopt_long_only(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (o) {
         case 't': target = optarg; break;
         case 'k': K = (int)opt_long("--terms", optarg, 1, MAXK); break;
@@ -235,7 +235,7 @@ int cmd_phase(int argc, char **argv)
         case 'T': strict = 1; break;
         case 'e': tol = opt_double("--tol", optarg, 0, 1, 1, 1); break;
         case 'h': help(); return 0;
-        default: die_usage("see 'nbt-fit phase --help'");
+        default: die_bad_option(o, argv, "nbt-fit phase");
         }
     }
     if (optind < argc)

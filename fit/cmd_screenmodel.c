@@ -116,7 +116,7 @@ int cmd_screenmodel(int argc, char **argv)
     double photons = 1e6;
     long seed = -1, threads = 0;
     int c;
-    while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:h", lo, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
         case 'p': spec = optarg; break;
@@ -136,7 +136,7 @@ int cmd_screenmodel(int argc, char **argv)
         case 'c': check = optarg; break;
         case 'q': quiet = 1; break;
         case 'h': help(); return 0;
-        default: die_usage("see 'nbt-fit screenmodel --help'");
+        default: die_bad_option(c, argv, "nbt-fit screenmodel");
         }
     }
     if (optind != argc)

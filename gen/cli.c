@@ -1,5 +1,6 @@
 /* gen/cli.c: argument checking and fatal errors for nbt-gen and nbt-fit. */
 #include <config.h>
+#include <getopt.h>
 #include <errno.h>
 #include <libgen.h>
 #include <math.h>
@@ -27,6 +28,20 @@ void die_usage(const char *fmt, ...)
     vmsg(fmt, ap);
     va_end(ap);
     exit(EXIT_USAGE);
+}
+
+void die_bad_option(int c, char *const argv[], const char *cmd)
+{
+    /* what the user typed: the argument getopt just passed (a missing value is
+     * always the last one; "--flag=1" is refused whole, as is an ambiguous
+     * prefix); an unknown letter in a group of short options is optopt (glibc
+     * leaves optopt 0 for an unknown long option) */
+    const char *a = optind > 0 ? argv[optind - 1] : "?";
+    if (c == ':')
+        die_usage("%s needs a value (see '%s --help')", a, cmd);
+    if (optopt > ' ' && optopt < 127 && strncmp(a, "--", 2) != 0)
+        die_usage("unknown option '-%c' (see '%s --help')", optopt, cmd);
+    die_usage("unknown option '%s' (see '%s --help')", a, cmd);
 }
 
 void die(const char *fmt, ...)

@@ -13,6 +13,10 @@ extern const char *cli_prog;
 
 _Noreturn void die_usage(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 _Noreturn void die(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* getopt's '?' (an unknown option) or ':' (a missing value), with an optstring
+ * that starts with ':' so getopt itself prints nothing: one line naming the
+ * option and pointing at CMD --help, exit 2. */
+_Noreturn void die_bad_option(int c, char *const argv[], const char *cmd);
 
 /* The parsers without the exit (what opt_* use; fuzzed by tests/fuzz_parsers.c):
  * 0 and *out set on success, -1 otherwise; parse_range returns NULL on

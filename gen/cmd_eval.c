@@ -390,13 +390,13 @@ int cmd_eval(int argc, char **argv)
     args_t a = {{0}};
     int c;
     optind = 2;
-    while ((c = getopt_long_only(argc, argv, "", opts, NULL)) != -1) {
+    while ((c = getopt_long_only(argc, argv, ":", opts, NULL)) != -1) {
         if (c == 'h') {
             eval_help();
             return 0;
         }
         if (c < 0 || c >= O_COUNT)
-            die_usage("see 'nbt-gen eval --help'");
+            die_bad_option(c, argv, "nbt-gen eval");
         a.arg[c] = optarg ? optarg : ""; /* a flag without argument is present as "" */
     }
     /* --tables FILE [FILE ...]: the files after the first are left as operands */

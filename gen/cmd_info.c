@@ -14,7 +14,7 @@ int cmd_info(int argc, char **argv)
     const char *at = NULL;
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
         if (c == 'a')
             at = optarg;
         else if (c == 'h') {
@@ -26,7 +26,7 @@ int cmd_info(int argc, char **argv)
                  "value form.");
             return 0;
         } else
-            die_usage("see 'nbt-gen info --help'");
+            die_bad_option(c, argv, "nbt-gen info");
     }
     if (optind != argc - 1)
         die_usage("info: expected exactly one table file");

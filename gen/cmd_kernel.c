@@ -126,7 +126,7 @@ int cmd_kernel(int argc, char **argv)
     const char *corr_path = NULL, *out = "kernel.exr", *tau_arg = NULL, *alb_arg = NULL;
     int o;
     optind = 1;
-    while ((o = getopt_long_only(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((o = getopt_long_only(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (o) {
         case 'B': B = opt_double("--B", optarg, 0, 1, 1e3, 0); break;
         case 'c': corr_path = optarg; break;
@@ -167,7 +167,7 @@ int cmd_kernel(int argc, char **argv)
                  "the medium; default a beam entering a half-space from vacuum.\n"
                  "  -o FILE.exr    output (default ./kernel.exr), with a PNG preview FILE.png beside it");
             return 0;
-        default: die_usage("see 'nbt-gen kernel --help'");
+        default: die_bad_option(o, argv, "nbt-gen kernel");
         }
     }
     if (optind < argc)

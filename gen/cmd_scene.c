@@ -85,7 +85,7 @@ int cmd_scene(int argc, char **argv)
     unsigned threads = 0;
     int c, quiet = 0, allow_miss = 0;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
         if (c == 'o')
             dir = optarg;
         else if (c == 'q')
@@ -106,7 +106,7 @@ int cmd_scene(int argc, char **argv)
                  "actual time, one warning line when the plan predicts more than 60 s; --quiet: none.");
             return 0;
         } else
-            die_usage("see 'nbt-gen scene --help'");
+            die_bad_option(c, argv, "nbt-gen scene");
     }
     if (optind != argc - 1)
         die_usage("scene: expected exactly one scene file");

@@ -486,6 +486,8 @@ static int slices_or_legendre(const nbt_plan_request *s, double g_lo, double g_h
 int cmd_tables(int argc, char **argv)
 {
     const char *cmd = argv[0];
+    char cmdline[32];
+    snprintf(cmdline, sizeof cmdline, "nbt-gen %s", cmd);
     int surface = !strcmp(cmd, "surface");
     nbt_plan_request s = {surface ? NBT_TABLE_J : NBT_TABLE_H, surface ? 1 : 0, 4, NULL, 10.0, 0, {0, 0}, 0, 0};
     unsigned threads = 0;
@@ -504,7 +506,7 @@ int cmd_tables(int argc, char **argv)
         {"help", no_argument, 0, 'h'},          {0, 0, 0, 0}};
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
         case 's': parse_size(optarg, &s.size[0], &s.size[1]); have_size = 1; break;
@@ -529,7 +531,7 @@ int cmd_tables(int argc, char **argv)
         case 'q': quiet = 1; break;
         case 'A': allow_miss = 1; break;
         case 'h': tables_help(cmd); return 0;
-        default: die_usage("see 'nbt-gen %s --help'", cmd);
+        default: die_bad_option(c, argv, cmdline);
         }
     }
     if (optind < argc)

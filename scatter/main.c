@@ -168,7 +168,7 @@ static int cmd_scene(int argc, char **argv)
     static const struct option lo[] = {{"output", 1, 0, 'o'}, {"size", 1, 0, 's'}, {"overscan", 1, 0, 'v'},
                                        {"help", 0, 0, 'h'}, {0, 0, 0, 0}};
     int c;
-    while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:h", lo, NULL)) != -1) {
         if (c == 'o')
             out = optarg;
         else if (c == 's')
@@ -179,7 +179,7 @@ static int cmd_scene(int argc, char **argv)
             help();
             return 0;
         } else
-            die_usage("see 'nbt-scatter --help'");
+            die_bad_option(c, argv, "nbt-scatter");
     }
     if (optind + 1 != argc)
         die_usage("scene: name one scene: %s", scene_names());
@@ -263,7 +263,7 @@ static void parse(int argc, char **argv, opts *o)
     o->up[1] = 1;
     int c;
     nbt_skernel_kind kk;
-    while ((c = getopt_long(argc, argv, "o:h", lo, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:h", lo, NULL)) != -1) {
         switch (c) {
         case 'o': o->out = optarg; break;
         case O_FOV: o->fov = opt_double("--fov-y", optarg, 0, 1, 180, 1); break;
@@ -365,7 +365,7 @@ static void parse(int argc, char **argv, opts *o)
         case O_CUT: o->cut = opt_double("--cut", optarg, 0, 1, 100, 0); break;
         case O_EPS: o->eps = opt_double("--eps", optarg, 0, 0, 100, 0); break;
         case 'h': help(); exit(0);
-        default: die_usage("see 'nbt-scatter --help'");
+        default: die_bad_option(c, argv, "nbt-scatter");
         }
     }
     if (optind + 1 != argc)
