@@ -109,7 +109,8 @@ static void help(void)
          "                         must hold the camera and every visible surface.\n"
          "  --camera X,Y,Z --look-at X,Y,Z --up X,Y,Z\n"
          "                         the camera in the grid's world (default 0,0,0 looking at 0,0,-1, up 0,1,0)\n"
-         "  --step S               ray-march step in world units (default half a voxel)\n\n"
+         "  --step S               ray-march step in world units (default half a voxel)\n"
+         "                         (--grid, --camera, --look-at, --up, --step: with --density only)\n\n"
          "'scene NAME' writes a generated test render: plane, step, layers, slant, blocks, lamps (a wall\n"
          "with HDR lamps, two just outside the frame); --size WxH of the frame (default 320x240),\n"
          "--overscan F adds F times the width and height on each side as a data window beyond the\n"
@@ -201,6 +202,7 @@ static int cmd_scene(int argc, char **argv)
 
 typedef struct {
     const char *in, *out, *compare, *corr_path, *density, *grid_name, *model_path;
+    const char *grid_opt; /* the first of --camera, --look-at, --up, --grid, --step given: only with --density */
     double fov, tail, step, noise, extend;
     scatter_medium med;
     long spp;
@@ -352,11 +354,14 @@ static void parse(int argc, char **argv, opts *o)
         case O_NOPNG: o->png = 0; break;
         case O_CORR: o->corr_path = optarg; break;
         case O_DENS: o->density = optarg; break;
-        case O_GRID: o->grid_name = optarg; break;
-        case O_CAM: parse_vec3("--camera", optarg, o->cam); break;
-        case O_LOOK: parse_vec3("--look-at", optarg, o->look); break;
-        case O_UP: parse_vec3("--up", optarg, o->up); break;
-        case O_STEP: o->step = opt_double("--step", optarg, 0, 1, 1e30, 0); break;
+        case O_GRID: o->grid_name = optarg; o->grid_opt = o->grid_opt ? o->grid_opt : "--grid"; break;
+        case O_CAM: parse_vec3("--camera", optarg, o->cam); o->grid_opt = o->grid_opt ? o->grid_opt : "--camera"; break;
+        case O_LOOK: parse_vec3("--look-at", optarg, o->look); o->grid_opt = o->grid_opt ? o->grid_opt : "--look-at"; break;
+        case O_UP: parse_vec3("--up", optarg, o->up); o->grid_opt = o->grid_opt ? o->grid_opt : "--up"; break;
+        case O_STEP:
+            o->step = opt_double("--step", optarg, 0, 1, 1e30, 0);
+            o->grid_opt = o->grid_opt ? o->grid_opt : "--step";
+            break;
         case O_QUANT:
             o->quantize = opt_long("--quantize", optarg, 0, 4096);
             if (o->quantize == 1)
@@ -431,6 +436,8 @@ static void parse(int argc, char **argv, opts *o)
     if (o->density && o->method == 2 && o->gl_method == NBT_GLS_ELEK)
         die_usage("--method elek: Elek's W(s) is for homogeneous media, not --density; use --method shinya, naive or "
                   "ref-a");
+    if (o->grid_opt && !o->density)
+        die_usage("%s places or marches a --density grid; without --density it would be ignored", o->grid_opt);
     if (o->density) { /* the camera of the ray march: checked before the input and the grid are read */
         double f[3] = {o->look[0] - o->cam[0], o->look[1] - o->cam[1], o->look[2] - o->cam[2]};
         double cr[3] = {f[1] * o->up[2] - f[2] * o->up[1], f[2] * o->up[0] - f[0] * o->up[2],

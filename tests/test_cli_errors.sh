@@ -342,6 +342,13 @@ E 2 "--look-at 0,0,0 from --camera 0,0,0: the view direction must be non-zero an
 E 2 "--look-at 0,2,0 from --camera 0,1,0: the view direction must be non-zero and not parallel to --up 0,1,0" "$S" none.exr -o "$o/o.exr" $DM --method ref-a --camera 0,1,0 --look-at 0,2,0
 E 2 "none.exr: cannot open" "$S" none.exr -o "$o/o.exr" $DM --method ref-a --camera 0,1,0 --look-at 0,2,0 --up 1,0,0
 [ $gl = 0 ] || E 2 "--method elek: Elek's W(s) is for homogeneous media, not --density" "$S" none.exr -o "$o/o.exr" $DM --method elek
+# the grid's camera and march options without a grid were ignored silently: refused, naming the first given
+HM="--fov-y 40 --sigma-t 0.5 --albedo 0.9 --B 0.01"
+E 2 "--camera places or marches a --density grid; without --density it would be ignored" "$S" in.exr -o "$o/o.exr" $HM --camera 1,2,3 --up 0,0,1
+E 2 "--look-at places or marches" "$S" in.exr -o "$o/o.exr" $HM --look-at 0,0,1
+E 2 "--up places or marches" "$S" in.exr -o "$o/o.exr" $HM --up 1,0,0 --camera 0,0,0
+E 2 "--grid places or marches" "$S" in.exr -o "$o/o.exr" $HM --grid density
+E 2 "--step places or marches" "$S" in.exr -o "$o/o.exr" $HM --step 0.1
 "$MK" c1.raw grid 1 >/dev/null 2>&1 && "$S" scene --size 8x6 --overscan 0.25 -o bo.exr blocks >/dev/null 2>&1 &&
   [ -s c1.raw ] && [ -s bo.exr ] && ok || bad "a density grid (tests/mkexr) and an overscanned render"
 E 2 "--density with an overscanned render (data window larger than the display window): not supported" "$S" bo.exr -o "$o/o.exr" $DM --method ref-a
