@@ -47,10 +47,12 @@ static outputs_file *push(const char *path, int state)
 /* Remove what is not kept. A file being written: its temporary; if that was
  * already gone, the rename may have happened, so the file too (it was
  * about to replace any older one of that name anyway). */
-static void remove_all(void)
+static int remove_all(void)
 {
+    int touched = 0; /* files or directories this run made (removed now) */
     for (outputs_file *f = atomic_load(&head); f; f = f->next) {
         int st = atomic_exchange(&f->state, F_KEPT);
+        touched += st == F_WRITING || st == F_DONE || st == F_FAILED || st == F_DIR;
         if (st == F_WRITING) {
             if (unlink(f->tmp) != 0)
                 unlink(f->path);
@@ -63,14 +65,15 @@ static void remove_all(void)
         else if (st != F_KEPT)
             atomic_store(&f->state, st);
     }
+    return touched;
 }
 
 static void on_signal(int sig)
 {
     atomic_store(&stopping, 1);
-    remove_all();
     static const char msg[] = "nbt-gen: interrupted: the files of this run were removed\n";
-    ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
+    static const char none[] = "nbt-gen: interrupted (no files written yet)\n";
+    ssize_t w = remove_all() ? write(STDERR_FILENO, msg, sizeof msg - 1) : write(STDERR_FILENO, none, sizeof none - 1);
     (void)w;
     signal(sig, SIG_DFL);
     raise(sig); /* the shell sees the signal: exit status 128 + sig */
@@ -78,7 +81,7 @@ static void on_signal(int sig)
 
 static void at_exit(void)
 {
-    remove_all(); /* nothing after outputs_commit */
+    (void)remove_all(); /* nothing after outputs_commit */
 }
 
 void outputs_install(void)

@@ -107,6 +107,18 @@ else
   kill -TERM $pid 2>/dev/null; wait $pid; bad "SIGTERM while writing: the run did not stop at the FIFO: $(cat "$tmp/sig.err"), $(ls "$tmp/sigw" | tr '\n' ' ')"
 fi
 
+# (3) before any file: the message says nothing was written (it said "the files
+# of this run were removed" also for a run that had none)
+"$NBT_GEN" airlight --kmax 15 --size 4096x4096 -o "$tmp/sigw/big.exr" >"$tmp/sig.out" 2>"$tmp/sig.err" &
+pid=$!
+if wait_for 'grep -q "building" "$tmp/sig.err"' $pid; then
+  kill -TERM $pid; wait $pid; rc=$?
+  [ $rc -eq 143 ] && [ "$(tail -n 1 "$tmp/sig.err")" = "nbt-gen: interrupted (no files written yet)" ] &&
+    [ -z "$(ls -A "$tmp/sigw")" ] && ok || bad "SIGTERM while building: rc=$rc, $(cat "$tmp/sig.err"), left: $(ls -A "$tmp/sigw")"
+else
+  kill -TERM $pid 2>/dev/null; wait $pid; bad "SIGTERM while building: no progress line: $(cat "$tmp/sig.err")"
+fi
+
 # ---- eval psi --model fitted: no per-point bound, so the error column is nan (it
 # was 0); outside the fitted tau range (the default model's is [0.5, 10]) the
 # value is called an extrapolation
