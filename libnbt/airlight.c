@@ -281,11 +281,15 @@ static nbt_status ray_integral(ray_ctx *c, double dvp, double tol, double *val, 
     if (c->t > 0 && c->t < end)
         pts[np++] = c->t;
     nbt_status st = nbt_quad_gk_pts(ws, ray_f, c, 1, 0.0, end, pts, np, 0.0, tol, val, err);
-    if (st == NBT_OK && isinf(dvp)) {
+    /* the tail beyond `end` also when the first part missed tol (NBT_ETOL):
+     * without it the value lacked the tail and its error said nothing of it */
+    if ((st == NBT_OK || st == NBT_ETOL) && isinf(dvp)) {
         double v2, e2;
         c->x0 = end;
         c->L = c->dsv;
-        st = nbt_quad_gk(ws, ray_tail_f, c, 1, 0.0, 1.0, 0.0, tol, &v2, &e2);
+        nbt_status s2 = nbt_quad_gk(ws, ray_tail_f, c, 1, 0.0, 1.0, 0.0, tol, &v2, &e2);
+        if (st == NBT_OK || s2 != NBT_ETOL)
+            st = s2;
         *val += v2;
         *err += e2;
     }
