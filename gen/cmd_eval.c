@@ -59,9 +59,10 @@ static void eval_help(void)
          "                error column is nan (no per-point bound; measured errors: doc/fit.md)\n\n"
          "Prints the value and its estimated absolute error, 17 significant digits.\n"
          "A density FILE has lines 'z rho': layers from z (first 0) with density rho >= 0.\n"
-         "--tol (default 1e-8) bounds the quadrature error; 'series' adds Legendre terms\n"
-         "until the series changes by less than tol relative (unless --terms); 'table' builds\n"
-         "tables at 1e-3 relative interpolation error and reports their recorded error.\n"
+         "--tol (default 1e-8; 1e-15..0.1, for J and surface 1e-12..0.1) bounds the quadrature\n"
+         "error; 'series' adds Legendre terms until the series changes by less than tol\n"
+         "relative (unless --terms); 'table' builds tables at 1e-3 relative interpolation\n"
+         "error and reports their recorded error.\n"
          "Angles in radians, distances in scene units, coefficients in 1/length.");
 }
 
@@ -179,10 +180,30 @@ static nbt_status series_auto(const phys_t *ph, const nbt_phase *p, size_t fixed
     return st;
 }
 
+/* --tol (default 1e-8). J and the surface integral are nested quadratures:
+ * below 1e-12 their inner integrals run into the double-precision floor and
+ * the outer one subdivides for minutes without reaching tol (J at 1e-13:
+ * over a minute; 1e-12: 0.1 s), so they accept 1e-12 and up. */
+static double eval_tol(const args_t *a, const char *what)
+{
+    if (!a->arg[O_TOL])
+        return 1e-8;
+    int nested = !strcmp(what, "J") || !strcmp(what, "surface");
+    double lo = nested ? 1e-12 : 1e-15, t;
+    char msg[256];
+    if (msg_double(msg, sizeof msg, "--tol", a->arg[O_TOL], lo, 0, 0.1, 0, &t) != 0) {
+        if (nested && parse_double(a->arg[O_TOL], 1e-15, 0, 0.1, 0, &t) == 0)
+            die_usage("eval %s: --tol %s is not accepted: 1e-12 .. 0.1 (a nested quadrature: below 1e-12 it "
+                      "runs for minutes at the double-precision floor)", what, a->arg[O_TOL]);
+        die_usage("%s", msg);
+    }
+    return t;
+}
+
 static int eval_phys(const args_t *a, phys_t *ph)
 {
     nbt_phase *p = get_phase(a);
-    double tol = a->arg[O_TOL] ? opt_double("--tol", a->arg[O_TOL], 1e-15, 0, 0.1, 0) : 1e-8;
+    double tol = eval_tol(a, ph->surface ? "surface" : "airlight");
     const char *method = a->arg[O_METHOD] ? a->arg[O_METHOD] : "direct";
     size_t terms = a->arg[O_TERMS] ? (size_t)opt_long("--terms", a->arg[O_TERMS], 1, 2048) : 0;
     nbt_status st = ph->surface ? nbt_surface_check(&ph->sg) : nbt_airlight_check(&ph->ag);
@@ -413,7 +434,7 @@ int cmd_eval(int argc, char **argv)
     }
     if (optind < argc)
         die_usage("eval: unexpected argument '%s'", argv[optind]);
-    double tol = a.arg[O_TOL] ? opt_double("--tol", a.arg[O_TOL], 1e-15, 0, 0.1, 0) : 1e-8;
+    double tol = eval_tol(&a, what);
     if (!strcmp(what, "H") || !strcmp(what, "J")) {
         int isJ = what[0] == 'J';
         static const int okH[] = {O_K, O_U, O_V, O_TOL, O_PHASE}, okJ[] = {O_K, O_N, O_T, O_THETA, O_TOL, O_PHASE};

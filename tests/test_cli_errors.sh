@@ -66,6 +66,11 @@ O "nbt-gen eval" "$G" eval H --k 2 --u 1 --v 0 --bogus
 E 2 "eval: unexpected argument 'extra'" "$G" eval H --k 2 --u 1 --v 0 extra
 E 2 "eval H: --k and --phase exclude each other" "$G" eval H --k 2 --phase iso --u 1 --v 0
 E 2 "eval J: --k K (Legendre order) or --phase SPEC is required" "$G" eval J --n 1 --T 1 --theta 1
+# nested quadratures (J, surface) take --tol >= 1e-12 (below it they ran for minutes); H, airlight 1e-15
+E 2 "eval J: --tol 1e-13 is not accepted: 1e-12 .. 0.1 (a nested quadrature" "$G" eval J --k 3 --n 20 --T 1.2 --theta 0.3 --tol 1e-13
+E 2 "eval surface: --tol 1e-15 is not accepted: 1e-12 .. 0.1" "$G" eval surface --g 0.5 --kappa-s 0.45 --kappa-t 0.5 --I0 1 --dsp 8 --theta-s 0.4 --theta-r 0.3 --kd 1 --ks 0 --n 2 --method series --tol 1e-15
+E 2 "--tol: '1e-16' is not accepted: expected a number in [1e-15, 0.1]" "$G" eval H --k 3 --u 1 --v 0.3 --tol 1e-16
+timeout 20 "$G" eval J --k 3 --n 20 --T 1.2 --theta 0.3 --tol 1e-12 >"$tmp/out" 2>/dev/null && [ -s "$tmp/out" ] && ok || bad "eval J --tol 1e-12 refused or slow"
 E 2 "eval: --g and --phase exclude each other" "$G" eval airlight --g 0.3 --phase iso $A
 E 2 "eval: give the phase function with --g G or --phase SPEC" "$G" eval airlight $A
 E 2 "--terms applies to --method series|table only" "$G" eval airlight --g 0.3 $A --terms 3
