@@ -155,7 +155,7 @@ static char *png_path(const char *out)
     if (!p)
         die("out of memory");
     memcpy(p, out, n + 1);
-    if (n > 4 && !strcasecmp(out + n - 4, ".exr"))
+    if (n > 4 && !strcmp(out + n - 4, ".exr"))
         p[n - 4] = '\0';
     strcat(p, ".png");
     return p;
@@ -379,7 +379,7 @@ static void parse(int argc, char **argv, opts *o)
     if (!o->out)
         die_usage("-o OUT.exr is required");
     size_t no = strlen(o->out);
-    if (no < 5 || strcasecmp(o->out + no - 4, ".exr"))
+    if (no < 5 || strcmp(o->out + no - 4, ".exr"))
         die_usage("-o: '%s' is not accepted: the output is OpenEXR and its name must end in .exr (the preview "
                   "gets .png beside it)", o->out);
     if (isnan(o->fov))

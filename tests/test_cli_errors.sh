@@ -311,6 +311,9 @@ SM="--fov-y 40 --sigma-t 0.1 --albedo 0.9 --B 0.01"
 E 2 "--geometry: 'sideways' is not accepted: expected inside (the camera in the medium) or entering" "$S" in.exr -o "$o/o.exr" $SM --geometry sideways
 [ $gl = 0 ] || E 2 "-o: 'x' is not accepted: the output is OpenEXR" "$S" in.exr --fov-y 40 --sigma-t 0.1 --albedo 0.9 --phase hg:g=0.5 --method elek --geometry entering -o x
 "$S" --help | grep -q "^Usage: nbt-scatter IN.exr" && ok || bad "nbt-scatter --help"
+# -o: lower-case .exr as in nbt-gen and nbt-fit (nbt-scatter alone took .EXR)
+E 2 "-o: '$o/o.EXR' is not accepted: the output is OpenEXR and its name must end in .exr" "$S" in.exr -o "$o/o.EXR" $SM
+E 2 "-o: '$o/o.EXR' is not accepted: the output must be a file name ending in .exr" "$G" airlight --phase iso -o "$o/o.EXR"
 E 2 "--display-window: '0,0,3' is not accepted: expected X0,Y0,X1,Y1" "$S" in.exr -o "$o/o.exr" $SM --display-window 0,0,3
 E 2 "--display-window: '3,0,2,3' is not accepted: X1 >= X0 and Y1 >= Y0" "$S" in.exr -o "$o/o.exr" $SM --display-window 3,0,2,3
 E 2 "--display-window: '0,3,3,2' is not accepted: X1 >= X0 and Y1 >= Y0" "$S" in.exr -o "$o/o.exr" $SM --display-window 0,3,3,2
