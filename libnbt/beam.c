@@ -396,8 +396,9 @@ nbt_status nbt_kernel_correction_read(const char *path, nbt_kernel_correction *c
 {
     FILE *f = fopen(path, "r");
     if (!f) {
-        snprintf(err, errlen, "kernel correction '%s' cannot be opened: %s", path, strerror(errno));
-        return NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "kernel correction '%s' cannot be opened: %s", path, strerror(e));
+        return nbt__io_status(e);
     }
     char line[1024];
     int got = 0, ln = 0;

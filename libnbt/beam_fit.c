@@ -136,8 +136,9 @@ nbt_status nbt_beam_fit_read(const char *path, nbt_beam_fit *f, char *err, size_
 {
     FILE *fp = fopen(path, "r");
     if (!fp) {
-        snprintf(err, errlen, "beam model '%s' cannot be opened: %s", path, strerror(errno));
-        return NBT_EIO;
+        int e = errno;
+        snprintf(err, errlen, "beam model '%s' cannot be opened: %s", path, strerror(e));
+        return nbt__io_status(e);
     }
     memset(f, 0, sizeof *f);
     char line[4096];

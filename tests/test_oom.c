@@ -348,7 +348,7 @@ static nbt_status call_h(char *err, size_t errlen)
 }
 
 /* ---- EXR tables: write (into an empty directory) and read back ---- */
-static char dir[64], path_tab[128], path_img[128], path_out[128], path_txt[128];
+static char dir[64], path_tab[128], path_img[128], path_out[128], path_txt[128], path_beamfit[128], path_corr[128];
 
 /* files in dir besides the inputs the cases keep there: a failed write must leave none */
 static int dir_entries(void)
@@ -867,6 +867,32 @@ static size_t fin_model_read(int ok, double *out)
     smodel = NULL;
     return n;
 }
+/* the text readers of the fitted kernel model and the kernel correction (fopen's
+ * FILE is an allocation: its failure is ENOMEM, not EIO) */
+static nbt_beam_fit bfit;
+static nbt_kernel_correction kcorr;
+static nbt_status call_beamfit_read(char *err, size_t errlen)
+{
+    return nbt_beam_fit_read(path_beamfit, &bfit, err, errlen);
+}
+static size_t fin_beamfit_read(int ok, double *out)
+{
+    size_t n = ok ? sizeof bfit.c / sizeof(double) : 0; /* every coefficient, both geometries */
+    memcpy(out, bfit.c, n * sizeof *out);
+    return n;
+}
+static nbt_status call_corr_read(char *err, size_t errlen)
+{
+    return nbt_kernel_correction_read(path_corr, &kcorr, err, errlen);
+}
+static size_t fin_corr_read(int ok, double *out)
+{
+    if (!ok)
+        return 0;
+    memcpy(out, kcorr.beta, sizeof kcorr.beta);
+    memcpy(out + NBT_KERNEL_CORR_TERMS, kcorr.alpha, sizeof kcorr.alpha);
+    return 2 * NBT_KERNEL_CORR_TERMS;
+}
 /* NNLS shape fit of radial masses */
 static nbt_status call_shape_fit(char *err, size_t errlen)
 {
@@ -1047,6 +1073,8 @@ static int make_inputs(void)
     snprintf(path_out, sizeof path_out, "%s/out.exr", dir);
     snprintf(path_txt, sizeof path_txt, "%s/phase.txt", dir);
     snprintf(path_model, sizeof path_model, "%s/model.txt", dir);
+    snprintf(path_beamfit, sizeof path_beamfit, "%s/beamfit.txt", dir);
+    snprintf(path_corr, sizeof path_corr, "%s/corr.txt", dir);
     setup_tab_write();
     nbt_status st = nbt_table_write_exr(tab, path_tab, NBT_EXR_ZIP);
     nbt_table_free(tab);
@@ -1096,6 +1124,15 @@ static int make_inputs(void)
         return -1;
     fprintf(f, "# mu p\n-1 0.2\n-0.25 0.5\n0.5 1.5\n1 4\n");
     fclose(f);
+    /* the two text readers' inputs: libnbt's default beam model as nbt-fit writes it, and a
+     * kernel correction with asymmetric coefficients */
+    if (!(f = fopen(path_beamfit, "w")) || nbt_beam_fit_fprint(f, nbt_beam_fit_default(), "# oom\n") != NBT_OK)
+        return -1;
+    fclose(f);
+    if (!(f = fopen(path_corr, "w")))
+        return -1;
+    fprintf(f, "# correction\nbeta 0.1 -0.02 0.003 0.04 -0.005 0.06 -0.007\nalpha -0.3 0.01 0 0.2 0.02 -0.1 0.005\n");
+    fclose(f);
     return 0;
 }
 
@@ -1136,6 +1173,8 @@ int main(void)
         {"grid_write_raw+read_raw", 2, setup_grid, call_grid, fin_grid, 0},
         {"screen_model_alloc+set+write", 1, setup_model_write, call_model_write, fin_model_write, 0},
         {"screen_model_read", 2, NULL, call_model_read, fin_model_read, 0},
+        {"beam_fit_read", 2, NULL, call_beamfit_read, fin_beamfit_read, 0},
+        {"kernel_correction_read", 2, NULL, call_corr_read, fin_corr_read, 0},
         {"screen_shape_fit", 1, NULL, call_shape_fit, fin_vals, 0},
         {"h_table_build_set+airlight_table_e", 1, setup_hset, call_hset, fin_hset, 0},
         {"screen_path", 1, setup_hg, call_screen_path, fin_screen_path, 0},
@@ -1149,7 +1188,7 @@ int main(void)
         run_case(&cases[i]);
     nbt_plan_free(xplan);
     unlink(path_model);
-    unlink(path_tab), unlink(path_img), unlink(path_txt), unlink(path_out);
+    unlink(path_tab), unlink(path_img), unlink(path_txt), unlink(path_out), unlink(path_beamfit), unlink(path_corr);
     rmdir(dir);
     return t_done();
 }
