@@ -37,13 +37,20 @@ void nbt_grid_free(nbt_grid *g)
 
 nbt_status nbt_grid_check(const nbt_grid *g, char *err, size_t errlen)
 {
-    if (!g || !g->data || g->nx == 0 || g->ny == 0 || g->nz == 0) {
-        snprintf(err, errlen, "empty grid");
+    if (!g || !g->data) {
+        snprintf(err, errlen, "empty grid: no data");
         return NBT_EDOM;
     }
-    if (!(g->voxel > 0) || !isfinite(g->voxel) || !isfinite(g->origin[0]) || !isfinite(g->origin[1]) ||
-        !isfinite(g->origin[2])) {
-        snprintf(err, errlen, "voxel size must be finite and > 0, the origin finite (voxel %g)", g->voxel);
+    if (g->nx == 0 || g->ny == 0 || g->nz == 0) {
+        snprintf(err, errlen, "empty grid: size %zu x %zu x %zu, each must be >= 1", g->nx, g->ny, g->nz);
+        return NBT_EDOM;
+    }
+    if (!(g->voxel > 0) || !isfinite(g->voxel)) {
+        snprintf(err, errlen, "voxel size %g is not accepted: finite and > 0", g->voxel);
+        return NBT_EDOM;
+    }
+    if (!isfinite(g->origin[0]) || !isfinite(g->origin[1]) || !isfinite(g->origin[2])) {
+        snprintf(err, errlen, "origin (%g, %g, %g) is not accepted: finite", g->origin[0], g->origin[1], g->origin[2]);
         return NBT_EDOM;
     }
     for (size_t k = 0; k < g->nz; k++)

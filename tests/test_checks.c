@@ -6,11 +6,13 @@
  * error handler that names the field and the bad value. Before, these were
  * reached only through their callers' bad-input tests, which never put a
  * value next to a bound, and the messages named no value. */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <nbt/airlight.h>
 #include <nbt/beam.h>
+#include <nbt/grid.h>
 #include <nbt/phase.h>
 #include <nbt/screen.h>
 #include <nbt/screen_path.h>
@@ -261,6 +263,61 @@ static void test_screen_path(void)
     nbt_phase_free(p);
 }
 
+/* nbt_grid_check reports in err (the grid API's convention): every size, the voxel
+ * and each origin component at its bound, and a bad density at the last voxel of a
+ * 3 x 4 x 2 grid and inside it, named by its (i, j, k) */
+static void grid_expect(const nbt_grid *g, nbt_status want, const char *words, const char *label)
+{
+    char err[256] = "";
+    nbt_status st = nbt_grid_check(g, err, sizeof err);
+    int ok = st == want && (want == NBT_OK || strstr(err, words) != NULL);
+    t_true(ok, "grid: %s: status %d (want %d), '%s' (want '%s')", label, st, want, err, want == NBT_OK ? "" : words);
+}
+static void test_grid(void)
+{
+    nbt_grid *g = nbt_grid_alloc(3, 4, 2, (const double[3]){-1.5, 0.25, 2.0}, 0.5);
+    grid_expect(g, NBT_OK, NULL, "a zero grid 3x4x2");
+    nbt_grid b = *g;
+    size_t *n[3] = {&b.nx, &b.ny, &b.nz};
+    for (int a = 0; a < 3; a++) {
+        b = *g;
+        *n[a] = 0;
+        grid_expect(&b, NBT_EDOM, a == 0 ? "size 0 x 4 x 2, each must be >= 1" : a == 1 ? "size 3 x 0 x 2" : "size 3 x 4 x 0",
+                    a == 0 ? "nx = 0" : a == 1 ? "ny = 0" : "nz = 0");
+    }
+    b = *g;
+    b.data = NULL;
+    grid_expect(&b, NBT_EDOM, "empty grid: no data", "no data");
+    const double voxels[] = {0.0, -0.5, INFINITY, NAN};
+    for (int v = 0; v < 4; v++) {
+        b = *g;
+        b.voxel = voxels[v];
+        grid_expect(&b, NBT_EDOM, v == 0 ? "voxel size 0 is not accepted: finite and > 0" : v == 1 ? "voxel size -0.5 is" :
+                                  v == 2 ? "voxel size inf is" : "voxel size nan is",
+                    v == 0 ? "voxel 0" : v == 1 ? "voxel -0.5" : v == 2 ? "voxel inf" : "voxel nan");
+    }
+    b = *g;
+    b.voxel = 1e-300;
+    grid_expect(&b, NBT_OK, NULL, "voxel 1e-300");
+    for (int a = 0; a < 3; a++) {
+        b = *g;
+        b.origin[a] = a == 1 ? INFINITY : NAN;
+        grid_expect(&b, NBT_EDOM, a == 0 ? "origin (nan, 0.25, 2) is not accepted: finite" : a == 1 ? "origin (-1.5, inf, 2)" :
+                                  "origin (-1.5, 0.25, nan)",
+                    a == 0 ? "origin x nan" : a == 1 ? "origin y inf" : "origin z nan");
+    }
+    g->data[(1 * 4 + 3) * 3 + 2] = -1e-30f; /* the last voxel (2, 3, 1) */
+    grid_expect(g, NBT_EDOM, "density -1e-30 at voxel (2, 3, 1)", "a negative density at the last voxel");
+    g->data[(1 * 4 + 3) * 3 + 2] = 0.0f;
+    g->data[(0 * 4 + 2) * 3 + 1] = NAN; /* (1, 2, 0) */
+    grid_expect(g, NBT_EDOM, "at voxel (1, 2, 0)", "NaN at (1, 2, 0)");
+    g->data[(0 * 4 + 2) * 3 + 1] = INFINITY;
+    grid_expect(g, NBT_EDOM, "density inf at voxel (1, 2, 0)", "inf at (1, 2, 0)");
+    g->data[(0 * 4 + 2) * 3 + 1] = FLT_MAX;
+    grid_expect(g, NBT_OK, NULL, "the largest finite densities");
+    nbt_grid_free(g);
+}
+
 int main(void)
 {
     nbt_set_error_handler(handler);
@@ -269,5 +326,6 @@ int main(void)
     test_beam();
     test_screen();
     test_screen_path();
+    test_grid();
     return t_done();
 }
