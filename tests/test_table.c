@@ -191,6 +191,35 @@ static void test_lookup_bilinear(void)
     nbt_table_free(t);
 }
 
+/* nbt_table_row_err_alloc on a 7 x 5 x 4 table of 3 channels: (4-1)(7-1)3 = 54 NaN
+ * values (NaN: the table's max_err applies); a value set in row cell 5 (the last),
+ * g cell 2 (the last), channel 2 is what nbt_table_err_at_row reads there and only
+ * there; a second alloc replaces it with NaN again. 2-D: (7-1)3 values. */
+static void test_row_err_alloc(void)
+{
+    nbt_axis a0 = {0, 3, NBT_AXIS_LINEAR, 0, 7}, a1 = {-1, 1, NBT_AXIS_LINEAR, 0, 5}, a2 = {-0.5, 0.7, NBT_AXIS_LINEAR, 0, 4};
+    nbt_table *t = nbt_table_alloc3(NBT_TABLE_J, &a0, &a1, &a2, 3);
+    for (int c = 0; c < 3; c++)
+        t->max_err[c] = 0.25 * (c + 1); /* exact: 0.25, 0.5, 0.75 */
+    t_true(nbt_table_row_err_alloc(t) == NBT_OK && nbt_table_row_err_len(t) == 54, "row_err: 54 values (%zu)",
+           nbt_table_row_err_len(t));
+    int allnan = 1;
+    for (size_t i = 0; i < 54; i++)
+        allnan &= isnan(t->row_err[i]) != 0;
+    t->row_err[(2 * 6 + 5) * 3 + 2] = 7e-4;
+    double in = nbt_table_err_at_row(t, 2, 2.9, 0.65), other_c = nbt_table_err_at_row(t, 1, 2.9, 0.65),
+           other_i = nbt_table_err_at_row(t, 2, 2.4, 0.65), other_m = nbt_table_err_at_row(t, 2, 2.9, 0.25);
+    t_true(allnan && in == 7e-4 && other_c == 0.5 && other_i == 0.75 && other_m == 0.75,
+           "row_err: all NaN (%d); set at (i 5, g cell 2, c 2) it is read there (%g), elsewhere max_err (%g %g %g)",
+           allnan, in, other_c, other_i, other_m);
+    t_true(nbt_table_row_err_alloc(t) == NBT_OK && isnan(t->row_err[(2 * 6 + 5) * 3 + 2]) &&
+               nbt_table_err_at_row(t, 2, 2.9, 0.65) == 0.75, "row_err: a second alloc replaces it (NaN again)");
+    nbt_table_free(t);
+    t = nbt_table_alloc(NBT_TABLE_H, &a0, &a1, 3);
+    t_true(nbt_table_row_err_alloc(t) == NBT_OK && nbt_table_row_err_len(t) == 18, "row_err of a 2-D 7x5 table: 18 values");
+    nbt_table_free(t);
+}
+
 static void test_maps_closed_forms(void)
 {
     const double r = 0.3;
@@ -454,6 +483,7 @@ int main(void)
 
     test_maps_closed_forms();
     test_lookup_bilinear();
+    test_row_err_alloc();
     test_form_sub();
 
     /* ---- lookup = hand bilinear, on a table of arbitrary values ---- */
