@@ -461,6 +461,51 @@ static void test_tail_cubic(void)
     nbt_table_free(t);
 }
 
+/* nbt_gslice_plan and nbt_gslice_execute called directly (not through
+ * nbt_gslice_build): the plan's axes are the table's; a plan edited by the
+ * caller (6 more T nodes) is built as edited; the table's specular surface
+ * radiance at g of both signs (-0.41, 0.33) and an off-axis geometry matches
+ * nbt_surface_direct with HG(g) within the two bounds. */
+static void test_plan_execute(void)
+{
+    nbt_gslice_request r = {NBT_TABLE_J, 20, 4.0, {-0.45, 0.35}, 2e-2, {0, 0, 0}, 0};
+    nbt_gslice_plan_t p;
+    char err[256] = "";
+    nbt_status st = nbt_gslice_plan(&r, 2, &p, err, sizeof err);
+    t_true(st == NBT_OK && p.axis[2].map == NBT_AXIS_ATANH && p.axis[2].lo == -0.45 && p.axis[2].hi == 0.35 &&
+               p.axis[0].hi == 4.0 && p.pred_seconds > 0 && p.bytes > 0,
+           "gslice_plan J^20: status %d %s, %zux%zux%zu, g [%g, %g]", st, err, p.axis[0].n, p.axis[1].n, p.axis[2].n,
+           p.axis[2].lo, p.axis[2].hi);
+    if (st != NBT_OK)
+        return;
+    size_t planned = p.axis[0].n;
+    p.axis[0].n = planned + 6; /* the caller's edit: execute builds what the plan says */
+    nbt_table *t = NULL;
+    st = nbt_gslice_execute(&p, 2, &t, err, sizeof err);
+    int same = st == NBT_OK;
+    for (int a = 0; a < 3 && same; a++)
+        same = t->axis[a].n == p.axis[a].n && t->axis[a].lo == p.axis[a].lo && t->axis[a].hi == p.axis[a].hi &&
+               t->axis[a].map == p.axis[a].map;
+    t_true(same && t->n == 20 && t->axis[0].n == planned + 6,
+           "gslice_execute: the table has the plan's axes (T %zu nodes, planned %zu + 6): %s",
+           st == NBT_OK ? t->axis[0].n : 0, planned, err);
+    if (st != NBT_OK)
+        return;
+    double worst = 0;
+    for (int k = 0; k < 2; k++) {
+        double g = k ? 0.33 : -0.41, L, E, R, RE;
+        nbt_surface_geom geo = {0.3, 0.5, 1.0, 3.7, 0.4, 0.9 - 0.5 * k, 0.0, 1.0, 20};
+        nbt_status s1 = nbt_surface_table_g(NULL, t, g, &geo, 0, &L, &E);
+        nbt_phase *hg = nbt_phase_hg(g);
+        nbt_status s2 = nbt_surface_direct(hg, &geo, 1e-8, &R, &RE);
+        nbt_phase_free(hg);
+        worst = fmax(worst, (s1 == NBT_OK || s1 == NBT_ETOL) && s2 == NBT_OK ? fabs(L - R) / (E + RE) : INFINITY);
+    }
+    t_true(worst <= 1, "executed J^20: specular radiance at g -0.41 and 0.33 = nbt_surface_direct within the bounds "
+                       "(worst %.2f of them)", worst);
+    nbt_table_free(t);
+}
+
 /* an error-driven build meets its tolerance, and an EXR round trip keeps
  * the table a g-sliced one */
 static void test_build_io(void)
@@ -666,6 +711,7 @@ int main(void)
     check_tail(H, 200);
     check_table(J, 80);
     test_tail_cubic();
+    test_plan_execute();
     /* the plain form (older files) still builds and bounds its error */
     nbt_table *P = nbt_table_alloc3(NBT_TABLE_H, &H->axis[0], &H->axis[1],
                                     &(nbt_axis){-0.4, 0.5, NBT_AXIS_COS, 0, 9}, 1);
