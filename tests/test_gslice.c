@@ -506,6 +506,43 @@ static void test_plan_execute(void)
     nbt_table_free(t);
 }
 
+/* nbt_scene_basis called directly: its table is the scene's first set (H with
+ * airlight; J^1 with diffuse; else the first Phong exponent, here 30), over
+ * [0, max kappa_t x max distance] = [0, 0.7 x 6] and the scene's g range; a
+ * Legendre request names the orders nbt_plan_legendre_terms needs for |g| up to
+ * 0.6 at that xmax and tol (both signs); a scene without a g range: NBT_EINVAL. */
+static void test_scene_basis(void)
+{
+    nbt_scene s;
+    nbt_scene_init(&s);
+    s.kappa_t[0] = 0.2, s.kappa_t[1] = 0.7, s.distance[0] = 1, s.distance[1] = 6;
+    s.have_g = 1, s.g[0] = -0.6, s.g[1] = 0.35, s.tol = 2e-2;
+    s.airlight = 0, s.diffuse = 0, s.phong[0] = 30, s.phong[1] = 5, s.nphong = 2;
+    s.basis = NBT_BASIS_SLICES;
+    nbt_basis_choice c;
+    char err[256] = "";
+    nbt_status st = nbt_scene_basis(&s, 2, &c, err, sizeof err);
+    t_true(st == NBT_OK && c.basis == NBT_BASIS_SLICES && c.sl_plan.req.kind == NBT_TABLE_J && c.sl_plan.req.n == 30 &&
+               fabs(c.sl_plan.req.xmax - 4.2) < 1e-12 && c.sl_plan.req.g[0] == -0.6 && c.sl_plan.req.g[1] == 0.35 &&
+               c.sl_plan.req.tol == 2e-2,
+           "scene_basis slices: J^30 (the first Phong set) over T to 4.2, g -0.6:0.35 (status %d, kind %d n %d xmax %g) %s",
+           st, (int)c.sl_plan.req.kind, c.sl_plan.req.n, c.sl_plan.req.xmax, err);
+    s.basis = NBT_BASIS_LEGENDRE;
+    s.orders_max = 512;
+    s.airlight = 1;
+    nbt_plan_legendre leg;
+    nbt_plan_legendre_terms(0.6, 4.2, 2e-2, 512, &leg);
+    st = nbt_scene_basis(&s, 2, &c, err, sizeof err);
+    t_true(st == NBT_OK && c.basis == NBT_BASIS_LEGENDRE && c.leg_nterms == leg.nterms && leg.nterms > 4,
+           "scene_basis legendre with airlight: %zu orders (the budget for |g| 0.6 at u 4.2: %zu) %s", c.leg_nterms,
+           leg.nterms, err);
+    s.have_g = 0;
+    nbt_phase *iso = nbt_phase_iso();
+    s.phase = iso;
+    t_true(nbt_scene_basis(&s, 2, &c, err, sizeof err) == NBT_EINVAL, "scene_basis without a g range: NBT_EINVAL");
+    nbt_phase_free(iso);
+}
+
 /* an error-driven build meets its tolerance, and an EXR round trip keeps
  * the table a g-sliced one */
 static void test_build_io(void)
@@ -712,6 +749,7 @@ int main(void)
     check_table(J, 80);
     test_tail_cubic();
     test_plan_execute();
+    test_scene_basis();
     /* the plain form (older files) still builds and bounds its error */
     nbt_table *P = nbt_table_alloc3(NBT_TABLE_H, &H->axis[0], &H->axis[1],
                                     &(nbt_axis){-0.4, 0.5, NBT_AXIS_COS, 0, 9}, 1);
