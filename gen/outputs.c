@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 #include "outputs.h"
 
@@ -21,6 +22,10 @@ struct outputs_file {
 
 static _Atomic(outputs_file *) head;
 static atomic_int stopping;
+/* files between outputs_begin and outputs_end: all threads, and this thread's
+ * own (a writer interrupted by the handler cannot finish while it waits) */
+static atomic_int inflight;
+static _Thread_local int inflight_here;
 
 static outputs_file *push(const char *path, int state)
 {
@@ -71,6 +76,14 @@ static int remove_all(void)
 static void on_signal(int sig)
 {
     atomic_store(&stopping, 1);
+    /* A writer thread may be about to create its temporary: removing first
+     * and dying next would leave it behind. No new write starts now
+     * (outputs_begin sees stopping); wait for those in flight to end, at
+     * most 2 s (a write blocked for good, e.g. on a FIFO, is removed as it
+     * stands). */
+    struct timespec tick = {0, 10000000};
+    for (int i = 0; i < 200 && atomic_load(&inflight) - inflight_here > 0; i++)
+        nanosleep(&tick, NULL);
     static const char msg[] = "nbt-gen: interrupted: the files of this run were removed\n";
     static const char none[] = "nbt-gen: interrupted (no files written yet)\n";
     ssize_t w = remove_all() ? write(STDERR_FILENO, msg, sizeof msg - 1) : write(STDERR_FILENO, none, sizeof none - 1);
@@ -107,15 +120,26 @@ outputs_file *outputs_add(const char *path)
 
 int outputs_begin(outputs_file *f)
 {
+    /* counted before stopping is read, the handler sets stopping before it
+     * reads the count: one of the two sees the other */
+    atomic_fetch_add(&inflight, 1);
+    inflight_here++;
+    if (atomic_load(&stopping)) {
+        inflight_here--;
+        atomic_fetch_sub(&inflight, 1);
+        return 1;
+    }
     if (f)
         atomic_store(&f->state, F_WRITING);
-    return atomic_load(&stopping);
+    return 0;
 }
 
 void outputs_end(outputs_file *f, int ok)
 {
     if (f)
         atomic_store(&f->state, ok ? F_DONE : F_FAILED);
+    inflight_here--;
+    atomic_fetch_sub(&inflight, 1);
 }
 
 void outputs_dir(const char *dir)

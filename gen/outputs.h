@@ -14,7 +14,9 @@ void outputs_install(void);
  * NULL when out of memory. Nothing is removed for it until outputs_begin. */
 outputs_file *outputs_add(const char *path);
 /* PATH is about to be written (it replaces any older file of that name);
- * non-zero when a signal already arrived: do not start. */
+ * non-zero when a signal already arrived: do not start. Every zero return
+ * is followed by outputs_end (from the same thread): a signal waits up to
+ * 2 s for the writes in flight before it removes the files. */
 int outputs_begin(outputs_file *f);
 /* The write ended: ok (renamed into place) or failed (only its temporary
  * may be left; an older file of that name is not ours to remove). */
