@@ -58,7 +58,7 @@
  *       so a kernel wider than the screen's sides is over-corrected). The
  *       approximation: that estimate, the fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
  *       beta = 1 .. 30 px, tests/test_gl_scatter.c; total mass within
- *       +-0.8% of the kernel's for beta up to 140 px) and the second order in
+ *       +0.01 .. +1.0% of the kernel's for beta = 1 .. 200 px) and the second order in
  *       delta log2 beta. Weights are fitted (NNLS) for beta_px in
  *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held below and scaled by
  *       1/beta above (light a kernel sends beyond the pyramid's reach, as
@@ -137,7 +137,7 @@ void nbt_gls_near_table(float *lut);
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.2 s; thread-safe): tab[i * NB + b]. */
+ * 0.3 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
  * below the table, scaled by 2^(HI - lb) above it: a kernel far wider than
