@@ -59,11 +59,12 @@ const char *__asan_default_options(void)
 #define NBT_EDGE_TOL 7e-2
 #define NBT_BIAS_TOL 8e-3
 /* the same beyond the screen (test_nbt_beyond_screen; measured relative L1
- * 0.06-0.9% for beta_px 0.3-30 (3.0% at 3-30 on the step), 2.9-4.4% for
- * beta_px 300-30000, where it is mostly bias: the fitted 1/r profile seen
- * within 64 px; 160x120 at beta 300-800: bias -0.1 .. -0.2%), 1.5x */
-#define NBT_WIDE_L1_TOL 6.6e-2
-#define NBT_WIDE_BIAS_TOL 6.6e-2
+ * 0.06-0.75% for beta_px 0.3-30 (2.6-3.0% at 3-30 on the step), 1.2-3.1% for
+ * beta_px 300-30000, where it is mostly bias (+1.2 .. +2.7%): the fitted
+ * 1/r profile seen within 64 px; before the wide kernels 2.9-4.4%, bias
+ * up to +4.4%), 1.5x */
+#define NBT_WIDE_L1_TOL 4.7e-2
+#define NBT_WIDE_BIAS_TOL 4.1e-2
 
 /* regression gates for the other pyramid methods on the five scenes of (c),
  * about 1.5x the worst measured value (relative L1 / edge band):
