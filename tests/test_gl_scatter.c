@@ -492,7 +492,7 @@ static void test_nbt_slope_bias(nbt_gls *g, const nbt_screen_kernel *km, const n
  * blocks). Tolerances: |bias| <= 0.5%, the issue's goal (the old kernels
  * miss it 11x at 140); relative L1 <= 0.6%, 1.4x the worse measured. GL =
  * its emulation here too (the wide blurs run only where their weights are
- * not 0: not in the 64x48 scenes above). */
+ * not 0: not in the five 64x48 scenes of (a)). */
 #define NBT_WIDEK_BIAS_TOL 5e-3
 #define NBT_WIDEK_L1_TOL 6e-3
 
