@@ -21,9 +21,10 @@ extern const char nbt_glsl_nbt_beam[], nbt_glsl_nbt_scatter_common[], nbt_glsl_n
     nbt_glsl_nbt_scatter_shinya[], nbt_glsl_nbt_scatter_literal[], nbt_glsl_nbt_scatter_pyr0[],
     nbt_glsl_nbt_scatter_down[], nbt_glsl_nbt_scatter_naive[], nbt_glsl_nbt_scatter_elek[],
     nbt_glsl_nbt_scatter_nbtc[], nbt_glsl_nbt_scatter_nbt0[], nbt_glsl_nbt_scatter_nbtdown[],
-    nbt_glsl_nbt_scatter_nbtmix[], nbt_glsl_nbt_scatter_nbtup[], nbt_glsl_nbt_scatter_nbt[];
+    nbt_glsl_nbt_scatter_nbtmix[], nbt_glsl_nbt_scatter_nbtup[], nbt_glsl_nbt_scatter_nbtwide[],
+    nbt_glsl_nbt_scatter_nbt[];
 
-enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, P_NBT0, P_NBTDOWN, P_NBTUP, P_NBT, NPASS };
+enum { P_NEAR, P_SHINYA, P_LITERAL, P_PYR0, P_DOWN, P_NAIVE, P_ELEK, P_NBT0, P_NBTDOWN, P_NBTUP, P_NBTWIDE, P_NBT, NPASS };
 #define FIRST_NBT_PASS P_NBT0 /* these get nbt_scatter_nbtc too */
 
 static const struct {
@@ -35,7 +36,7 @@ static const struct {
     {"down", nbt_glsl_nbt_scatter_down},       {"naive", nbt_glsl_nbt_scatter_naive},
     {"elek", nbt_glsl_nbt_scatter_elek},       {"nbt0", nbt_glsl_nbt_scatter_nbt0},
     {"nbtdown", nbt_glsl_nbt_scatter_nbtdown}, {"nbtup", nbt_glsl_nbt_scatter_nbtup},
-    {"nbt", nbt_glsl_nbt_scatter_nbt},
+    {"nbtwide", nbt_glsl_nbt_scatter_nbtwide}, {"nbt", nbt_glsl_nbt_scatter_nbt},
 };
 
 static const char *const MNAMES[NBT_GLS_NMETHODS] = {"shinya", "shinya-literal", "naive", "elek", "nbt"};
@@ -86,9 +87,11 @@ char *nbt_gls_pass_source(unsigned i)
                      "#version 430 core\n#define NBT_SC_TAIL_PER %d\n#define NBT_SC_TAIL_N %d\n"
                      "#define NBT_SC_LUT_LO %d\n#define NBT_SC_LUT_PER %d\n#define NBT_SC_LUT_N %d\n"
                      "#define NBT_SC_NAIVE_C %.9g\n#define NBT_SC_ELEK_C %.9g\n#define NBT_SC_NBT_MAXSLABS %d\n"
-                     "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n#define NBT_SC_NBT_K %d\n",
+                     "#define NBT_SC_NBT_LO %d\n#define NBT_SC_NBT_HI %d\n#define NBT_SC_NBT_BLUR %.9g\n#define NBT_SC_NBT_K %d\n"
+                     "#define NBT_SC_NBT_NW %d\n#define NBT_SC_NBT_WT %d\n",
                      NBT_GLS_TAIL_PER, NBT_GLS_TAIL_N, NBT_GLS_LUT_LO, NBT_GLS_LUT_PER, NBT_GLS_LUT_N, NBT_GLS_NAIVE_C, NBT_GLS_ELEK_C,
-                     NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR, NBT_GLS_K);
+                     NBT_GLS_NBT_MAXSLABS, NBT_GLS_NBT_LO, NBT_GLS_NBT_HI, NBT_GLS_NBT_BLUR, NBT_GLS_K,
+                     NBT_GLS_NBT_NW, NBT_GLS_NBT_WT);
     const char *parts[6] = {head, nbt_glsl_nbt_beam, nbt_glsl_nbt_scatter_common,
                             i >= FIRST_NBT_PASS ? nbt_glsl_nbt_scatter_nbtc : "",
                             i == P_NBTUP ? nbt_glsl_nbt_scatter_nbtmix : "", PASSES[i].src};
@@ -140,20 +143,34 @@ void nbt_gls_nbt_tail_table(float *t)
 
 /* ---- NBT_GLS_NBT: the kernel fit ---- */
 
-#define KB_N 1024 /* 1-D domain of the level kernels: impulse near KB_N/2 */
+#define KB_N 4096 /* 1-D domain of the level kernels: impulse near KB_N/2 */
 #define KB_C (KB_N / 2)
 static double nbt_kbar_tab[NBT_GLS_NBT_NB][KB_N];
 static double nbt_wtab[NBT_GLS_NBT_N * NBT_GLS_NBT_NB];
 static pthread_once_t nbt_fit_once = PTHREAD_ONCE_INIT;
 
+void nbt_gls_nbt_wide_taps(int m, double t[NBT_GLS_NBT_WT + 1])
+{
+    double s = m ? 3.0 : 1.5, sum = 0;
+    for (int d = 0; d <= NBT_GLS_NBT_WT; d++) {
+        t[d] = exp(-0.5 * d * d / (s * s));
+        sum += d ? 2 * t[d] : t[d];
+    }
+    for (int d = 0; d <= NBT_GLS_NBT_WT; d++)
+        t[d] /= sum;
+}
+
 /* 1-D kernels U^l [B] D^l of an impulse, averaged over its 2^l phases */
 static void nbt_level_kernels(void)
 {
+    enum { K = NBT_GLS_K, WT = NBT_GLS_NBT_WT };
     static const double F[4] = {0.13, 0.37, 0.37, 0.13};
     static double a[NBT_GLS_K + 1][KB_N];
-    double bl = NBT_GLS_NBT_BLUR, t[KB_N];
+    double bl = NBT_GLS_NBT_BLUR, t[KB_N], g[WT + 1];
     for (int b = 0; b < NBT_GLS_NBT_NB; b++) {
-        int l = b % (NBT_GLS_NBT_NB / 2) + 1, blur = b >= NBT_GLS_NBT_NB / 2, P = 1 << l;
+        int l = b < 2 * K ? b % K + 1 : K, blur = b >= K && b < 2 * K, wide = b >= 2 * K, P = 1 << l;
+        if (wide)
+            nbt_gls_nbt_wide_taps(b - 2 * K, g);
         memset(nbt_kbar_tab[b], 0, sizeof nbt_kbar_tab[b]);
         for (int ph = 0; ph < P; ph++) {
             memset(a, 0, sizeof a);
@@ -172,6 +189,15 @@ static void nbt_level_kernels(void)
             if (blur) {
                 for (int p = 0; p < n; p++)
                     t[p] = (1 - 2 * bl) * a[l][p] + (p > 0 ? bl * a[l][p - 1] : 0) + (p + 1 < n ? bl * a[l][p + 1] : 0);
+                memcpy(a[l], t, (size_t)n * sizeof *t);
+            }
+            if (wide) {
+                for (int p = 0; p < n; p++) {
+                    t[p] = 0;
+                    for (int d = -WT; d <= WT; d++)
+                        if (p + d >= 0 && p + d < n)
+                            t[p] += g[abs(d)] * a[l][p + d];
+                }
                 memcpy(a[l], t, (size_t)n * sizeof *t);
             }
             for (int j = l; j >= 1; j--) { /* the bilinear octave up-step */
@@ -204,8 +230,11 @@ static double nbt_far(double b, double r)
     return (G / r + lap / 24.0) / (2.50662827463100050 * b);
 }
 
+/* the fit window's largest half-width: the wide kernels reach about 640 px */
+#define NBT_FIT_RMAX 640
+
 /* non-negative least squares over the pixels outside the 3x3 centre,
- * |dx|, |dy| <= R, by cyclic coordinate descent on the normal equations */
+ * |dx|, |dy| <= R (5 beta, 12 .. NBT_FIT_RMAX), through the normal equations */
 static void nbt_fit_one(double beta, double *w)
 {
     enum { NB = NBT_GLS_NBT_NB };
@@ -214,21 +243,28 @@ static void nbt_fit_one(double beta, double *w)
      * matrix is accumulated once (nbt_fit_all runs once, serially). A 1/r
      * weight (relative error per ring) was tried: 64x48 +4.4% -> +3.6%, but
      * 160x120 -0.4% -> -3.0% against operator A at beta_px 800 */
-    int ring = R > 256;
-    R = R < 12 ? 12 : R > 256 ? 256 : R;
-    static double Gring[NB][NB];
+    int ring = R > NBT_FIT_RMAX;
+    R = R < 12 ? 12 : R > NBT_FIT_RMAX ? NBT_FIT_RMAX : R;
+    /* and, beyond r = FB px, their projections f_i t in radial bins of FD
+     * px with a first-order term (t is smooth there: relative error ~1e-6),
+     * so each later one costs bins, not pixels */
+    enum { FB = 16, NBIN = (int)(NBT_FIT_RMAX * 1.4143 - FB) * 2 + 2 };
+    const double FD = 0.5;
+    static double Gring[NB][NB], Fb[NB][NBIN], Fb1[NB][NBIN];
     static int have_ring;
     double G[NB][NB], r[NB], f[NB];
-    int need_G = !ring || !have_ring;
+    int need_G = !ring || !have_ring, binned = ring && have_ring;
     memset(G, 0, sizeof G);
     memset(r, 0, sizeof r);
     /* one octant 0 <= y <= x, each pixel counted with its mirror images:
      * the level kernels are even (to 1e-17) and the atom radial */
-    for (long y = 0; y <= R; y++)
-        for (long x = y; x <= R; x++) {
+    for (long y = 0; y <= (binned ? FB : R); y++)
+        for (long x = y; x <= (binned ? FB : R); x++) {
             if (x <= 1)
                 continue;
             double rr = sqrt((double)(x * x + y * y));
+            if (binned && rr > FB)
+                continue;
             double t = rr > 4 ? nbt_far(beta, rr) : nbt_screen_atom_pixel(NBT_ATOM_ERFC, beta, x, y);
             for (int i = 0; i < NB; i++)
                 f[i] = nbt_kbar_tab[i][KB_C + x] * nbt_kbar_tab[i][KB_C + y];
@@ -239,26 +275,54 @@ static void nbt_fit_one(double beta, double *w)
                 for (int j = 0; need_G && j <= i; j++)
                     G[i][j] += wt * f[i] * f[j];
             }
+            if (ring && !have_ring && rr > FB) {
+                int k = (int)((rr - FB) / FD);
+                double dr = rr - (FB + (k + 0.5) * FD);
+                for (int i = 0; i < NB; i++) {
+                    Fb[i][k] += wt * f[i];
+                    Fb1[i][k] += wt * f[i] * dr;
+                }
+            }
         }
+    for (int k = 0; binned && k < NBIN; k++) {
+        double rho = FB + (k + 0.5) * FD, t = nbt_far(beta, rho);
+        double dt = (nbt_far(beta, rho + 0.05) - nbt_far(beta, rho - 0.05)) / 0.1;
+        for (int i = 0; i < NB; i++)
+            r[i] += Fb[i][k] * t + Fb1[i][k] * dt;
+    }
     if (ring && have_ring)
         memcpy(G, Gring, sizeof G);
-    for (int i = 0; i < NB; i++) {
-        w[i] = 0;
+    for (int i = 0; i < NB; i++)
         for (int j = i + 1; j < NB; j++)
             G[i][j] = G[j][i];
-    }
     if (ring && !have_ring) {
         memcpy(Gring, G, sizeof G);
         have_ring = 1;
     }
-    for (int sweep = 0; sweep < 3000; sweep++)
-        for (int i = 0; i < NB; i++) {
-            double s = r[i];
-            for (int j = 0; j < NB; j++)
-                if (j != i)
-                    s -= G[i][j] * w[j];
-            w[i] = G[i][i] > 0 && s > 0 ? s / G[i][i] : 0.0;
+    /* |f w - t|^2 = |L^T w - L^-1 r|^2 + const with G = L L^T: an exact
+     * active-set NNLS on the NB x NB factor (cyclic coordinate descent,
+     * used before, was far from converged after 3000 sweeps once the wide
+     * kernels made the basis near-collinear: +1% mass at beta ~ 100 px) */
+    double L[NB][NB], LT[NB * NB], y[NB];
+    memset(L, 0, sizeof L);
+    for (int i = 0; i < NB; i++) {
+        for (int j = 0; j <= i; j++) {
+            double s = G[i][j];
+            for (int k = 0; k < j; k++)
+                s -= L[i][k] * L[j][k];
+            L[i][j] = i == j ? sqrt(s > 0 ? s : 0) : L[j][j] > 0 ? s / L[j][j] : 0;
         }
+        double s = r[i];
+        for (int k = 0; k < i; k++)
+            s -= L[i][k] * y[k];
+        y[i] = L[i][i] > 0 ? s / L[i][i] : 0;
+    }
+    for (int i = 0; i < NB; i++)
+        for (int j = 0; j < NB; j++)
+            LT[i * NB + j] = L[j][i];
+    if (nbt__nnls(LT, NB, NB, y, w, NULL) != NBT_OK)
+        for (int i = 0; i < NB; i++)
+            w[i] = 0;
 }
 
 static void nbt_fit_all(void)
@@ -626,6 +690,41 @@ static void dispatch3(size_t w, size_t h, size_t layers)
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
 }
 
+/* method nbt's wide kernels at level K (nbt_scatter_nbtwide), after the
+ * collapse's step there; nothing when every wide weight is 0. Returns
+ * whether it ran (it leaves its own program in use). */
+static int run_nbt_wide(const nbt_gls *g, const nbt_gls_nbt_plan *pl, double a[][NBT_GLS_NBT_NB],
+                        double da[][NBT_GLS_NBT_NB])
+{
+    enum { NW = NBT_GLS_NBT_NW, MS = NBT_GLS_NBT_MAXSLABS, WT = NBT_GLS_NBT_WT, K = NBT_GLS_K };
+    float wc[NW * MS] = {0}, wdc[NW * MS] = {0}, wg[NW * (WT + 1)];
+    int any = 0;
+    for (int m = 0; m < NW; m++) {
+        double tap[WT + 1];
+        nbt_gls_nbt_wide_taps(m, tap);
+        for (int d = 0; d <= WT; d++)
+            wg[m * (WT + 1) + d] = (float)tap[d];
+        for (unsigned j = 0; j < pl->n; j++) {
+            wc[m * MS + j] = (float)a[j][2 * K + m];
+            wdc[m * MS + j] = (float)da[j][2 * K + m];
+            any |= wc[m * MS + j] != 0 || wdc[m * MS + j] != 0;
+        }
+    }
+    if (!any)
+        return 0;
+    use(g, P_NBTWIDE);
+    set_plan(g, P_NBTWIDE, pl);
+    GLuint p = g->prog[P_NBTWIDE];
+    glUniform1fv(glGetUniformLocation(p, "nbt_sc_wg"), NW * (WT + 1), wg);
+    glUniform1fv(glGetUniformLocation(p, "nbt_sc_wc"), NW * MS, wc);
+    glUniform1fv(glGetUniformLocation(p, "nbt_sc_wdc"), NW * MS, wdc);
+    glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)((g->pw >> K) + 2), (GLint)((g->ph >> K) + 2));
+    glBindImageTexture(0, g->tsrc, K - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, g->tcol, K - 1, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+    dispatch((g->pw >> K) + 2, (g->ph >> K) + 2);
+    return 1;
+}
+
 /* method nbt: source pyramid, the collapse from level K to 1 (each level's
  * parts mixed from the source layers in the same pass, never stored), the
  * centre weights, the receivers */
@@ -663,8 +762,8 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         for (unsigned j = 0; j < n; j++) {
             wa[j] = (float)a[j][k - 1];
             wda[j] = (float)da[j][k - 1];
-            wb[j] = (float)a[j][NBT_GLS_NBT_NB / 2 + k - 1];
-            wdb[j] = (float)da[j][NBT_GLS_NBT_NB / 2 + k - 1];
+            wb[j] = (float)a[j][NBT_GLS_K + k - 1];
+            wdb[j] = (float)da[j][NBT_GLS_K + k - 1];
         }
         glUniform1fv(glGetUniformLocation(p, "nbt_sc_wa"), NBT_GLS_NBT_MAXSLABS, wa);
         glUniform1fv(glGetUniformLocation(p, "nbt_sc_wda"), NBT_GLS_NBT_MAXSLABS, wda);
@@ -676,6 +775,10 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
         glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(EXT(g->pw, k), EXT(g->ph, k));
+        if (k == NBT_GLS_K && run_nbt_wide(g, pl, a, da)) {
+            use(g, P_NBTUP); /* back to the collapse for levels K - 1 .. 1 */
+            set_plan(g, P_NBTUP, pl);
+        }
     }
     use(g, P_NEAR);
     bind_tex(2, g->tnlut);

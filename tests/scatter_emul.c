@@ -535,7 +535,7 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
     int ok = nw && lut && lev0;
     for (int k = 1; k <= NBT_GLS_K && ok; k++)
         ok = stack_new(&src[k], (pw >> k) + 2, (ph >> k) + 2, (size_t)L) &&
-             stack_new(&q[k], (pw >> k) + 2, (ph >> k) + 2, 2 * (size_t)Z) &&
+             stack_new(&q[k], (pw >> k) + 2, (ph >> k) + 2, (2 + NBT_GLS_NBT_NW) * (size_t)Z) &&
              stack_new(&col[k], (pw >> k) + 2, (ph >> k) + 2, (size_t)Z);
     nbt_status st = ok ? NBT_OK : NBT_ENOMEM;
     if (st == NBT_OK) {
@@ -579,16 +579,19 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
         double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
         for (long j = 0; j < n; j++)
             nbt_gls_nbt_weights(pl.lb[j], a[j], da[j]);
-        const int HB = NBT_GLS_NBT_NB / 2;
+        /* parts: t = 0 sharp, 1 blurred, 2 + m wide kernel m (level K only) */
+        enum { NT = 2 + NBT_GLS_NBT_NW, K = NBT_GLS_K };
         for (int k = 1; k <= NBT_GLS_K; k++)
             for (long py = 0; py < (long)q[k].h; py++)
                 for (long px = 0; px < (long)q[k].w; px++) {
-                    double acc[2][3] = {{0, 0, 0}, {0, 0, 0}}, suf[3];
+                    double acc[NT][3] = {{0}}, suf[3];
                     for (long j = 0; j < n; j++) {
                         const double *A = at(&src[k], (size_t)j, px, py), *E = at(&src[k], (size_t)(n + j), px, py);
-                        double w1[2] = {(float)a[j][k - 1], (float)a[j][HB + k - 1]};
-                        double w2[2] = {(float)da[j][k - 1], (float)da[j][HB + k - 1]};
-                        for (int t = 0; t < 2; t++)
+                        double w1[NT] = {(float)a[j][k - 1], (float)a[j][K + k - 1]};
+                        double w2[NT] = {(float)da[j][k - 1], (float)da[j][K + k - 1]};
+                        for (int m = 0; m < NBT_GLS_NBT_NW && k == K; m++)
+                            w1[2 + m] = (float)a[j][2 * K + m], w2[2 + m] = (float)da[j][2 * K + m];
+                        for (int t = 0; t < NT; t++)
                             for (int c = 0; c < 3; c++) {
                                 acc[t][c] += w1[t] * A[c] + w2[t] * E[c];
                                 at(&q[k], (size_t)(t * Z + j), px, py)[c] = acc[t][c];
@@ -596,9 +599,11 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
                     }
                     memcpy(suf, at(&src[k], (size_t)(3 * n), px, py), sizeof suf);
                     for (long i = n - 1; i >= 0; i--) {
-                        double w1[2] = {(float)a[i][k - 1], (float)a[i][HB + k - 1]};
-                        double w2[2] = {(float)da[i][k - 1], (float)da[i][HB + k - 1]};
-                        for (int t = 0; t < 2; t++)
+                        double w1[NT] = {(float)a[i][k - 1], (float)a[i][K + k - 1]};
+                        double w2[NT] = {(float)da[i][k - 1], (float)da[i][K + k - 1]};
+                        for (int m = 0; m < NBT_GLS_NBT_NW && k == K; m++)
+                            w1[2 + m] = (float)a[i][2 * K + m], w2[2 + m] = (float)da[i][2 * K + m];
+                        for (int t = 0; t < NT; t++)
                             for (int c = 0; c < 3; c++) {
                                 at(&q[k], (size_t)(t * Z + n + i), px, py)[c] = w1[t] * suf[c];
                                 at(&q[k], (size_t)(t * Z + 2 * n + i), px, py)[c] = w2[t] * suf[c];
@@ -625,6 +630,20 @@ nbt_status scatter_emul_nbt(const nbt_gls_input *in, unsigned slabs, double *S)
                                 for (int c = 0; c < 3; c++)
                                     o[c] += bw[dx + 1] * bw[dy + 1] * v[c];
                             }
+                        for (int m = 0; m < NBT_GLS_NBT_NW && k == K; m++) { /* the wide blurs */
+                            enum { WT = NBT_GLS_NBT_WT };
+                            double g[WT + 1];
+                            nbt_gls_nbt_wide_taps(m, g);
+                            for (long dy = -WT; dy <= WT; dy++)
+                                for (long dx = -WT; dx <= WT; dx++) {
+                                    long xx = px + dx, yy = py + dy;
+                                    if (xx < 0 || yy < 0 || xx >= (long)col[k].w || yy >= (long)col[k].h)
+                                        continue;
+                                    const double *v = at(&q[k], (size_t)((2 + m) * Z + z), xx, yy);
+                                    for (int c = 0; c < 3; c++)
+                                        o[c] += g[labs(dx)] * g[labs(dy)] * v[c];
+                                }
+                        }
                         if (k < NBT_GLS_K) { /* logical (q + 0.5)/2 - 0.5, index + 1 */
                             stack_bilinear(&col[k + 1], (size_t)z, (px - 1 + 0.5) / 2 + 0.5, (py - 1 + 0.5) / 2 + 0.5, u);
                             for (int c = 0; c < 3; c++)

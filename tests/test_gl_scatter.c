@@ -59,11 +59,12 @@ const char *__asan_default_options(void)
 #define NBT_EDGE_TOL 7e-2
 #define NBT_BIAS_TOL 8e-3
 /* the same beyond the screen (test_nbt_beyond_screen; measured relative L1
- * 0.06-0.9% for beta_px 0.3-30 (3.0% at 3-30 on the step), 2.9-4.4% for
- * beta_px 300-30000, where it is mostly bias: the fitted 1/r profile seen
- * within 64 px; 160x120 at beta 300-800: bias -0.1 .. -0.2%), 1.5x */
-#define NBT_WIDE_L1_TOL 6.6e-2
-#define NBT_WIDE_BIAS_TOL 6.6e-2
+ * 0.06-0.75% for beta_px 0.3-30 (2.6-3.0% at 3-30 on the step), 1.2-3.1% for
+ * beta_px 300-30000, where it is mostly bias (+1.2 .. +2.7%): the fitted
+ * 1/r profile seen within 64 px; before the wide kernels 2.9-4.4%, bias
+ * up to +4.4%), 1.5x */
+#define NBT_WIDE_L1_TOL 4.7e-2
+#define NBT_WIDE_BIAS_TOL 4.1e-2
 
 /* regression gates for the other pyramid methods on the five scenes of (c),
  * about 1.5x the worst measured value (relative L1 / edge band):
@@ -479,6 +480,67 @@ static void test_nbt_slope_bias(nbt_gls *g, const nbt_screen_kernel *km, const n
     free(Se);
 }
 
+/* nbt's energy bias with kernels of 60-140 px on a 320x240 screen (issue
+ * 21). The pyramid's own kernels (levels 1-6) stop at about 150 px, where an
+ * erfc kernel of beta = 100 px still has 7% of its mass (140 px: 20%); the
+ * wide kernels (two Gaussian blurs at level 6) reach that light. A far wall
+ * with beta_px = target, a box in front at half the distance, sky on top,
+ * random colours, against operator A by layered FFT (exact for these three
+ * depths): measured bias +0.15% (target 70) and -0.02% (140), relative L1
+ * 0.43% and 0.30%; before the wide kernels +0.05% and -5.6%, relative L1
+ * 0.47% and 5.6% (the bench's 320x240 scenes: -0.9% on layers and
+ * blocks). Tolerances: |bias| <= 0.5%, the issue's goal (the old kernels
+ * miss it 11x at 140); relative L1 <= 0.6%, 1.4x the worse measured. GL =
+ * its emulation here too (the wide blurs run only where their weights are
+ * not 0: not in the five 64x48 scenes of (a)). */
+#define NBT_WIDEK_BIAS_TOL 5e-3
+#define NBT_WIDEK_L1_TOL 6e-3
+
+static void test_nbt_wide_kernels(const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    const size_t w = 320, h = 240, n = w * h;
+    const double target[2] = {70, 140};
+    nbt_gls *g = nbt_gls_alloc(w, h);
+    float *Sg = malloc(n * 3 * sizeof *Sg);
+    double *SA = malloc(n * 3 * sizeof *SA), *Sd = malloc(n * 3 * sizeof *Sd), *Se = malloc(n * 3 * sizeof *Se);
+    t_true(g != NULL, "context for %zux%zu", w, h);
+    for (int k = 0; k < 2 && g; k++) {
+        scene s = scene_new("wall+box", w, h);
+        random_rgb(&s);
+        for (size_t y = 0; y < h; y++)
+            for (size_t x = 0; x < w; x++)
+                s.D[y * w + x] = y < 24 ? INFINITY : x >= 90 && x < 230 && y >= 60 && y < 180 ? 6.0f : 12.0f;
+        const size_t far = (h - 1) * w + w - 1; /* the last pixel: the far wall */
+        scene_kernels(&s, km, ke, dth);
+        double d = dth * s.beta[far] / target[k];
+        scene_kernels(&s, km, ke, d);
+        nbt_screen_input sin = {.w = w, .h = h, .rgb = s.rgb, .D = s.D, .dtheta = d};
+        t_true(nbt_screen_layered(&sin, km, NBT_SCREEN_NEAR, 1e-7, 4, 2, SA, NULL) == NBT_OK, "wall+box: operator A");
+        nbt_gls_input in = gls_input(&s, 0, d);
+        nbt_status st = nbt_gls_exec(g, NBT_GLS_NBT, &in, Sg, NULL);
+        scatter_emul(NBT_GLS_NBT, &in, Se);
+        double e = gl_vs_emul(Sg, Se, n * 3);
+        t_true(st == NBT_OK && e <= 1e-5, "wall+box, beta_px %.0f: nbt GL = CPU emulation (max diff %.2g of max S)",
+               (double)s.beta[far], e);
+        for (size_t i = 0; i < n * 3; i++)
+            Sd[i] = Sg[i];
+        nbt_screen_metrics m;
+        nbt_screen_compare(&sin, km, Sd, SA, &m);
+        printf("# wall+box 320x240, beta_px %.1f (box %.1f): nbt vs A relative L1 %.4f bias %+.4f\n",
+               (double)s.beta[far], (double)s.beta[100 * w + 150], m.rel_l1, m.bias);
+        t_true(fabs(m.bias) <= NBT_WIDEK_BIAS_TOL && m.rel_l1 <= NBT_WIDEK_L1_TOL,
+               "wall+box, beta_px %.0f: nbt against operator A, bias %+.3g within +-%.2g, relative L1 %.3g <= %.2g",
+               (double)s.beta[far], m.bias, NBT_WIDEK_BIAS_TOL, m.rel_l1, NBT_WIDEK_L1_TOL);
+        scene_free(&s);
+    }
+    if (g)
+        nbt_gls_free(g);
+    free(Sg);
+    free(SA);
+    free(Sd);
+    free(Se);
+}
+
 static void test_nbt_kernel(void)
 {
     const size_t w = 384, h = 384, n = w * h;
@@ -774,6 +836,7 @@ int main(void)
     test_nbt_wide(g, km, ke, dth);
     test_nbt_beyond_screen(g, km, ke, dth);
     test_nbt_slope_bias(g, km, ke, dth);
+    test_nbt_wide_kernels(km, ke, dth);
     test_nbt_kernel();
     test_odd_size(km, ke, dth);
     test_invariants(g, km, ke, dth);

@@ -39,7 +39,9 @@
  *       NBT_GLS_NBT_NB pyramid kernels U^l [B] D^l, l = 1..K (D: the 4-tap
  *       decimation, U: one bilinear octave up-step, B: an optional 3x3 blur
  *       [b, 1-2b, b]^2 at level l, b = NBT_GLS_NBT_BLUR, which puts a kernel
- *       half-way between two octaves), plus exact 3x3 centre taps (the
+ *       half-way between two octaves) and NBT_GLS_NBT_NW wide kernels (two
+ *       Gaussian blurs at level K, nbt_scatter_nbtwide.glsl: they reach
+ *       about 600 px, the pyramid's own about 150), plus exact 3x3 centre taps (the
  *       kernel's pixel integrals minus the pyramid's phase-averaged spill
  *       there). Depth slabs (NBT_GLS_NBT_SLABS, log-spaced over the finite
  *       depths; sky is one more): a receiver in slab i takes the centre taps
@@ -55,7 +57,8 @@
  *       first order in the kernel's change, strips whole across the line,
  *       so a kernel wider than the screen's sides is over-corrected). The
  *       approximation: that estimate, the fitted kernel shapes (misplaced mass 4-9% of the kernel's own for
- *       beta = 1 .. 30 px, tests/test_gl_scatter.c) and the second order in
+ *       beta = 1 .. 30 px, tests/test_gl_scatter.c; total mass within
+ *       +0.01 .. +1.0% of the kernel's for beta = 1 .. 200 px) and the second order in
  *       delta log2 beta. Weights are fitted (NNLS) for beta_px in
  *       [2^NBT_GLS_NBT_LO, 2^NBT_GLS_NBT_HI], held below and scaled by
  *       1/beta above (light a kernel sends beyond the pyramid's reach, as
@@ -116,29 +119,37 @@ typedef struct {
 /* Fills lut[NBT_GLS_LUT_N * 8]. */
 void nbt_gls_near_table(float *lut);
 
-/* NBT_GLS_NBT: the fit. Basis kernel b < NB/2 is level b + 1, b >= NB/2
- * level b - NB/2 + 1 with the blur. Weights tabulated at log2 beta_px =
- * LO + i / PER, i < N, linear in between. */
-#define NBT_GLS_NBT_NB 12
+/* NBT_GLS_NBT: the fit. Basis kernel b < K is level b + 1, K <= b < 2K
+ * level b - K + 1 with the blur, b = 2K + m level K with the wide blur m
+ * (nbt_gls_nbt_wide_taps): the pyramid's own kernels stop at about 150
+ * px, where an erfc kernel of beta = 100 px still has 7% of its mass, so
+ * without them wide kernels lost light on screen (-0.9% on 320x240 scenes).
+ * Weights tabulated at log2 beta_px = LO + i / PER, i < N, linear in between. */
+#define NBT_GLS_NBT_NW 2
+#define NBT_GLS_NBT_NB (2 * NBT_GLS_K + NBT_GLS_NBT_NW)
+#define NBT_GLS_NBT_WT 9
 #define NBT_GLS_NBT_BLUR 0.16
 #define NBT_GLS_NBT_LO (-1)
-#define NBT_GLS_NBT_HI 13 /* 8192 px: the fit window (r <= 256 px) is deep in the 1/r regime */
+#define NBT_GLS_NBT_HI 13 /* 8192 px: the fit window (r <= 640 px) is in the 1/r regime (G 6% below G(0) at its edge) */
 #define NBT_GLS_NBT_PER 4
 #define NBT_GLS_NBT_N ((NBT_GLS_NBT_HI - NBT_GLS_NBT_LO) * NBT_GLS_NBT_PER + 1)
 #define NBT_GLS_NBT_SLABS 4    /* default depth slabs */
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.2 s; thread-safe): tab[i * NB + b]. */
+ * 0.3 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
  * below the table, scaled by 2^(HI - lb) above it: a kernel far wider than
  * the pyramid's reach is G(0)/(sqrt(2 pi) beta r) there, so it only scales)
  * and their slope da[NB] in lb (the segment's; 0 below, -ln 2 a above). */
 void nbt_gls_nbt_weights(double lb, double *a, double *da);
-/* The 1-D phase-averaged level kernel of basis b at offset d (|d| < 512),
+/* The 1-D phase-averaged level kernel of basis b at offset d (|d| < 2048),
  * the 2-D one being the product of two. */
 double nbt_gls_nbt_kbar(int b, long d);
+/* The wide blur m < NBT_GLS_NBT_NW: 1-D taps t[|d|], d = -WT .. WT, a
+ * Gaussian of 1.5 (m = 0) or 3 (m = 1) texels normalised to sum 1. */
+void nbt_gls_nbt_wide_taps(int m, double t[NBT_GLS_NBT_WT + 1]);
 /* The centre-tap table of NBT_GLS_NBT, laid out as nbt_gls_near_table
  * (entries a00, a10, a11 used; the others 0): the atom's pixel integral
  * minus the pyramid's phase-averaged spill. */
