@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <nbt/screen.h>
 #include "nbt/gl_scatter.h"
 #include "gl_internal.h"
@@ -48,7 +49,10 @@ struct nbt_gls {
     GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
     GLuint ttail;             /* nbt: the atom's tail along a line (the in-slab excess) */
     unsigned slabs;
-    GLuint stamp[2]; /* GL_TIMESTAMP before and after the passes */
+    GLuint stamp[NBT_GLS_MAXPASSES + 1]; /* GL_TIMESTAMP before the passes and after each group */
+    const char *pname[NBT_GLS_MAXPASSES]; /* the groups of the last exec */
+    double pms[NBT_GLS_MAXPASSES], pcpu[NBT_GLS_MAXPASSES + 1]; /* GPU ms; process CPU s at each stamp */
+    unsigned nmark; /* stamps issued in this exec */
     float *buf; /* staging, w*h*4 */
 };
 
@@ -440,7 +444,7 @@ void nbt_gls_free(nbt_gls *g)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
-        glDeleteQueries(2, g->stamp);
+        glDeleteQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
     free(g->buf);
     free(g);
 }
@@ -509,7 +513,7 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     nbt_gls_nbt_tail_table(tail);
     glBindTexture(GL_TEXTURE_2D, g->ttail);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N, 1, GL_RED, GL_FLOAT, tail);
-    glGenQueries(2, g->stamp);
+    glGenQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
     if (!ok || glGetError() != GL_NO_ERROR) {
         nbt_gls_free(g);
         nbt__fail(ok ? NBT_EIO : NBT_ENOMEM, "gl_scatter: creating the textures failed");
@@ -573,6 +577,19 @@ static void bind_tex(GLuint unit, GLuint tex)
     glBindTexture(GL_TEXTURE_2D, tex);
 }
 
+/* a GL_TIMESTAMP after the group of passes called name (NULL: the start) */
+static void mark(nbt_gls *g, const char *name)
+{
+    if (g->nmark > NBT_GLS_MAXPASSES)
+        return;
+    if (name)
+        g->pname[g->nmark - 1] = name;
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    g->pcpu[g->nmark] = (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+    glQueryCounter(g->stamp[g->nmark++], GL_TIMESTAMP);
+}
+
 static void dispatch(size_t w, size_t h)
 {
     glDispatchCompute((GLuint)((w + 7) / 8), (GLuint)((h + 7) / 8), 1);
@@ -589,12 +606,13 @@ static void use(const nbt_gls *g, int pass)
 }
 
 /* the pyramid: level 0, then K levels (masked for Elek) */
-static void build_pyramid(const nbt_gls *g, int masked, float eps)
+static void build_pyramid(nbt_gls *g, int masked, float eps)
 {
     use(g, P_PYR0);
     glBindImageTexture(0, g->tpyr, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->twb, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch(g->pw, g->ph);
+    mark(g, "pyr0");
     use(g, P_DOWN);
     GLuint p = g->prog[P_DOWN];
     glUniform1i(glGetUniformLocation(p, "nbt_sc_masked"), masked);
@@ -610,6 +628,7 @@ static void build_pyramid(const nbt_gls *g, int masked, float eps)
         glBindImageTexture(3, g->twb, k, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
         dispatch(sw / 2, sh / 2);
     }
+    mark(g, "down");
 }
 
 static void set_plan(const nbt_gls *g, int pass, const nbt_gls_nbt_plan *pl)
@@ -629,7 +648,7 @@ static void dispatch3(size_t w, size_t h, size_t layers)
 /* method nbt: source pyramid, the collapse from level K to 1 (each level's
  * parts mixed from the source layers in the same pass, never stored), the
  * centre weights, the receivers */
-static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
+static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
 {
     unsigned n = pl->n, L = 3 * n + 1;
     size_t bw = g->pw / 2 + ((size_t)1 << NBT_GLS_K), bh = g->ph / 2 + ((size_t)1 << NBT_GLS_K);
@@ -639,6 +658,7 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     glUniform2i(glGetUniformLocation(g->prog[P_NBT0], "nbt_sc_lsize"), (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1));
     glBindImageTexture(0, g->tsrc, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(EXT(g->pw, 1), EXT(g->ph, 1));
+    mark(g, "nbt0");
     use(g, P_NBTDOWN);
     GLuint p = g->prog[P_NBTDOWN];
     for (int k = 2; k <= NBT_GLS_K; k++) {
@@ -648,6 +668,7 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glBindImageTexture(1, g->tsrc, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch3(EXT(g->pw, k), EXT(g->ph, k), L);
     }
+    mark(g, "nbtdown");
     /* the weights of each slab's mid beta and their slopes */
     double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
     for (unsigned j = 0; j < n; j++)
@@ -677,11 +698,13 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(EXT(g->pw, k), EXT(g->ph, k));
     }
+    mark(g, "nbtup");
     use(g, P_NEAR);
     bind_tex(2, g->tnlut);
     glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(g->w, g->h);
+    mark(g, "near");
     use(g, P_NBT);
     set_plan(g, P_NBT, pl);
     glUniform2i(glGetUniformLocation(g->prog[P_NBT], "nbt_sc_usize"), (GLint)bw, (GLint)bh);
@@ -695,6 +718,7 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
     glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(g->w, g->h);
+    mark(g, "nbt");
     bind_tex(2, g->tlut);
     glActiveTexture(GL_TEXTURE7);
     glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
@@ -740,13 +764,15 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 
     /* timestamps, not GL_TIME_ELAPSED: llvmpipe reports 1 ns elapsed for
      * compute-only work, while its timestamps (and a GPU's) bracket it */
-    glQueryCounter(g->stamp[0], GL_TIMESTAMP);
+    g->nmark = 0;
+    mark(g, NULL);
     switch (m) {
     case NBT_GLS_SHINYA:
         use(g, P_NEAR);
         glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "near");
         use(g, P_SHINYA);
         bind_tex(3, g->tn0);
         bind_tex(4, g->tn1);
@@ -754,6 +780,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         glUniform1f(glGetUniformLocation(g->prog[P_SHINYA], "nbt_sc_cut"), (float)in->cut);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "shinya");
         break;
     case NBT_GLS_SHINYA_LITERAL:
         use(g, P_LITERAL);
@@ -761,6 +788,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         glUniform1f(glGetUniformLocation(g->prog[P_LITERAL], "nbt_sc_dtheta"), (float)in->dtheta);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "literal");
         break;
     case NBT_GLS_NAIVE:
     case NBT_GLS_ELEK: {
@@ -772,13 +800,13 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         bind_tex(3, g->twb);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, PASSES[pass].name);
         break;
     }
     case NBT_GLS_NBT:
         run_nbt(g, &plan);
         break;
     }
-    glQueryCounter(g->stamp[1], GL_TIMESTAMP);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, g->tout);
@@ -787,16 +815,35 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     for (size_t i = 0; i < np; i++)
         for (int c = 0; c < 3; c++)
             S[3 * i + c] = g->buf[4 * i + c];
+    GLuint64 t0 = 0, t1 = 0;
+    glGetQueryObjectui64v(g->stamp[0], GL_QUERY_RESULT, &t0);
+    for (unsigned k = 1; k < g->nmark; k++, t0 = t1) {
+        glGetQueryObjectui64v(g->stamp[k], GL_QUERY_RESULT, &t1);
+        g->pms[k - 1] = t1 > t0 ? (double)(t1 - t0) * 1e-6 : 0.0;
+    }
     if (gpu_ms) {
-        GLuint64 t0 = 0, t1 = 0;
-        glGetQueryObjectui64v(g->stamp[0], GL_QUERY_RESULT, &t0);
-        glGetQueryObjectui64v(g->stamp[1], GL_QUERY_RESULT, &t1);
-        *gpu_ms = t1 > t0 ? (double)(t1 - t0) * 1e-6 : 0.0;
+        *gpu_ms = 0;
+        for (unsigned k = 1; k < g->nmark; k++)
+            *gpu_ms += g->pms[k - 1];
     }
     glUseProgram(0);
     if (glGetError() != GL_NO_ERROR)
         return nbt__fail(NBT_EIO, "gl_scatter: a GL call failed");
     return NBT_OK;
+}
+
+unsigned nbt_gls_pass_times(const nbt_gls *g, const char **names, double *ms, double *cpu_ms, unsigned max)
+{
+    unsigned n = g && g->nmark > 0 ? g->nmark - 1 : 0;
+    for (unsigned k = 0; k < n && k < max; k++) {
+        if (names)
+            names[k] = g->pname[k];
+        if (ms)
+            ms[k] = g->pms[k];
+        if (cpu_ms)
+            cpu_ms[k] = 1e3 * (g->pcpu[k + 1] - g->pcpu[k]);
+    }
+    return n;
 }
 
 nbt_status nbt_gls_run(nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms)

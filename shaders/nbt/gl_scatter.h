@@ -179,6 +179,20 @@ void nbt_gls_free(nbt_gls *g);
  * size mismatch or an unknown method, NBT_EIO on a GL error. */
 nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
 
+/* The GPU time of each group of passes of the last exec, in order (a
+ * GL_TIMESTAMP after each; their sum is exec's gpu_ms): names[k], ms[k]
+ * and cpu_ms[k] for k < min(count, max), any of them may be NULL; returns
+ * the count (0 before the first exec). cpu_ms: the process's CPU time
+ * (all threads) over the same span: on a software GL that finishes a
+ * dispatch before returning (Mesa's llvmpipe) the pass's work, which
+ * other jobs on a shared machine do not inflate; on a GPU only the
+ * driver's. Groups: shinya "near", "shinya"; shinya-literal "literal";
+ * naive and elek "pyr0", "down" (all K levels), "naive" or "elek"; nbt
+ * "nbt0" (source level 1), "nbtdown" (levels 2 .. K), "nbtup" (the
+ * collapse), "near", "nbt" (the receivers). */
+#define NBT_GLS_MAXPASSES 8
+unsigned nbt_gls_pass_times(const nbt_gls *g, const char **names, double *ms, double *cpu_ms, unsigned max);
+
 /* NBT_GLS_NBT's slab count for later runs (1 .. NBT_GLS_NBT_MAXSLABS;
  * NBT_GLS_NBT_SLABS at alloc); NBT_EDOM outside. */
 nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs);
