@@ -508,11 +508,14 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     /* rows: texel (i, 0) = entries 0..3 of i, (i, 1) = entries 4..7 */
     int ok = upload_lut(g->tlut, lut);
     free(lut);
-    g->ttail = make_tex(1, GL_R32F, NBT_GLS_TAIL_N, 1, 0);
-    float tail[NBT_GLS_TAIL_N];
+    /* texel k = (tail[k], tail[k + 1]): one fetch per linear lookup */
+    g->ttail = make_tex(1, GL_RG32F, NBT_GLS_TAIL_N - 1, 1, 0);
+    float tail[NBT_GLS_TAIL_N], pair[2 * (NBT_GLS_TAIL_N - 1)];
     nbt_gls_nbt_tail_table(tail);
+    for (int k = 0; k + 1 < NBT_GLS_TAIL_N; k++)
+        pair[2 * k] = tail[k], pair[2 * k + 1] = tail[k + 1];
     glBindTexture(GL_TEXTURE_2D, g->ttail);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N, 1, GL_RED, GL_FLOAT, tail);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N - 1, 1, GL_RG, GL_FLOAT, pair);
     glGenQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
     if (!ok || glGetError() != GL_NO_ERROR) {
         nbt_gls_free(g);
@@ -700,6 +703,7 @@ static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
     }
     mark(g, "nbtup");
     use(g, P_NEAR);
+    glUniform1i(glGetUniformLocation(g->prog[P_NEAR], "nbt_sc_only0"), 1); /* a store per pixel less */
     bind_tex(2, g->tnlut);
     glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
@@ -769,6 +773,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     switch (m) {
     case NBT_GLS_SHINYA:
         use(g, P_NEAR);
+        glUniform1i(glGetUniformLocation(g->prog[P_NEAR], "nbt_sc_only0"), 0);
         glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
