@@ -48,6 +48,9 @@ struct nbt_gls {
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
     GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
     GLuint ttail;             /* nbt: the atom's tail along a line (the in-slab excess) */
+    GLuint stage;             /* nbt: the levels' stores, a band of rows at a time (nbt_sc_put) */
+    size_t stage_cap;         /* its size in texels (vec4) */
+    unsigned band_rows;       /* a cap on the rows per band (nbt_gls_set_band_rows), 0: none */
     unsigned slabs;
     GLuint stamp[NBT_GLS_MAXPASSES + 1]; /* GL_TIMESTAMP before the passes and after each group */
     const char *pname[NBT_GLS_MAXPASSES]; /* the groups of the last exec */
@@ -432,6 +435,14 @@ nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs)
     return NBT_OK;
 }
 
+nbt_status nbt_gls_set_band_rows(nbt_gls *g, unsigned rows)
+{
+    if (!g)
+        return nbt__fail(NBT_EINVAL, "gl_scatter: no context");
+    g->band_rows = rows;
+    return NBT_OK;
+}
+
 void nbt_gls_free(nbt_gls *g)
 {
     if (!g)
@@ -445,6 +456,8 @@ void nbt_gls_free(nbt_gls *g)
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
         glDeleteQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
+    if (g->stage)
+        glDeleteBuffers(1, &g->stage);
     free(g->buf);
     free(g);
 }
@@ -496,6 +509,23 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     g->tsrc = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->tcol = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->slabs = NBT_GLS_NBT_SLABS;
+    /* the staging buffer: a whole level 1 of every layer, or as many rows
+     * as one shader storage block holds (at least one) */
+    GLint64 maxblk = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxblk);
+    size_t l1w = (g->pw >> 1) + 2, l1h = (g->ph >> 1) + 2, row = l1w * NBT_LAYERS;
+    g->stage_cap = row * l1h;
+    if (maxblk > 0 && g->stage_cap > (size_t)maxblk / 16)
+        g->stage_cap = (size_t)maxblk / 16 / row * row;
+    if (g->stage_cap < row) {
+        nbt_gls_free(g);
+        nbt__fail(NBT_EDOM, "gl_scatter: image too wide for a shader storage block (GL_MAX_SHADER_STORAGE_BLOCK_SIZE)");
+        return NULL;
+    }
+    glGenBuffers(1, &g->stage);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, g->stage);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(g->stage_cap * 16), NULL, GL_DYNAMIC_COPY);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     float *lut = malloc(NBT_GLS_LUT_N * 8 * sizeof *lut);
     if (!lut) {
         nbt_gls_free(g);
@@ -642,10 +672,35 @@ static void set_plan(const nbt_gls *g, int pass, const nbt_gls_nbt_plan *pl)
     glUniform1fv(glGetUniformLocation(p, "nbt_sc_lb"), NBT_GLS_NBT_MAXSLABS, pl->lb);
 }
 
-static void dispatch3(size_t w, size_t h, size_t layers)
+/* one pass that writes every texel of level tlevel of the array texture
+ * tex (w x h, layers 0 .. L-1) through nbt_sc_put (per_layer: an
+ * invocation per layer, gl_GlobalInvocationID.z): band by band of rows
+ * into the staging buffer, each copied into the texture (a buffer store
+ * and the copy cost llvmpipe about a tenth of an imageStore) */
+static void staged(const nbt_gls *g, GLuint prog, GLuint tex, GLint tlevel, GLint w, GLint h, GLint L, int per_layer)
 {
-    glDispatchCompute((GLuint)((w + 7) / 8), (GLuint)((h + 7) / 8), (GLuint)layers);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    GLint rows = (GLint)(g->stage_cap / ((size_t)w * (size_t)L)), band = glGetUniformLocation(prog, "nbt_sc_rows");
+    if (g->band_rows && rows > (GLint)g->band_rows)
+        rows = (GLint)g->band_rows;
+    if (rows > h)
+        rows = h;
+    glActiveTexture(GL_TEXTURE8);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g->stage);
+    for (GLint y0 = 0; y0 < h; y0 += rows) {
+        GLint bh = h - y0 < rows ? h - y0 : rows;
+        glUniform3i(band, y0, bh, w);
+        glDispatchCompute((GLuint)(w + 7) / 8, (GLuint)(bh + 7) / 8, per_layer ? (GLuint)L : 1);
+        glMemoryBarrier(GL_PIXEL_BUFFER_BARRIER_BIT);
+        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, g->stage);
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, tlevel, 0, y0, 0, w, bh, L, GL_RGBA, GL_FLOAT, NULL);
+        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+        /* the next band's stores may not overtake this copy (a GPU reads the buffer later) */
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
 }
 
 /* method nbt: source pyramid, the collapse from level K to 1 (each level's
@@ -659,8 +714,7 @@ static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
     use(g, P_NBT0);
     set_plan(g, P_NBT0, pl);
     glUniform2i(glGetUniformLocation(g->prog[P_NBT0], "nbt_sc_lsize"), (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1));
-    glBindImageTexture(0, g->tsrc, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    dispatch(EXT(g->pw, 1), EXT(g->ph, 1));
+    staged(g, g->prog[P_NBT0], g->tsrc, 0, (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1), (GLint)L, 0);
     mark(g, "nbt0");
     use(g, P_NBTDOWN);
     GLuint p = g->prog[P_NBTDOWN];
@@ -668,8 +722,7 @@ static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glUniform2i(glGetUniformLocation(p, "nbt_sc_srcsize"), (GLint)EXT(g->pw, k - 1), (GLint)EXT(g->ph, k - 1));
         glUniform2i(glGetUniformLocation(p, "nbt_sc_dstsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
         glBindImageTexture(0, g->tsrc, k - 2, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, g->tsrc, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch3(EXT(g->pw, k), EXT(g->ph, k), L);
+        staged(g, p, g->tsrc, k - 1, (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k), (GLint)L, 1);
     }
     mark(g, "nbtdown");
     /* the weights of each slab's mid beta and their slopes */
@@ -698,8 +751,7 @@ static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glUniform2i(glGetUniformLocation(p, "nbt_sc_usize"), (GLint)(bw >> k), (GLint)(bh >> k));
         glUniform1i(glGetUniformLocation(p, "nbt_sc_level"), k);
         glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch(EXT(g->pw, k), EXT(g->ph, k));
+        staged(g, p, g->tcol, k - 1, (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k), (GLint)(3 * n), 0);
     }
     mark(g, "nbtup");
     use(g, P_NEAR);

@@ -479,6 +479,50 @@ static void test_nbt_slope_bias(nbt_gls *g, const nbt_screen_kernel *km, const n
     free(Se);
 }
 
+/* nbt stores its pyramid levels a band of rows at a time when a level
+ * exceeds one shader storage block (large images); forced here on a small
+ * one: 6 slabs (all 19 source layers), 1, 5 and 7 rows per band (level 1
+ * is 34 rows, level 6 three), on a floor with sky (every layer and the
+ * in-slab march busy). Each row is computed by the same code whichever
+ * band holds it, so S must equal the unbanded run's bit for bit; and both
+ * the CPU emulation to 1e-5 of max S. */
+static void test_nbt_bands(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    float *S0 = malloc(NP * 3 * sizeof *S0), *S1 = malloc(NP * 3 * sizeof *S1);
+    double *Se = malloc(NP * 3 * sizeof *Se);
+    scene s = scene_new("bands", W, H);
+    random_rgb(&s);
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
+            s.D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
+        }
+    scene_kernels(&s, km, ke, dth);
+    nbt_gls_input in = gls_input(&s, 0, dth);
+    nbt_gls_set_slabs(g, NBT_GLS_NBT_MAXSLABS);
+    nbt_status st = nbt_gls_exec(g, NBT_GLS_NBT, &in, S0, NULL);
+    scatter_emul_nbt(&in, NBT_GLS_NBT_MAXSLABS, Se);
+    const unsigned rows[3] = {1, 5, 7};
+    for (int r = 0; r < 3; r++) {
+        nbt_gls_set_band_rows(g, rows[r]);
+        nbt_status st1 = nbt_gls_exec(g, NBT_GLS_NBT, &in, S1, NULL);
+        size_t diff = 0;
+        for (size_t i = 0; i < NP * 3; i++)
+            diff += S1[i] != S0[i];
+        double e = gl_vs_emul(S1, Se, NP * 3);
+        t_true(st == NBT_OK && st1 == NBT_OK && diff == 0 && e <= 1e-5,
+               "nbt, %d slabs, %u rows per band: S equals the unbanded run's (%zu of %d values differ), the CPU "
+               "emulation to %.2g of max S",
+               NBT_GLS_NBT_MAXSLABS, rows[r], diff, NP * 3, e);
+    }
+    nbt_gls_set_band_rows(g, 0);
+    nbt_gls_set_slabs(g, NBT_GLS_NBT_SLABS);
+    scene_free(&s);
+    free(S0);
+    free(S1);
+    free(Se);
+}
+
 static void test_nbt_kernel(void)
 {
     const size_t w = 384, h = 384, n = w * h;
@@ -774,6 +818,7 @@ int main(void)
     test_nbt_wide(g, km, ke, dth);
     test_nbt_beyond_screen(g, km, ke, dth);
     test_nbt_slope_bias(g, km, ke, dth);
+    test_nbt_bands(g, km, ke, dth);
     test_nbt_kernel();
     test_odd_size(km, ke, dth);
     test_invariants(g, km, ke, dth);

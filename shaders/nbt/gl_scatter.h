@@ -193,6 +193,14 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 #define NBT_GLS_MAXPASSES 8
 unsigned nbt_gls_pass_times(const nbt_gls *g, const char **names, double *ms, double *cpu_ms, unsigned max);
 
+/* NBT_GLS_NBT writes its pyramid levels through a staging buffer, a band
+ * of rows at a time (as many as one shader storage block holds: all of a
+ * level unless the image is large, e.g. above ~1080p at 6 slabs on
+ * llvmpipe's 128 MiB). This caps the rows per band (0: no cap) so that
+ * tests can take the banded path on small images; the output does not
+ * depend on it. */
+nbt_status nbt_gls_set_band_rows(nbt_gls *g, unsigned rows);
+
 /* NBT_GLS_NBT's slab count for later runs (1 .. NBT_GLS_NBT_MAXSLABS;
  * NBT_GLS_NBT_SLABS at alloc); NBT_EDOM outside. */
 nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs);
