@@ -48,6 +48,7 @@ struct nbt_gls {
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
     GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
     GLuint ttail;             /* nbt: the atom's tail along a line (the in-slab excess) */
+    GLuint tdk;               /* nbt: the depth keys alone (R32F): the march reads 4 bytes a tap, not 16 */
     GLuint stage;             /* nbt: the levels' stores, a band of rows at a time (nbt_sc_put) */
     size_t stage_cap;         /* its size in texels (vec4) */
     unsigned band_rows;       /* a cap on the rows per band (nbt_gls_set_band_rows), 0: none */
@@ -450,8 +451,8 @@ void nbt_gls_free(nbt_gls *g)
     for (int i = 0; i < NPASS; i++)
         if (g->prog[i])
             glDeleteProgram(g->prog[i]);
-    GLuint t[12] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol, g->ttail};
-    for (int i = 0; i < 12; i++)
+    GLuint t[13] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol, g->ttail, g->tdk};
+    for (int i = 0; i < 13; i++)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
@@ -497,6 +498,7 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
         }
     glActiveTexture(GL_TEXTURE0);
     g->tc = make_tex(1, GL_RGBA32F, w, h, 0);
+    g->tdk = make_tex(1, GL_R32F, w, h, 0);
     g->tp = make_tex(1, GL_RGBA32F, w, h, 0);
     g->tn0 = make_tex(1, GL_RGBA32F, w, h, 0);
     g->tn1 = make_tex(1, GL_RGBA32F, w, h, 0);
@@ -768,6 +770,7 @@ static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
     bind_tex(4, g->tn0);
     bind_tex(5, g->tlut);  /* the atom's 3x3 weights and */
     bind_tex(6, g->ttail); /* its tail: the in-slab excess */
+    bind_tex(9, g->tdk);   /* the depth keys for the march */
     glActiveTexture(GL_TEXTURE7);
     glBindTexture(GL_TEXTURE_2D_ARRAY, g->tsrc); /* and the slabs' colours */
     glActiveTexture(GL_TEXTURE3);
@@ -802,6 +805,12 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     }
     glBindTexture(GL_TEXTURE_2D, g->tc);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_FLOAT, g->buf);
+    if (m == NBT_GLS_NBT) { /* the depth keys alone, in place (i <= 4i + 3) */
+        for (size_t i = 0; i < np; i++)
+            g->buf[i] = g->buf[4 * i + 3];
+        glBindTexture(GL_TEXTURE_2D, g->tdk);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RED, GL_FLOAT, g->buf);
+    }
     for (size_t i = 0; i < np; i++) {
         g->buf[4 * i] = in->M0[i];
         g->buf[4 * i + 1] = in->beta_px[i];

@@ -37,6 +37,7 @@ layout(binding = 4) uniform sampler2D nbt_sc_n0;
 layout(rgba32f, binding = 0) uniform writeonly image2D nbt_sc_out;
 uniform ivec2 nbt_sc_usize; // texture size of level 1 (texture level 0)
 layout(binding = 5) uniform sampler2D nbt_sc_alut; // the atom's near table (nbt_gls_near_table)
+layout(binding = 9) uniform sampler2D nbt_sc_dk; // nbt_sc_c's depth keys alone (R32F): a quarter of the memory per tap
 layout(binding = 6) uniform sampler2D nbt_sc_tail; // nbt_gls_nbt_tail_table, texel k = (tail[k], tail[k + 1])
 layout(binding = 7) uniform sampler2DArray nbt_sc_srct; // the source pyramid (levels 1 .. K)
 
@@ -112,7 +113,7 @@ vec3 nbt_sc_march(ivec2 x, float Dx, vec2 r, int i, vec2 px, ivec2 e)
             h = float(e.x > 0 ? nbt_sc_size.x - x.x : e.x < 0 ? x.x + 1 : e.y > 0 ? nbt_sc_size.y - x.y : x.y + 1) - 0.5;
             break;
         }
-        float Dy = texelFetch(nbt_sc_c, y, 0).a;
+        float Dy = texelFetch(nbt_sc_dk, y, 0).r;
         if (!(Dy > 0.0 && Dy >= r.x && Dy < r.y)) {
             h = 0.5 * float(tprev + t);
             break;
@@ -135,7 +136,7 @@ vec3 nbt_sc_march(ivec2 x, float Dx, vec2 r, int i, vec2 px, ivec2 e)
     tprev = 0;
     for (int k = 0; k < cnt; k++) {
         ivec2 y = x + t * e;
-        float Dy = texelFetch(nbt_sc_c, y, 0).a;
+        float Dy = texelFetch(nbt_sc_dk, y, 0).r;
         vec2 ky = Dy > Dx ? texelFetch(nbt_sc_p, y, 0).xy : px;
         if (ky != prev) {
             float tm = 0.5 * float(tprev + t), by = max(ky.y, 1e-6), hy = nbt_sc_tailv(h / by);

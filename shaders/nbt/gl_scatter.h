@@ -174,7 +174,8 @@ void nbt_gls_free(nbt_gls *g);
  * reads S back (w*h*3 floats). gpu_ms (may be NULL): the GPU time of the
  * method's passes (GL_TIMESTAMP queries around them: llvmpipe
  * reports 1 ns for GL_TIME_ELAPSED of compute work; upload and read-back
- * excluded).
+ * excluded: the upload is of the input, c with D and the kernel per
+ * pixel, and for nbt D once more alone).
  * NBT_EDOM for an input outside the documented ranges, NBT_EINVAL for a
  * size mismatch or an unknown method, NBT_EIO on a GL error. */
 nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
@@ -205,8 +206,8 @@ nbt_status nbt_gls_set_band_rows(nbt_gls *g, unsigned rows);
  * NBT_GLS_NBT_SLABS at alloc); NBT_EDOM outside. */
 nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs);
 
-/* GL state left behind by exec: program 0; textures on units 0-4, images on
- * units 0-3 and the active texture unit are the context's. */
+/* GL state left behind by exec: program 0; 2-D textures on units 0-9, images
+ * on units 0-3 and the active texture unit are the context's. */
 
 /* One-shot: alloc, exec, free. */
 nbt_status nbt_gls_run(nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
