@@ -708,6 +708,45 @@ static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_s
 }
 
 /* time per pass at 320x240 (the three-layer scene scaled, same kernels in pixels) */
+static double clock_s(clockid_t c)
+{
+    struct timespec t;
+    clock_gettime(c, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* nbt_gls_pass_times after one more exec: the method's groups by name in
+ * order, each time >= 0, their GPU sum (timestamps inside exec) at most
+ * exec's wall time and above 0, their CPU sum at most the process's CPU
+ * time over exec (a unit or a misplaced stamp breaks one of these) */
+static void check_pass_times(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S)
+{
+    static const char *const want[NBT_GLS_NMETHODS][6] = {{"near", "shinya"},
+                                                         {"literal"},
+                                                         {"pyr0", "down", "naive"},
+                                                         {"pyr0", "down", "elek"},
+                                                         {"nbt0", "nbtdown", "nbtup", "near", "nbt"}};
+    const char *nm[NBT_GLS_MAXPASSES];
+    double ms[NBT_GLS_MAXPASSES], cpu[NBT_GLS_MAXPASSES], gpu = 0;
+    double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+    nbt_status st = nbt_gls_exec(g, m, in, S, &gpu);
+    double wall = 1e3 * (clock_s(CLOCK_MONOTONIC) - w0), pcpu = 1e3 * (clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0);
+    unsigned n = nbt_gls_pass_times(g, nm, ms, cpu, NBT_GLS_MAXPASSES), nw = 0;
+    while (nw < 6 && want[m][nw])
+        nw++;
+    int names = n == nw, pos = 1;
+    double sg = 0, sc = 0;
+    for (unsigned k = 0; k < n && k < NBT_GLS_MAXPASSES; k++) {
+        names = names && k < nw && !strcmp(nm[k], want[m][k]);
+        pos = pos && ms[k] >= 0 && cpu[k] >= 0;
+        sg += ms[k], sc += cpu[k];
+    }
+    t_true(st == NBT_OK && names && pos && sg > 0 && sg <= wall && fabs(sg - gpu) <= 1e-9 * gpu && sc <= pcpu,
+           "%s: %u pass groups named as documented (%s ...), GPU sum %.3g ms in (0, exec's wall %.3g ms], = gpu_ms "
+           "%.3g, CPU sum %.3g ms <= the process's %.3g ms",
+           nbt_gls_method_name(m), n, n ? nm[0] : "-", sg, wall, gpu, sc, pcpu);
+}
+
 static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
 {
     const size_t w = 320, h = 240, n = w * h;
@@ -741,6 +780,7 @@ static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke,
         if (m == NBT_GLS_SHINYA)
             best = ms;
         t_true(st == NBT_OK, "%s runs at %zux%zu", nbt_gls_method_name((nbt_gls_method)m), w, h);
+        check_pass_times(g, (nbt_gls_method)m, &in, S);
         printf("# %s at %zux%zu: %.1f ms (best of 3 after a first run; window %ld px)\n",
                nbt_gls_method_name((nbt_gls_method)m), w, h, best, R);
     }
