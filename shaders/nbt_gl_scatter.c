@@ -789,6 +789,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 {
     if (!g || in->w != g->w || in->h != g->h)
         return nbt__fail(NBT_EINVAL, "gl_scatter: the input's size is not the context's");
+    g->nmark = 0; /* a refused input leaves no pass times behind */
     nbt_status st = check_input(m, in);
     if (st != NBT_OK)
         return st;

@@ -677,8 +677,11 @@ static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_s
         s.D[i] = 3.3f;
     scene_kernels(&s, km, ke, dth);
     nbt_gls_input b = gls_input(&s, 0, dth);
+    unsigned ran = nbt_gls_pass_times(g, NULL, NULL, NULL, 0);
     s.D[17] = -1.0f;
     t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EDOM, "negative depth refused");
+    t_true(ran > 0 && nbt_gls_pass_times(g, NULL, NULL, NULL, 0) == 0,
+           "a refused input leaves no pass times behind (%u groups from the run before)", ran);
     s.D[17] = NAN;
     t_true(nbt_gls_exec(g, NBT_GLS_NAIVE, &b, S, NULL) == NBT_EDOM, "NaN depth refused");
     s.D[17] = 3.3f;

@@ -183,7 +183,8 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 /* The GPU time of each group of passes of the last exec, in order (a
  * GL_TIMESTAMP after each; their sum is exec's gpu_ms): names[k], ms[k]
  * and cpu_ms[k] for k < min(count, max), any of them may be NULL; returns
- * the count (0 before the first exec). cpu_ms: the process's CPU time
+ * the count (0 before the first exec and after one that refused its
+ * input). cpu_ms: the process's CPU time
  * (all threads) over the same span: on a software GL that finishes a
  * dispatch before returning (Mesa's llvmpipe) the pass's work, which
  * other jobs on a shared machine do not inflate; on a GPU only the
