@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <nbt/screen.h>
 #include "nbt/gl_scatter.h"
 #include "gl_internal.h"
@@ -48,8 +49,15 @@ struct nbt_gls {
     GLuint tc, tp, tn0, tn1, tlut, tout, tpyr, twb;
     GLuint tnlut, tsrc, tcol; /* nbt: centre table, source pyramid, collapse */
     GLuint ttail;             /* nbt: the atom's tail along a line (the in-slab excess) */
+    GLuint tdk;               /* nbt: the depth keys alone (R32F): the march reads 4 bytes a tap, not 16 */
+    GLuint stage;             /* nbt: the levels' stores, a band of rows at a time (nbt_sc_put) */
+    size_t stage_cap;         /* its size in texels (vec4) */
+    unsigned band_rows;       /* a cap on the rows per band (nbt_gls_set_band_rows), 0: none */
     unsigned slabs;
-    GLuint stamp[2]; /* GL_TIMESTAMP before and after the passes */
+    GLuint stamp[NBT_GLS_MAXPASSES + 1]; /* GL_TIMESTAMP before the passes and after each group */
+    const char *pname[NBT_GLS_MAXPASSES]; /* the groups of the last exec */
+    double pms[NBT_GLS_MAXPASSES], pcpu[NBT_GLS_MAXPASSES + 1]; /* GPU ms; process CPU s at each stamp */
+    unsigned nmark; /* stamps issued in this exec */
     float *buf; /* staging, w*h*4 */
 };
 
@@ -492,6 +500,14 @@ nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs)
     return NBT_OK;
 }
 
+nbt_status nbt_gls_set_band_rows(nbt_gls *g, unsigned rows)
+{
+    if (!g)
+        return nbt__fail(NBT_EINVAL, "gl_scatter: no context");
+    g->band_rows = rows;
+    return NBT_OK;
+}
+
 void nbt_gls_free(nbt_gls *g)
 {
     if (!g)
@@ -499,12 +515,14 @@ void nbt_gls_free(nbt_gls *g)
     for (int i = 0; i < NPASS; i++)
         if (g->prog[i])
             glDeleteProgram(g->prog[i]);
-    GLuint t[12] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol, g->ttail};
-    for (int i = 0; i < 12; i++)
+    GLuint t[13] = {g->tc, g->tp, g->tn0, g->tn1, g->tlut, g->tout, g->tpyr, g->twb, g->tnlut, g->tsrc, g->tcol, g->ttail, g->tdk};
+    for (int i = 0; i < 13; i++)
         if (t[i])
             glDeleteTextures(1, &t[i]);
     if (g->stamp[0])
-        glDeleteQueries(2, g->stamp);
+        glDeleteQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
+    if (g->stage)
+        glDeleteBuffers(1, &g->stage);
     free(g->buf);
     free(g);
 }
@@ -544,6 +562,7 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
         }
     glActiveTexture(GL_TEXTURE0);
     g->tc = make_tex(1, GL_RGBA32F, w, h, 0);
+    g->tdk = make_tex(1, GL_R32F, w, h, 0);
     g->tp = make_tex(1, GL_RGBA32F, w, h, 0);
     g->tn0 = make_tex(1, GL_RGBA32F, w, h, 0);
     g->tn1 = make_tex(1, GL_RGBA32F, w, h, 0);
@@ -556,6 +575,23 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     g->tsrc = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->tcol = make_arr(NBT_GLS_K, NBT_LAYERS, g->pw / 2 + pad, g->ph / 2 + pad);
     g->slabs = NBT_GLS_NBT_SLABS;
+    /* the staging buffer: a whole level 1 of every layer, or as many rows
+     * as one shader storage block holds (at least one) */
+    GLint64 maxblk = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &maxblk);
+    size_t l1w = (g->pw >> 1) + 2, l1h = (g->ph >> 1) + 2, row = l1w * NBT_LAYERS;
+    g->stage_cap = row * l1h;
+    if (maxblk > 0 && g->stage_cap > (size_t)maxblk / 16)
+        g->stage_cap = (size_t)maxblk / 16 / row * row;
+    if (g->stage_cap < row) {
+        nbt_gls_free(g);
+        nbt__fail(NBT_EDOM, "gl_scatter: image too wide for a shader storage block (GL_MAX_SHADER_STORAGE_BLOCK_SIZE)");
+        return NULL;
+    }
+    glGenBuffers(1, &g->stage);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, g->stage);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(g->stage_cap * 16), NULL, GL_DYNAMIC_COPY);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     float *lut = malloc(NBT_GLS_LUT_N * 8 * sizeof *lut);
     if (!lut) {
         nbt_gls_free(g);
@@ -568,12 +604,15 @@ nbt_gls *nbt_gls_alloc(size_t w, size_t h)
     /* rows: texel (i, 0) = entries 0..3 of i, (i, 1) = entries 4..7 */
     int ok = upload_lut(g->tlut, lut);
     free(lut);
-    g->ttail = make_tex(1, GL_R32F, NBT_GLS_TAIL_N, 1, 0);
-    float tail[NBT_GLS_TAIL_N];
+    /* texel k = (tail[k], tail[k + 1]): one fetch per linear lookup */
+    g->ttail = make_tex(1, GL_RG32F, NBT_GLS_TAIL_N - 1, 1, 0);
+    float tail[NBT_GLS_TAIL_N], pair[2 * (NBT_GLS_TAIL_N - 1)];
     nbt_gls_nbt_tail_table(tail);
+    for (int k = 0; k + 1 < NBT_GLS_TAIL_N; k++)
+        pair[2 * k] = tail[k], pair[2 * k + 1] = tail[k + 1];
     glBindTexture(GL_TEXTURE_2D, g->ttail);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N, 1, GL_RED, GL_FLOAT, tail);
-    glGenQueries(2, g->stamp);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, NBT_GLS_TAIL_N - 1, 1, GL_RG, GL_FLOAT, pair);
+    glGenQueries(NBT_GLS_MAXPASSES + 1, g->stamp);
     if (!ok || glGetError() != GL_NO_ERROR) {
         nbt_gls_free(g);
         nbt__fail(ok ? NBT_EIO : NBT_ENOMEM, "gl_scatter: creating the textures failed");
@@ -637,6 +676,19 @@ static void bind_tex(GLuint unit, GLuint tex)
     glBindTexture(GL_TEXTURE_2D, tex);
 }
 
+/* a GL_TIMESTAMP after the group of passes called name (NULL: the start) */
+static void mark(nbt_gls *g, const char *name)
+{
+    if (g->nmark > NBT_GLS_MAXPASSES)
+        return;
+    if (name)
+        g->pname[g->nmark - 1] = name;
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    g->pcpu[g->nmark] = (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+    glQueryCounter(g->stamp[g->nmark++], GL_TIMESTAMP);
+}
+
 static void dispatch(size_t w, size_t h)
 {
     glDispatchCompute((GLuint)((w + 7) / 8), (GLuint)((h + 7) / 8), 1);
@@ -653,12 +705,13 @@ static void use(const nbt_gls *g, int pass)
 }
 
 /* the pyramid: level 0, then K levels (masked for Elek) */
-static void build_pyramid(const nbt_gls *g, int masked, float eps)
+static void build_pyramid(nbt_gls *g, int masked, float eps)
 {
     use(g, P_PYR0);
     glBindImageTexture(0, g->tpyr, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->twb, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch(g->pw, g->ph);
+    mark(g, "pyr0");
     use(g, P_DOWN);
     GLuint p = g->prog[P_DOWN];
     glUniform1i(glGetUniformLocation(p, "nbt_sc_masked"), masked);
@@ -674,6 +727,7 @@ static void build_pyramid(const nbt_gls *g, int masked, float eps)
         glBindImageTexture(3, g->twb, k, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
         dispatch(sw / 2, sh / 2);
     }
+    mark(g, "down");
 }
 
 static void set_plan(const nbt_gls *g, int pass, const nbt_gls_nbt_plan *pl)
@@ -684,10 +738,35 @@ static void set_plan(const nbt_gls *g, int pass, const nbt_gls_nbt_plan *pl)
     glUniform1fv(glGetUniformLocation(p, "nbt_sc_lb"), NBT_GLS_NBT_MAXSLABS, pl->lb);
 }
 
-static void dispatch3(size_t w, size_t h, size_t layers)
+/* one pass that writes every texel of level tlevel of the array texture
+ * tex (w x h, layers 0 .. L-1) through nbt_sc_put (per_layer: an
+ * invocation per layer, gl_GlobalInvocationID.z): band by band of rows
+ * into the staging buffer, each copied into the texture (a buffer store
+ * and the copy cost llvmpipe about a tenth of an imageStore) */
+static void staged(const nbt_gls *g, GLuint prog, GLuint tex, GLint tlevel, GLint w, GLint h, GLint L, int per_layer)
 {
-    glDispatchCompute((GLuint)((w + 7) / 8), (GLuint)((h + 7) / 8), (GLuint)layers);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    GLint rows = (GLint)(g->stage_cap / ((size_t)w * (size_t)L)), band = glGetUniformLocation(prog, "nbt_sc_rows");
+    if (g->band_rows && rows > (GLint)g->band_rows)
+        rows = (GLint)g->band_rows;
+    if (rows > h)
+        rows = h;
+    glActiveTexture(GL_TEXTURE8);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g->stage);
+    for (GLint y0 = 0; y0 < h; y0 += rows) {
+        GLint bh = h - y0 < rows ? h - y0 : rows;
+        glUniform3i(band, y0, bh, w);
+        glDispatchCompute((GLuint)(w + 7) / 8, (GLuint)(bh + 7) / 8, per_layer ? (GLuint)L : 1);
+        glMemoryBarrier(GL_PIXEL_BUFFER_BARRIER_BIT);
+        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, g->stage);
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, tlevel, 0, y0, 0, w, bh, L, GL_RGBA, GL_FLOAT, NULL);
+        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+        /* the next band's stores may not overtake this copy (a GPU reads the buffer later) */
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
 }
 
 /* method nbt's wide kernels at level K (nbt_scatter_nbtwide), after the
@@ -728,7 +807,7 @@ static int run_nbt_wide(const nbt_gls *g, const nbt_gls_nbt_plan *pl, double a[]
 /* method nbt: source pyramid, the collapse from level K to 1 (each level's
  * parts mixed from the source layers in the same pass, never stored), the
  * centre weights, the receivers */
-static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
+static void run_nbt(nbt_gls *g, const nbt_gls_nbt_plan *pl)
 {
     unsigned n = pl->n, L = 3 * n + 1;
     size_t bw = g->pw / 2 + ((size_t)1 << NBT_GLS_K), bh = g->ph / 2 + ((size_t)1 << NBT_GLS_K);
@@ -736,17 +815,17 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     use(g, P_NBT0);
     set_plan(g, P_NBT0, pl);
     glUniform2i(glGetUniformLocation(g->prog[P_NBT0], "nbt_sc_lsize"), (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1));
-    glBindImageTexture(0, g->tsrc, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    dispatch(EXT(g->pw, 1), EXT(g->ph, 1));
+    staged(g, g->prog[P_NBT0], g->tsrc, 0, (GLint)EXT(g->pw, 1), (GLint)EXT(g->ph, 1), (GLint)L, 0);
+    mark(g, "nbt0");
     use(g, P_NBTDOWN);
     GLuint p = g->prog[P_NBTDOWN];
     for (int k = 2; k <= NBT_GLS_K; k++) {
         glUniform2i(glGetUniformLocation(p, "nbt_sc_srcsize"), (GLint)EXT(g->pw, k - 1), (GLint)EXT(g->ph, k - 1));
         glUniform2i(glGetUniformLocation(p, "nbt_sc_dstsize"), (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k));
         glBindImageTexture(0, g->tsrc, k - 2, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, g->tsrc, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch3(EXT(g->pw, k), EXT(g->ph, k), L);
+        staged(g, p, g->tsrc, k - 1, (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k), (GLint)L, 1);
     }
+    mark(g, "nbtdown");
     /* the weights of each slab's mid beta and their slopes */
     double a[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB], da[NBT_GLS_NBT_MAXSLABS][NBT_GLS_NBT_NB];
     for (unsigned j = 0; j < n; j++)
@@ -773,18 +852,20 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
         glUniform2i(glGetUniformLocation(p, "nbt_sc_usize"), (GLint)(bw >> k), (GLint)(bh >> k));
         glUniform1i(glGetUniformLocation(p, "nbt_sc_level"), k);
         glBindImageTexture(0, g->tsrc, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, g->tcol, k - 1, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch(EXT(g->pw, k), EXT(g->ph, k));
+        staged(g, p, g->tcol, k - 1, (GLint)EXT(g->pw, k), (GLint)EXT(g->ph, k), (GLint)(3 * n), 0);
         if (k == NBT_GLS_K && run_nbt_wide(g, pl, a, da)) {
             use(g, P_NBTUP); /* back to the collapse for levels K - 1 .. 1 */
             set_plan(g, P_NBTUP, pl);
         }
     }
+    mark(g, "nbtup");
     use(g, P_NEAR);
+    glUniform1i(glGetUniformLocation(g->prog[P_NEAR], "nbt_sc_only0"), 1); /* a store per pixel less */
     bind_tex(2, g->tnlut);
     glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(g->w, g->h);
+    mark(g, "near");
     use(g, P_NBT);
     set_plan(g, P_NBT, pl);
     glUniform2i(glGetUniformLocation(g->prog[P_NBT], "nbt_sc_usize"), (GLint)bw, (GLint)bh);
@@ -792,12 +873,14 @@ static void run_nbt(const nbt_gls *g, const nbt_gls_nbt_plan *pl)
     bind_tex(4, g->tn0);
     bind_tex(5, g->tlut);  /* the atom's 3x3 weights and */
     bind_tex(6, g->ttail); /* its tail: the in-slab excess */
+    bind_tex(9, g->tdk);   /* the depth keys for the march */
     glActiveTexture(GL_TEXTURE7);
     glBindTexture(GL_TEXTURE_2D_ARRAY, g->tsrc); /* and the slabs' colours */
     glActiveTexture(GL_TEXTURE3);
     glBindTexture(GL_TEXTURE_2D_ARRAY, g->tcol);
     glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch(g->w, g->h);
+    mark(g, "nbt");
     bind_tex(2, g->tlut);
     glActiveTexture(GL_TEXTURE7);
     glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
@@ -809,6 +892,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 {
     if (!g || in->w != g->w || in->h != g->h)
         return nbt__fail(NBT_EINVAL, "gl_scatter: the input's size is not the context's");
+    g->nmark = 0; /* a refused input leaves no pass times behind */
     nbt_status st = check_input(m, in);
     if (st != NBT_OK)
         return st;
@@ -825,6 +909,12 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     }
     glBindTexture(GL_TEXTURE_2D, g->tc);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_FLOAT, g->buf);
+    if (m == NBT_GLS_NBT) { /* the depth keys alone, in place (i <= 4i + 3) */
+        for (size_t i = 0; i < np; i++)
+            g->buf[i] = g->buf[4 * i + 3];
+        glBindTexture(GL_TEXTURE_2D, g->tdk);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RED, GL_FLOAT, g->buf);
+    }
     for (size_t i = 0; i < np; i++) {
         g->buf[4 * i] = in->M0[i];
         g->buf[4 * i + 1] = in->beta_px[i];
@@ -843,13 +933,16 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
 
     /* timestamps, not GL_TIME_ELAPSED: llvmpipe reports 1 ns elapsed for
      * compute-only work, while its timestamps (and a GPU's) bracket it */
-    glQueryCounter(g->stamp[0], GL_TIMESTAMP);
+    g->nmark = 0;
+    mark(g, NULL);
     switch (m) {
     case NBT_GLS_SHINYA:
         use(g, P_NEAR);
+        glUniform1i(glGetUniformLocation(g->prog[P_NEAR], "nbt_sc_only0"), 0);
         glBindImageTexture(0, g->tn0, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, g->tn1, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "near");
         use(g, P_SHINYA);
         bind_tex(3, g->tn0);
         bind_tex(4, g->tn1);
@@ -857,6 +950,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         glUniform1f(glGetUniformLocation(g->prog[P_SHINYA], "nbt_sc_cut"), (float)in->cut);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "shinya");
         break;
     case NBT_GLS_SHINYA_LITERAL:
         use(g, P_LITERAL);
@@ -864,6 +958,7 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         glUniform1f(glGetUniformLocation(g->prog[P_LITERAL], "nbt_sc_dtheta"), (float)in->dtheta);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, "literal");
         break;
     case NBT_GLS_NAIVE:
     case NBT_GLS_ELEK: {
@@ -875,13 +970,13 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
         bind_tex(3, g->twb);
         glBindImageTexture(0, g->tout, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         dispatch(w, h);
+        mark(g, PASSES[pass].name);
         break;
     }
     case NBT_GLS_NBT:
         run_nbt(g, &plan);
         break;
     }
-    glQueryCounter(g->stamp[1], GL_TIMESTAMP);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, g->tout);
@@ -890,16 +985,35 @@ nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, f
     for (size_t i = 0; i < np; i++)
         for (int c = 0; c < 3; c++)
             S[3 * i + c] = g->buf[4 * i + c];
+    GLuint64 t0 = 0, t1 = 0;
+    glGetQueryObjectui64v(g->stamp[0], GL_QUERY_RESULT, &t0);
+    for (unsigned k = 1; k < g->nmark; k++, t0 = t1) {
+        glGetQueryObjectui64v(g->stamp[k], GL_QUERY_RESULT, &t1);
+        g->pms[k - 1] = t1 > t0 ? (double)(t1 - t0) * 1e-6 : 0.0;
+    }
     if (gpu_ms) {
-        GLuint64 t0 = 0, t1 = 0;
-        glGetQueryObjectui64v(g->stamp[0], GL_QUERY_RESULT, &t0);
-        glGetQueryObjectui64v(g->stamp[1], GL_QUERY_RESULT, &t1);
-        *gpu_ms = t1 > t0 ? (double)(t1 - t0) * 1e-6 : 0.0;
+        *gpu_ms = 0;
+        for (unsigned k = 1; k < g->nmark; k++)
+            *gpu_ms += g->pms[k - 1];
     }
     glUseProgram(0);
     if (glGetError() != GL_NO_ERROR)
         return nbt__fail(NBT_EIO, "gl_scatter: a GL call failed");
     return NBT_OK;
+}
+
+unsigned nbt_gls_pass_times(const nbt_gls *g, const char **names, double *ms, double *cpu_ms, unsigned max)
+{
+    unsigned n = g && g->nmark > 0 ? g->nmark - 1 : 0;
+    for (unsigned k = 0; k < n && k < max; k++) {
+        if (names)
+            names[k] = g->pname[k];
+        if (ms)
+            ms[k] = g->pms[k];
+        if (cpu_ms)
+            cpu_ms[k] = 1e3 * (g->pcpu[k + 1] - g->pcpu[k]);
+    }
+    return n;
 }
 
 nbt_status nbt_gls_run(nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms)

@@ -37,7 +37,8 @@ layout(binding = 4) uniform sampler2D nbt_sc_n0;
 layout(rgba32f, binding = 0) uniform writeonly image2D nbt_sc_out;
 uniform ivec2 nbt_sc_usize; // texture size of level 1 (texture level 0)
 layout(binding = 5) uniform sampler2D nbt_sc_alut; // the atom's near table (nbt_gls_near_table)
-layout(binding = 6) uniform sampler2D nbt_sc_tail; // nbt_gls_nbt_tail_table, one row
+layout(binding = 9) uniform sampler2D nbt_sc_dk; // nbt_sc_c's depth keys alone (R32F): a quarter of the memory per tap
+layout(binding = 6) uniform sampler2D nbt_sc_tail; // nbt_gls_nbt_tail_table, texel k = (tail[k], tail[k + 1])
 layout(binding = 7) uniform sampler2DArray nbt_sc_srct; // the source pyramid (levels 1 .. K)
 
 // M0 (a10 + 2 a11) of the unit erfc atom at beta_px (as nbt_scatter_near):
@@ -59,7 +60,8 @@ float nbt_sc_tailv(float v)
         return 0.0;
     int k = int(u);
     float f = u - float(k);
-    return mix(texelFetch(nbt_sc_tail, ivec2(k, 0), 0).r, texelFetch(nbt_sc_tail, ivec2(k + 1, 0), 0).r, f);
+    vec2 t = texelFetch(nbt_sc_tail, ivec2(k, 0), 0).rg; // (tail[k], tail[k + 1])
+    return mix(t.x, t.y, f);
 }
 
 float nbt_sc_band(vec2 pq, float t, float h)
@@ -82,8 +84,22 @@ vec3 nbt_sc_cmean(ivec2 q, int i, int l)
     return textureLod(nbt_sc_srct, vec3(uv, float(2 * nbt_sc_nslab + i)), float(l - 1)).rgb;
 }
 
+// slab i's depth keys (i < n): nbt_sc_slab(D) == i exactly when D > 0,
+// D >= r.x and D < r.y, the bounds never decreasing (nbt_gls_nbt_plan_of);
+// two compares per tap instead of a loop over the bounds
+vec2 nbt_sc_slab_range(int i)
+{
+    vec2 r = vec2(0.0, NBT_SC_SKY);
+    for (int k = 1; k < NBT_SC_NBT_MAXSLABS; k++) {
+        r.x = k == i ? nbt_sc_bound[k] : r.x;
+        r.y = k == i + 1 && k < nbt_sc_nslab ? min(nbt_sc_bound[k], NBT_SC_SKY) : r.y;
+    }
+    return r;
+}
+
 // the excess from the sources on one side of x along axis direction e
-vec3 nbt_sc_march(ivec2 x, float Dx, int i, vec2 px, ivec2 e)
+// (r: slab i's nbt_sc_slab_range)
+vec3 nbt_sc_march(ivec2 x, float Dx, vec2 r, int i, vec2 px, ivec2 e)
 {
     const int NT = 24;
     float reach = 2.0 * px.y, h = 1e30;
@@ -97,8 +113,8 @@ vec3 nbt_sc_march(ivec2 x, float Dx, int i, vec2 px, ivec2 e)
             h = float(e.x > 0 ? nbt_sc_size.x - x.x : e.x < 0 ? x.x + 1 : e.y > 0 ? nbt_sc_size.y - x.y : x.y + 1) - 0.5;
             break;
         }
-        float Dy = texelFetch(nbt_sc_c, y, 0).a;
-        if (nbt_sc_slab(Dy) != i) {
+        float Dy = texelFetch(nbt_sc_dk, y, 0).r;
+        if (!(Dy > 0.0 && Dy >= r.x && Dy < r.y)) {
             h = 0.5 * float(tprev + t);
             break;
         }
@@ -111,20 +127,27 @@ vec3 nbt_sc_march(ivec2 x, float Dx, int i, vec2 px, ivec2 e)
     if (!farther)
         return E;
     // pass 2: each interval's change of kernel times the slab's mean colour
-    // at its far tap, over about the interval's length
+    // at its far tap, over about the interval's length. A tap whose kernel
+    // is its predecessor's (nearer than x: x's own) changes nothing (d = 0
+    // exactly) and is skipped; the predecessor's band beyond h is carried.
     vec2 prev = px;
+    float hprev = nbt_sc_tailv(h / max(px.y, 1e-6));
     t = 1;
     tprev = 0;
     for (int k = 0; k < cnt; k++) {
         ivec2 y = x + t * e;
-        float Dy = texelFetch(nbt_sc_c, y, 0).a;
+        float Dy = texelFetch(nbt_sc_dk, y, 0).r;
         vec2 ky = Dy > Dx ? texelFetch(nbt_sc_p, y, 0).xy : px;
-        float tm = 0.5 * float(tprev + t);
-        float d = nbt_sc_band(ky, tm, h) - nbt_sc_band(prev, tm, h);
-        if (k == 0)
-            d -= nbt_sc_side3(ky) - nbt_sc_side3(prev);
-        E += d * nbt_sc_cmean(y, i, clamp(findMSB(t - tprev), 1, NBT_SC_NBT_K));
-        prev = ky;
+        if (ky != prev) {
+            float tm = 0.5 * float(tprev + t), by = max(ky.y, 1e-6), hy = nbt_sc_tailv(h / by);
+            // nbt_sc_band(ky, tm, h) - nbt_sc_band(prev, tm, h), the same float operations
+            float d = ky.x * (nbt_sc_tailv(tm / by) - hy) - prev.x * (nbt_sc_tailv(tm / max(prev.y, 1e-6)) - hprev);
+            if (k == 0)
+                d -= nbt_sc_side3(ky) - nbt_sc_side3(prev);
+            E += d * nbt_sc_cmean(y, i, clamp(findMSB(t - tprev), 1, NBT_SC_NBT_K));
+            prev = ky;
+            hprev = hy;
+        }
         tprev = t;
         t = nbt_sc_tap(t);
     }
@@ -133,8 +156,9 @@ vec3 nbt_sc_march(ivec2 x, float Dx, int i, vec2 px, ivec2 e)
 
 vec3 nbt_sc_excess(ivec2 x, float Dx, int i, vec2 px)
 {
-    vec3 ex = nbt_sc_march(x, Dx, i, px, ivec2(1, 0)) + nbt_sc_march(x, Dx, i, px, ivec2(-1, 0));
-    vec3 ey = nbt_sc_march(x, Dx, i, px, ivec2(0, 1)) + nbt_sc_march(x, Dx, i, px, ivec2(0, -1));
+    vec2 r = nbt_sc_slab_range(i);
+    vec3 ex = nbt_sc_march(x, Dx, r, i, px, ivec2(1, 0)) + nbt_sc_march(x, Dx, r, i, px, ivec2(-1, 0));
+    vec3 ey = nbt_sc_march(x, Dx, r, i, px, ivec2(0, 1)) + nbt_sc_march(x, Dx, r, i, px, ivec2(0, -1));
     return sign(ex + ey) * sqrt(ex * ex + ey * ey);
 }
 

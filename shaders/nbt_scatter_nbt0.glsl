@@ -16,15 +16,14 @@
 // memory round trip per access).
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 0) uniform writeonly image2DArray nbt_sc_src;
-uniform ivec2 nbt_sc_lsize; // physical extent of level 1: n_1 + 2
+uniform ivec2 nbt_sc_lsize; // physical extent of level 1: n_1 + 2 (stored through nbt_sc_put)
 
 const float NBT_SC_F4[4] = float[4](0.13, 0.37, 0.37, 0.13);
 
 void main()
 {
-    ivec2 P = ivec2(gl_GlobalInvocationID.xy);
-    if (!nbt_sc_inside(P, nbt_sc_lsize))
+    ivec2 P = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, nbt_sc_rows.x);
+    if (!nbt_sc_inside(P, nbt_sc_lsize) || !nbt_sc_in_band(P))
         return;
     ivec2 p = P - 1; // logical
     int n = nbt_sc_nslab;
@@ -61,9 +60,9 @@ void main()
         }
     for (int j = 0; j < NBT_SC_NBT_MAXSLABS; j++)
         if (j < n) {
-            imageStore(nbt_sc_src, ivec3(P, j), vec4(A[j], 0.0));
-            imageStore(nbt_sc_src, ivec3(P, n + j), vec4(E[j], 0.0));
-            imageStore(nbt_sc_src, ivec3(P, 2 * n + j), vec4(C[j], 0.0));
+            nbt_sc_put(P, j, A[j]);
+            nbt_sc_put(P, n + j, E[j]);
+            nbt_sc_put(P, 2 * n + j, C[j]);
         }
-    imageStore(nbt_sc_src, ivec3(P, 3 * n), vec4(C[NBT_SC_NBT_MAXSLABS], 0.0));
+    nbt_sc_put(P, 3 * n, C[NBT_SC_NBT_MAXSLABS]);
 }

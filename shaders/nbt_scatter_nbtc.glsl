@@ -24,3 +24,21 @@ float nbt_sc_lbeta(float b)
 {
     return log2(max(b, exp2(float(NBT_SC_NBT_LO))));
 }
+
+// Stores of a whole pyramid level (nbt_scatter_nbt0, nbt_scatter_nbtup) go
+// to a buffer, rows band.x .. band.x + band.y - 1 of a level band.z texels
+// wide, layer-major as glTexSubImage3D reads them, and libnbt-gl copies the
+// band into the texture level: llvmpipe pays about ten times more per
+// imageStore than per buffer store plus the copy.
+layout(std430, binding = 0) writeonly buffer nbt_sc_stageb { vec4 nbt_sc_stage[]; };
+uniform ivec3 nbt_sc_rows;
+
+bool nbt_sc_in_band(ivec2 P)
+{
+    return P.y >= nbt_sc_rows.x && P.y < nbt_sc_rows.x + nbt_sc_rows.y;
+}
+
+void nbt_sc_put(ivec2 P, int z, vec3 v)
+{
+    nbt_sc_stage[(z * nbt_sc_rows.y + P.y - nbt_sc_rows.x) * nbt_sc_rows.z + P.x] = vec4(v, 0.0);
+}

@@ -6,15 +6,14 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform readonly image2DArray nbt_sc_src;
-layout(rgba32f, binding = 1) uniform writeonly image2DArray nbt_sc_dst;
-uniform ivec2 nbt_sc_srcsize, nbt_sc_dstsize; // physical extents n_l + 2
+uniform ivec2 nbt_sc_srcsize, nbt_sc_dstsize; // physical extents n_l + 2; stored through nbt_sc_put
 
 const float NBT_SC_F4[4] = float[4](0.13, 0.37, 0.37, 0.13);
 
 void main()
 {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (!nbt_sc_inside(p.xy, nbt_sc_dstsize))
+    ivec3 p = ivec3(gl_GlobalInvocationID) + ivec3(0, nbt_sc_rows.x, 0);
+    if (!nbt_sc_inside(p.xy, nbt_sc_dstsize) || !nbt_sc_in_band(p.xy))
         return;
     vec3 I = vec3(0.0);
     for (int b = 0; b < 4; b++) {
@@ -29,5 +28,5 @@ void main()
         }
         I += NBT_SC_F4[b] * row;
     }
-    imageStore(nbt_sc_dst, p, vec4(I, 0.0));
+    nbt_sc_put(p.xy, p.z, I);
 }

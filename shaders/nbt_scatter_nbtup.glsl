@@ -5,19 +5,18 @@
 // part_l from nbt_sc_mix (nbt_scatter_nbtmix: sharp + blurred level
 // kernels of the source layers), U the bilinear read of level l + 1 at the
 // texel centre (weights 0.75 / 0.25 per axis, zero border); col_{K+1} = 0.
-// The parts are never stored (llvmpipe pays far more per image store than
-// per image load).
+// The parts are never stored (llvmpipe pays far more per store than per
+// load); col goes through nbt_sc_put.
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(rgba32f, binding = 1) uniform writeonly image2DArray nbt_sc_col;
 layout(binding = 3) uniform sampler2DArray nbt_sc_colt; // mipmapped, zero border
 uniform ivec2 nbt_sc_usize; // texture size of level l + 1
 uniform int nbt_sc_level, nbt_sc_K;
 
 void main()
 {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (!nbt_sc_inside(p, nbt_sc_lsize))
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, nbt_sc_rows.x);
+    if (!nbt_sc_inside(p, nbt_sc_lsize) || !nbt_sc_in_band(p))
         return;
     const int M = NBT_SC_NBT_MAXSLABS;
     int n = nbt_sc_nslab;
@@ -31,6 +30,6 @@ void main()
                 vec3 v = q[k * M + j];
                 if (nbt_sc_level < nbt_sc_K)
                     v += textureLod(nbt_sc_colt, vec3(uv, float(z)), float(nbt_sc_level)).rgb;
-                imageStore(nbt_sc_col, ivec3(p, z), vec4(v, 0.0));
+                nbt_sc_put(p, z, v);
             }
 }

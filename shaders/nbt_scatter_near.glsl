@@ -15,6 +15,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 2) uniform sampler2D nbt_sc_lut;
 layout(rgba32f, binding = 0) uniform writeonly image2D nbt_sc_out0;
 layout(rgba32f, binding = 1) uniform writeonly image2D nbt_sc_out1;
+uniform int nbt_sc_only0; // 1: out0 alone (method nbt reads a00, a10, a11)
 
 void main()
 {
@@ -33,5 +34,6 @@ void main()
         b *= p.x * scale;
     }
     imageStore(nbt_sc_out0, x, a);
-    imageStore(nbt_sc_out1, x, b);
+    if (nbt_sc_only0 == 0)
+        imageStore(nbt_sc_out1, x, b);
 }

@@ -541,6 +541,50 @@ static void test_nbt_wide_kernels(const nbt_screen_kernel *km, const nbt_screen_
     free(Se);
 }
 
+/* nbt stores its pyramid levels a band of rows at a time when a level
+ * exceeds one shader storage block (large images); forced here on a small
+ * one: 6 slabs (all 19 source layers), 1, 5 and 7 rows per band (level 1
+ * is 34 rows, level 6 three), on a floor with sky (every layer and the
+ * in-slab march busy). Each row is computed by the same code whichever
+ * band holds it, so S must equal the unbanded run's bit for bit; and both
+ * the CPU emulation to 1e-5 of max S. */
+static void test_nbt_bands(nbt_gls *g, const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
+{
+    float *S0 = malloc(NP * 3 * sizeof *S0), *S1 = malloc(NP * 3 * sizeof *S1);
+    double *Se = malloc(NP * 3 * sizeof *Se);
+    scene s = scene_new("bands", W, H);
+    random_rgb(&s);
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
+            s.D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
+        }
+    scene_kernels(&s, km, ke, dth);
+    nbt_gls_input in = gls_input(&s, 0, dth);
+    nbt_gls_set_slabs(g, NBT_GLS_NBT_MAXSLABS);
+    nbt_status st = nbt_gls_exec(g, NBT_GLS_NBT, &in, S0, NULL);
+    scatter_emul_nbt(&in, NBT_GLS_NBT_MAXSLABS, Se);
+    const unsigned rows[3] = {1, 5, 7};
+    for (int r = 0; r < 3; r++) {
+        nbt_gls_set_band_rows(g, rows[r]);
+        nbt_status st1 = nbt_gls_exec(g, NBT_GLS_NBT, &in, S1, NULL);
+        size_t diff = 0;
+        for (size_t i = 0; i < NP * 3; i++)
+            diff += S1[i] != S0[i];
+        double e = gl_vs_emul(S1, Se, NP * 3);
+        t_true(st == NBT_OK && st1 == NBT_OK && diff == 0 && e <= 1e-5,
+               "nbt, %d slabs, %u rows per band: S equals the unbanded run's (%zu of %d values differ), the CPU "
+               "emulation to %.2g of max S",
+               NBT_GLS_NBT_MAXSLABS, rows[r], diff, NP * 3, e);
+    }
+    nbt_gls_set_band_rows(g, 0);
+    nbt_gls_set_slabs(g, NBT_GLS_NBT_SLABS);
+    scene_free(&s);
+    free(S0);
+    free(S1);
+    free(Se);
+}
+
 static void test_nbt_kernel(void)
 {
     const size_t w = 384, h = 384, n = w * h;
@@ -695,8 +739,11 @@ static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_s
         s.D[i] = 3.3f;
     scene_kernels(&s, km, ke, dth);
     nbt_gls_input b = gls_input(&s, 0, dth);
+    unsigned ran = nbt_gls_pass_times(g, NULL, NULL, NULL, 0);
     s.D[17] = -1.0f;
     t_true(nbt_gls_exec(g, NBT_GLS_SHINYA, &b, S, NULL) == NBT_EDOM, "negative depth refused");
+    t_true(ran > 0 && nbt_gls_pass_times(g, NULL, NULL, NULL, 0) == 0,
+           "a refused input leaves no pass times behind (%u groups from the run before)", ran);
     s.D[17] = NAN;
     t_true(nbt_gls_exec(g, NBT_GLS_NAIVE, &b, S, NULL) == NBT_EDOM, "NaN depth refused");
     s.D[17] = 3.3f;
@@ -726,6 +773,45 @@ static void test_invariants(nbt_gls *g, const nbt_screen_kernel *km, const nbt_s
 }
 
 /* time per pass at 320x240 (the three-layer scene scaled, same kernels in pixels) */
+static double clock_s(clockid_t c)
+{
+    struct timespec t;
+    clock_gettime(c, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* nbt_gls_pass_times after one more exec: the method's groups by name in
+ * order, each time >= 0, their GPU sum (timestamps inside exec) at most
+ * exec's wall time and above 0, their CPU sum at most the process's CPU
+ * time over exec (a unit or a misplaced stamp breaks one of these) */
+static void check_pass_times(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S)
+{
+    static const char *const want[NBT_GLS_NMETHODS][6] = {{"near", "shinya"},
+                                                         {"literal"},
+                                                         {"pyr0", "down", "naive"},
+                                                         {"pyr0", "down", "elek"},
+                                                         {"nbt0", "nbtdown", "nbtup", "near", "nbt"}};
+    const char *nm[NBT_GLS_MAXPASSES];
+    double ms[NBT_GLS_MAXPASSES], cpu[NBT_GLS_MAXPASSES], gpu = 0;
+    double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+    nbt_status st = nbt_gls_exec(g, m, in, S, &gpu);
+    double wall = 1e3 * (clock_s(CLOCK_MONOTONIC) - w0), pcpu = 1e3 * (clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0);
+    unsigned n = nbt_gls_pass_times(g, nm, ms, cpu, NBT_GLS_MAXPASSES), nw = 0;
+    while (nw < 6 && want[m][nw])
+        nw++;
+    int names = n == nw, pos = 1;
+    double sg = 0, sc = 0;
+    for (unsigned k = 0; k < n && k < NBT_GLS_MAXPASSES; k++) {
+        names = names && k < nw && !strcmp(nm[k], want[m][k]);
+        pos = pos && ms[k] >= 0 && cpu[k] >= 0;
+        sg += ms[k], sc += cpu[k];
+    }
+    t_true(st == NBT_OK && names && pos && sg > 0 && sg <= wall && fabs(sg - gpu) <= 1e-9 * gpu && sc <= pcpu,
+           "%s: %u pass groups named as documented (%s ...), GPU sum %.3g ms in (0, exec's wall %.3g ms], = gpu_ms "
+           "%.3g, CPU sum %.3g ms <= the process's %.3g ms",
+           nbt_gls_method_name(m), n, n ? nm[0] : "-", sg, wall, gpu, sc, pcpu);
+}
+
 static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke, double dth)
 {
     const size_t w = 320, h = 240, n = w * h;
@@ -759,6 +845,7 @@ static void time_large(const nbt_screen_kernel *km, const nbt_screen_kernel *ke,
         if (m == NBT_GLS_SHINYA)
             best = ms;
         t_true(st == NBT_OK, "%s runs at %zux%zu", nbt_gls_method_name((nbt_gls_method)m), w, h);
+        check_pass_times(g, (nbt_gls_method)m, &in, S);
         printf("# %s at %zux%zu: %.1f ms (best of 3 after a first run; window %ld px)\n",
                nbt_gls_method_name((nbt_gls_method)m), w, h, best, R);
     }
@@ -837,6 +924,7 @@ int main(void)
     test_nbt_beyond_screen(g, km, ke, dth);
     test_nbt_slope_bias(g, km, ke, dth);
     test_nbt_wide_kernels(km, ke, dth);
+    test_nbt_bands(g, km, ke, dth);
     test_nbt_kernel();
     test_odd_size(km, ke, dth);
     test_invariants(g, km, ke, dth);

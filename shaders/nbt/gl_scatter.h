@@ -185,17 +185,41 @@ void nbt_gls_free(nbt_gls *g);
  * reads S back (w*h*3 floats). gpu_ms (may be NULL): the GPU time of the
  * method's passes (GL_TIMESTAMP queries around them: llvmpipe
  * reports 1 ns for GL_TIME_ELAPSED of compute work; upload and read-back
- * excluded).
+ * excluded: the upload is of the input, c with D and the kernel per
+ * pixel, and for nbt D once more alone).
  * NBT_EDOM for an input outside the documented ranges, NBT_EINVAL for a
  * size mismatch or an unknown method, NBT_EIO on a GL error. */
 nbt_status nbt_gls_exec(nbt_gls *g, nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
+
+/* The GPU time of each group of passes of the last exec, in order (a
+ * GL_TIMESTAMP after each; their sum is exec's gpu_ms): names[k], ms[k]
+ * and cpu_ms[k] for k < min(count, max), any of them may be NULL; returns
+ * the count (0 before the first exec and after one that refused its
+ * input). cpu_ms: the process's CPU time
+ * (all threads) over the same span: on a software GL that finishes a
+ * dispatch before returning (Mesa's llvmpipe) the pass's work, which
+ * other jobs on a shared machine do not inflate; on a GPU only the
+ * driver's. Groups: shinya "near", "shinya"; shinya-literal "literal";
+ * naive and elek "pyr0", "down" (all K levels), "naive" or "elek"; nbt
+ * "nbt0" (source level 1), "nbtdown" (levels 2 .. K), "nbtup" (the
+ * collapse), "near", "nbt" (the receivers). */
+#define NBT_GLS_MAXPASSES 8
+unsigned nbt_gls_pass_times(const nbt_gls *g, const char **names, double *ms, double *cpu_ms, unsigned max);
+
+/* NBT_GLS_NBT writes its pyramid levels through a staging buffer, a band
+ * of rows at a time (as many as one shader storage block holds: all of a
+ * level unless the image is large, e.g. above ~1080p at 6 slabs on
+ * llvmpipe's 128 MiB). This caps the rows per band (0: no cap) so that
+ * tests can take the banded path on small images; the output does not
+ * depend on it. */
+nbt_status nbt_gls_set_band_rows(nbt_gls *g, unsigned rows);
 
 /* NBT_GLS_NBT's slab count for later runs (1 .. NBT_GLS_NBT_MAXSLABS;
  * NBT_GLS_NBT_SLABS at alloc); NBT_EDOM outside. */
 nbt_status nbt_gls_set_slabs(nbt_gls *g, unsigned slabs);
 
-/* GL state left behind by exec: program 0; textures on units 0-4, images on
- * units 0-3 and the active texture unit are the context's. */
+/* GL state left behind by exec: program 0; 2-D textures on units 0-9, images
+ * on units 0-3 and the active texture unit are the context's. */
 
 /* One-shot: alloc, exec, free. */
 nbt_status nbt_gls_run(nbt_gls_method m, const nbt_gls_input *in, float *S, double *gpu_ms);
