@@ -428,6 +428,17 @@ static void test_nbt_beyond_screen(nbt_gls *g, const nbt_screen_kernel *km, cons
 /* nbt's own kernel: the impulse response (CPU emulation, = GL above) on a
  * constant-depth plane against the pixel-integrated erfc kernel, at three
  * sub-pixel phases of the 2^K pyramid grid; misplaced mass = L1 / mass */
+/* a floor tilted across the image (depth 1.2/(fy - 0.15), 25% deeper to the
+ * right) under sky in the top fifth: every slab and the in-slab march busy */
+static void floor_depth(scene *s)
+{
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
+            s->D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
+        }
+}
+
 /* nbt's energy bias on continuous depth (issue 21). Within a depth slab the
  * pyramid sends every pair through the source's kernel where operator A
  * takes the nearer pixel's; nbt subtracts an estimate of that excess
@@ -452,11 +463,7 @@ static void test_nbt_slope_bias(nbt_gls *g, const nbt_screen_kernel *km, const n
         double d = k ? dth / 4 : dth;
         scene s = scene_new("floor", W, H);
         random_rgb(&s);
-        for (size_t y = 0; y < H; y++)
-            for (size_t x = 0; x < W; x++) {
-                double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
-                s.D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
-            }
+        floor_depth(&s);
         scene_kernels(&s, km, ke, d);
         nbt_screen_input sin = {.w = s.w, .h = s.h, .rgb = s.rgb, .D = s.D, .dtheta = d};
         t_true(nbt_screen_brute(&sin, km, NBT_SCREEN_NEAR, 1e-7, 2, SA, NULL) == NBT_OK, "floor: operator A");
@@ -554,11 +561,7 @@ static void test_nbt_bands(nbt_gls *g, const nbt_screen_kernel *km, const nbt_sc
     double *Se = malloc(NP * 3 * sizeof *Se);
     scene s = scene_new("bands", W, H);
     random_rgb(&s);
-    for (size_t y = 0; y < H; y++)
-        for (size_t x = 0; x < W; x++) {
-            double fy = (y + 0.5) / H, fx = (x + 0.5) / W;
-            s.D[y * W + x] = fy < 0.2 ? 1e10f : (float)(1.2 / (fy - 0.15) * (1 + 0.25 * fx));
-        }
+    floor_depth(&s);
     scene_kernels(&s, km, ke, dth);
     nbt_gls_input in = gls_input(&s, 0, dth);
     nbt_gls_set_slabs(g, NBT_GLS_NBT_MAXSLABS);
