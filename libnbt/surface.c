@@ -199,14 +199,14 @@ static nbt_status j_eval(const nbt__weights *w, int n, double T, double theta, d
 
 nbt_status nbt_jk(size_t kmax, int n, double T, double theta, double tol, double *J, double *abserr)
 {
-    nbt__weights w = {kmax, NULL, NULL, NULL, 0};
+    nbt__weights w = {kmax, NULL, NULL, NULL, 0, NULL};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
 nbt_status nbt_j_phase(const nbt_phase *p, int n, double T, double theta, double tol,
                        double *J, double *abserr)
 {
-    nbt__weights w = {0, p, NULL, NULL, 0};
+    nbt__weights w = {0, p, NULL, NULL, 0, NULL};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
@@ -333,7 +333,7 @@ nbt_status nbt_surface_series(const double *b, size_t nterms, const nbt_surface_
     if (nterms == 0)
         NBT_FAIL(NBT_EINVAL, "surface: need at least one Legendre term");
     /* one channel: J of the truncated series sum_k (2k+1) b_k P_k */
-    nbt__weights w = {nterms - 1, NULL, b, NULL, 0};
+    nbt__weights w = {nterms - 1, NULL, b, NULL, 0, NULL};
     double T = g->kappa_t * g->dsp, s = 0, e = 0;
     for (int lobe = 0; lobe < 2 && st == NBT_OK; lobe++) {
         double coef = lobe == 0 ? g->kd : g->ks, J, Je;
@@ -768,10 +768,16 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
             st = nbt__fail(NBT_EINVAL, "J table: HG slices are one-channel tables");
         kmap[i] = (int)i; /* slice i is component i */
     }
+    double *hgk = hg ? malloc(3 * ntab * sizeof *hgk) : NULL;
     if (hg) {
         c.w.hg = hg;
         c.w.nhg = ntab;
         c.w.kmax = 0;
+        if (hgk) /* the HG constants once per build, not per node */
+            nbt__hg_consts(hg, ntab, hgk);
+        else
+            st = NBT_ENOMEM;
+        c.w.hgk = hgk;
     }
     c.kmap = kmap;
     nbt_table *t = ts[0];
@@ -792,7 +798,8 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     c.logform = t->form == NBT_FORM_LOG_ET;
     if (st != NBT_OK) {
         free(kmap);
-        return st;
+        free(hgk);
+        return st == NBT_ENOMEM ? nbt__fail(st, "J table: out of memory") : st;
     }
     c.fdim = nbt__fdim(&c.w);
     for (size_t i = 0; i < ntab; i++)
@@ -860,6 +867,7 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     nbt_gl_rule_free(rp);
     nbt_gl_rule_free(c.rm);
     free(kmap);
+    free(hgk);
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "J table: out of memory");
     return st;
