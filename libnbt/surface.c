@@ -427,6 +427,8 @@ typedef struct {
     size_t nx, ny;
     double *G, *M, *F;
     size_t *mq;                 /* per theta row of M: its non-zero q in [mq[2j], mq[2j + 1]) */
+    double *Mk, *yk;            /* the coarse panels' M, mq and theta nodes of the last pass (the */
+    size_t *mqk, nyk;           /* measured rows' pass has the node rows' thetas: M once), or NULL */
     double *rowerr;
     nbt_quad_ws **ws;
     double **buf;
@@ -677,8 +679,10 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->ny = ny;
     c->F = F;
     c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
-    c->M = malloc(ny * P->Q * sizeof(double));
-    c->mq = malloc(2 * ny * sizeof(size_t));
+    /* M depends on the panels and theta only: the coarse one is kept */
+    int keep = P == &c->coarse, reuse = keep && c->Mk && ny == c->nyk && !memcmp(ys, c->yk, ny * sizeof *ys);
+    c->M = reuse ? c->Mk : malloc(ny * P->Q * sizeof(double));
+    c->mq = reuse ? c->mqk : malloc(2 * ny * sizeof(size_t));
     c->rowerr = calloc(nx * c->fdim, sizeof(double));
     int share = c->gc && (c->sf || c->w.hg);
     c->have = share ? calloc(nx, 1) : NULL;
@@ -707,7 +711,7 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
                 key.T = xs[i];
                 nbt__jcache_put(c->gc, &key, c->G + i * len, c->w.hg ? c->rowerr + i * c->fdim : &re);
             }
-        if (st == NBT_OK)
+        if (st == NBT_OK && !reuse)
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
@@ -734,8 +738,21 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->have = NULL;
     *gerr = 2.0 * NBT_PI * e;
     free(c->G);
-    free(c->M);
-    free(c->mq);
+    double *yk = keep && !reuse && st == NBT_OK ? malloc(ny * sizeof *yk) : NULL;
+    if (yk) { /* the new coarse M replaces the kept one */
+        free(c->Mk);
+        free(c->mqk);
+        free(c->yk);
+        c->Mk = c->M;
+        c->mqk = c->mq;
+        c->yk = memcpy(yk, ys, ny * sizeof *ys);
+        c->nyk = ny;
+    } else if (!reuse) {
+        free(c->M);
+        free(c->mq);
+    }
+    c->M = NULL;
+    c->mq = NULL;
     free(c->rowerr);
     return st;
 }
@@ -897,6 +914,9 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     }
     jpanels_free(&c.coarse);
     jpanels_free(&c.fine);
+    free(c.Mk);
+    free(c.mqk);
+    free(c.yk);
     nbt_gl_rule_free(rp);
     nbt_gl_rule_free(c.rm);
     free(kmap);
