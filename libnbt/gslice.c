@@ -347,8 +347,8 @@ static size_t ladder_at_least(const size_t *lad, size_t n, double want)
     return lad[n - 1];
 }
 
-static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, double t0,
-                            char *err, size_t errlen)
+static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt__jcache *gc,
+                            nbt_gslice_plan_t *out, double t0, char *err, size_t errlen)
 {
     int H = r->kind == NBT_TABLE_H;
     size_t n0 = r->size[0] > 0 ? r->size[0] : H ? 97 : 65, n1 = r->size[1] > 0 ? r->size[1] : H ? 193 : 257;
@@ -372,12 +372,15 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     out->pred_err = r->tol;
     /* the time: a 33x33x3 proxy through the same code (error measurement
      * included), scaled by the node count, so that it compares with the
-     * Legendre planner's measured proxies on this machine and build */
+     * Legendre planner's measured proxies on this machine and build. In a
+     * set (gc) the proxies of J^1 and J^n share their G rows (the same T
+     * nodes and g), as the tables do: the later ones predict what they cost
+     * there */
     nbt_axis p0 = out->axis[0], p1 = out->axis[1];
     p0.n = p1.n = 33;
     nbt_table *proxy;
     double tp = nbt__now_s();
-    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, NULL, &proxy);
+    nbt_status st = build_at(r, &p0, &p1, 3, nthreads, 1, gc, &proxy);
     tp = nbt__now_s() - tp;
     nbt_table_free(proxy);
     if (st != NBT_OK)
@@ -388,8 +391,8 @@ static nbt_status plan_rule(const nbt_gslice_request *r, unsigned nthreads, nbt_
     return NBT_OK;
 }
 
-nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
-                           size_t errlen)
+static nbt_status plan_gc(const nbt_gslice_request *r, unsigned nthreads, nbt__jcache *gc, nbt_gslice_plan_t *out,
+                          char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
     out->req = *r;
@@ -397,7 +400,13 @@ nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_g
     nbt_status st = check_request(r, err, errlen);
     if (st != NBT_OK)
         return st;
-    return plan_rule(r, nthreads, out, t0, err, errlen);
+    return plan_rule(r, nthreads, gc, out, t0, err, errlen);
+}
+
+nbt_status nbt_gslice_plan(const nbt_gslice_request *r, unsigned nthreads, nbt_gslice_plan_t *out, char *err,
+                           size_t errlen)
+{
+    return plan_gc(r, nthreads, NULL, out, err, errlen);
 }
 
 static nbt_status execute(const nbt_gslice_plan_t *p, unsigned nthreads, nbt__jcache *gc, nbt_table **out,
@@ -440,7 +449,7 @@ static nbt_status build_gc(const nbt_gslice_request *r, unsigned nthreads, nbt__
     *out = NULL;
     double t0 = nbt__now_s();
     nbt_gslice_plan_t p;
-    nbt_status st = nbt_gslice_plan(r, nthreads, &p, err, errlen);
+    nbt_status st = plan_gc(r, nthreads, gc, &p, err, errlen);
     if (st == NBT_OK)
         st = execute(&p, nthreads, gc, out, err, errlen);
     if (seconds)

@@ -99,14 +99,20 @@ void nbt__axis_cell(const nbt_axis *a, double x, size_t *i0, double *f);
  * channel: 4 pi p(mu) when phase != NULL, or the truncated series
  * sum_k (2k+1) b_k P_k(mu) when b != NULL (orders 0..kmax); or, when
  * nhg > 0, 4 pi HG(hg[i], mu) for nhg asymmetries at once (g-sliced
- * tables: one quadrature for all slices). */
+ * tables: one quadrature for all slices). hgk, when set: the slices'
+ * constants 1 + g^2, 2 g and 1 - g^2 (nhg each, nbt__hg_consts), which the
+ * integrands then use in a vector loop (the same values to the bit). */
 typedef struct {
     size_t kmax;
     const nbt_phase *phase;
     const double *b;
     const double *hg;
     size_t nhg;
+    const double *hgk;
 } nbt__weights;
+
+/* hgk[0..3n-1] for nbt__weights from g[0..n-1] */
+void nbt__hg_consts(const double *g, size_t n, double *hgk);
 
 static inline unsigned nbt__fdim(const nbt__weights *w)
 {

@@ -131,7 +131,7 @@ static nbt_status choose_terms(double gmax, double umax, double tol, size_t *N, 
     double *d = malloc(2 * (K + 1) * sizeof(double));
     double *worst = calloc(K + 2, sizeof(double));
     nbt_quad_ws *ws = nbt_quad_ws_alloc((unsigned)(K + 1), 2000);
-    nbt__weights w = {K, NULL, NULL, NULL, 0};
+    nbt__weights w = {K, NULL, NULL, NULL, 0, NULL};
     nbt_status st = NBT_OK;
     if (!d || !worst || !ws)
         st = NBT_ENOMEM;

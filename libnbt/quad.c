@@ -6,6 +6,9 @@
 #include <string.h>
 #include <nbt/quad.h>
 #include "internal.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 nbt_gl_rule *nbt_gl_rule_alloc(size_t n)
 {
@@ -88,6 +91,7 @@ struct nbt_quad_ws {
     double *a, *b;     /* interval ends */
     double *r, *e, *l; /* per interval x fdim: integral, error, integral of |f| */
     double *fv;        /* 15 x fdim integrand values */
+    double *acc;       /* 4 x fdim: sums per component */
 };
 
 nbt_quad_ws *nbt_quad_ws_alloc(unsigned fdim, size_t max_intervals)
@@ -105,7 +109,8 @@ nbt_quad_ws *nbt_quad_ws_alloc(unsigned fdim, size_t max_intervals)
     w->e = malloc(max_intervals * fdim * sizeof(double));
     w->l = malloc(max_intervals * fdim * sizeof(double));
     w->fv = malloc(15 * (size_t)fdim * sizeof(double));
-    if (!w->a || !w->b || !w->r || !w->e || !w->l || !w->fv) {
+    w->acc = malloc(4 * (size_t)fdim * sizeof(double));
+    if (!w->a || !w->b || !w->r || !w->e || !w->l || !w->fv || !w->acc) {
         nbt_quad_ws_free(w);
         return NULL;
     }
@@ -122,7 +127,64 @@ void nbt_quad_ws_free(nbt_quad_ws *w)
     free(w->e);
     free(w->l);
     free(w->fv);
+    free(w->acc);
     free(w);
+}
+
+/* The vector integrands' sums over their components (g-sliced J: 33 HG
+ * slices): two components at a time where SSE2 is there. Each component
+ * sees the same operations in the same order as a scalar loop (no fused
+ * multiply-add), so the results are the same to the bit. */
+
+/* K += w (fa + fb), L += w (|fa| + |fb|) */
+static void kl_add(double *K, double *L, double w, const double *fa, const double *fb, unsigned n)
+{
+    unsigned d = 0;
+#ifdef __SSE2__
+    __m128d w2 = _mm_set1_pd(w), sgn = _mm_set1_pd(-0.0);
+    for (; d + 2 <= n; d += 2) {
+        __m128d a = _mm_loadu_pd(fa + d), b = _mm_loadu_pd(fb + d);
+        _mm_storeu_pd(K + d, _mm_add_pd(_mm_loadu_pd(K + d), _mm_mul_pd(w2, _mm_add_pd(a, b))));
+        __m128d s = _mm_add_pd(_mm_andnot_pd(sgn, a), _mm_andnot_pd(sgn, b));
+        _mm_storeu_pd(L + d, _mm_add_pd(_mm_loadu_pd(L + d), _mm_mul_pd(w2, s)));
+    }
+#endif
+    for (; d < n; d++) {
+        K[d] += w * (fa[d] + fb[d]);
+        L[d] += w * (fabs(fa[d]) + fabs(fb[d]));
+    }
+}
+
+/* G += w (fa + fb) */
+static void g_add(double *G, double w, const double *fa, const double *fb, unsigned n)
+{
+    unsigned d = 0;
+#ifdef __SSE2__
+    __m128d w2 = _mm_set1_pd(w);
+    for (; d + 2 <= n; d += 2) {
+        __m128d a = _mm_loadu_pd(fa + d), b = _mm_loadu_pd(fb + d);
+        _mm_storeu_pd(G + d, _mm_add_pd(_mm_loadu_pd(G + d), _mm_mul_pd(w2, _mm_add_pd(a, b))));
+    }
+#endif
+    for (; d < n; d++)
+        G[d] += w * (fa[d] + fb[d]);
+}
+
+/* whether all of f[0..n-1] are finite */
+static int all_finite(const double *f, unsigned n)
+{
+    unsigned d = 0;
+    int ok = 1;
+#ifdef __SSE2__
+    /* x * 0 is NaN exactly for infinite and NaN x */
+    __m128d z = _mm_setzero_pd(), acc = _mm_setzero_pd();
+    for (; d + 2 <= n; d += 2)
+        acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadu_pd(f + d), z));
+    ok = _mm_movemask_pd(_mm_cmpunord_pd(acc, acc)) == 0;
+#endif
+    for (; d < n; d++)
+        ok &= isfinite(f[d]) != 0;
+    return ok;
 }
 
 /* Apply G7K15 on interval j = [a, b]; store into slot j. */
@@ -134,29 +196,47 @@ static int gk15(nbt_quad_ws *w, nbt_integrand f, void *params, unsigned fdim,
     for (int i = 0; i < 15; i++) {
         /* node order: i < 7 left of centre, 7 centre, > 7 right */
         double x = i < 7 ? c - h * xgk[i] : (i == 7 ? c : c + h * xgk[14 - i]);
-        if (f(x, params, fdim, fv + (size_t)i * fdim))
+        if (f(x, params, fdim, fv + (size_t)i * fdim) || !all_finite(fv + (size_t)i * fdim, fdim))
             return 1;
-        for (unsigned d = 0; d < fdim; d++)
-            if (!isfinite(fv[(size_t)i * fdim + d]))
-                return 1;
     }
     double ah = fabs(h);
+    /* the sums of every component at once (the inner loops run over the
+     * components, contiguous); each component's additions in the same
+     * order as one at a time, so the same values to the bit */
+    double *K = w->acc, *G = K + fdim, *L = G + fdim;
+    const double *f7 = fv + 7 * (size_t)fdim;
     for (unsigned d = 0; d < fdim; d++) {
-        double k = wgk[7] * fv[7 * fdim + d], g = wg[3] * fv[7 * fdim + d];
-        double l = wgk[7] * fabs(fv[7 * fdim + d]);
-        for (int i = 0; i < 7; i++) {
-            double s = fv[(size_t)i * fdim + d] + fv[(size_t)(14 - i) * fdim + d];
-            k += wgk[i] * s;
-            l += wgk[i] * (fabs(fv[(size_t)i * fdim + d]) + fabs(fv[(size_t)(14 - i) * fdim + d]));
-            if (i % 2 == 1)
-                g += wg[i / 2] * s;
-        }
-        w->r[j * fdim + d] = k * h;
-        w->l[j * fdim + d] = l * ah;
+        K[d] = wgk[7] * f7[d];
+        G[d] = wg[3] * f7[d];
+        L[d] = wgk[7] * fabs(f7[d]);
+    }
+    for (int i = 0; i < 7; i++) {
+        const double *fa = fv + (size_t)i * fdim, *fb = fv + (size_t)(14 - i) * fdim;
+        kl_add(K, L, wgk[i], fa, fb, fdim);
+        if (i % 2 == 1)
+            g_add(G, wg[i / 2], fa, fb, fdim);
+    }
+    double *r = w->r + j * fdim, *l = w->l + j * fdim, *e = w->e + j * fdim;
+    unsigned d0 = 0;
+#ifdef __SSE2__
+    __m128d h2 = _mm_set1_pd(h), ah2 = _mm_set1_pd(ah), fl2 = _mm_set1_pd(50.0 * DBL_EPSILON);
+    __m128d sgn = _mm_set1_pd(-0.0);
+    for (; d0 + 2 <= fdim; d0 += 2) {
+        __m128d k = _mm_loadu_pd(K + d0), g = _mm_loadu_pd(G + d0), ll = _mm_loadu_pd(L + d0);
+        _mm_storeu_pd(r + d0, _mm_mul_pd(k, h2));
+        _mm_storeu_pd(l + d0, _mm_mul_pd(ll, ah2));
+        __m128d ed = _mm_andnot_pd(sgn, _mm_mul_pd(_mm_sub_pd(k, g), h2));
+        __m128d fl = _mm_mul_pd(_mm_mul_pd(fl2, ll), ah2);
+        _mm_storeu_pd(e + d0, _mm_max_pd(ed, fl)); /* ed > fl ? ed : fl */
+    }
+#endif
+    for (unsigned d = d0; d < fdim; d++) {
+        r[d] = K[d] * h;
+        l[d] = L[d] * ah;
         /* |K - G|, floored at the rounding level of the sum */
-        double e = fabs((k - g) * h);
-        double floor_ = 50.0 * DBL_EPSILON * l * ah;
-        w->e[j * fdim + d] = e > floor_ ? e : floor_;
+        double ed = fabs((K[d] - G[d]) * h);
+        double floor_ = 50.0 * DBL_EPSILON * L[d] * ah;
+        e[d] = ed > floor_ ? ed : floor_;
     }
     return 0;
 }
@@ -199,18 +279,33 @@ nbt_status nbt_quad_gk_pts(nbt_quad_ws *w, nbt_integrand f, void *params, unsign
     for (;;) {
         /* totals and the worst interval, errors scaled by each tolerance */
         int done = 1;
-        for (unsigned d = 0; d < fdim; d++) {
-            double R = 0, E = 0, L = 0;
-            for (size_t j = 0; j < w->n; j++) {
-                R += w->r[j * fdim + d];
-                E += w->e[j * fdim + d];
-                L += w->l[j * fdim + d];
+        /* per component, the intervals summed in order (loops over the
+         * components inside, as in gk15) */
+        double *R = w->acc, *E = R + fdim, *L = E + fdim;
+        for (unsigned d = 0; d < fdim; d++)
+            R[d] = E[d] = L[d] = 0;
+        for (size_t j = 0; j < w->n; j++) {
+            const double *rj = w->r + j * fdim, *ej = w->e + j * fdim, *lj = w->l + j * fdim;
+            unsigned d = 0;
+#ifdef __SSE2__
+            for (; d + 2 <= fdim; d += 2) {
+                _mm_storeu_pd(R + d, _mm_add_pd(_mm_loadu_pd(R + d), _mm_loadu_pd(rj + d)));
+                _mm_storeu_pd(E + d, _mm_add_pd(_mm_loadu_pd(E + d), _mm_loadu_pd(ej + d)));
+                _mm_storeu_pd(L + d, _mm_add_pd(_mm_loadu_pd(L + d), _mm_loadu_pd(lj + d)));
             }
-            result[d] = sign * R;
-            abserr[d] = E;
-            double tol = fmax(epsabs, epsrel * L);
+#endif
+            for (; d < fdim; d++) {
+                R[d] += rj[d];
+                E[d] += ej[d];
+                L[d] += lj[d];
+            }
+        }
+        for (unsigned d = 0; d < fdim; d++) {
+            result[d] = sign * R[d];
+            abserr[d] = E[d];
+            double tol = fmax(epsabs, epsrel * L[d]);
             w->fv[d] = tol > 0 ? tol : DBL_MIN; /* scratch: scale of component d */
-            if (E > tol)
+            if (E[d] > tol)
                 done = 0;
         }
         if (done)
@@ -222,9 +317,22 @@ nbt_status nbt_quad_gk_pts(nbt_quad_ws *w, nbt_integrand f, void *params, unsign
         size_t worst = 0;
         double wv = -1.0;
         for (size_t j = 0; j < w->n; j++) {
+            /* errors and scales are finite and >= 0: a comparison, not fmax */
             double v = 0;
-            for (unsigned d = 0; d < fdim; d++)
-                v = fmax(v, w->e[j * fdim + d] / w->fv[d]);
+            const double *ej = w->e + j * fdim;
+            unsigned d = 0;
+#ifdef __SSE2__
+            __m128d v2 = _mm_setzero_pd();
+            for (; d + 2 <= fdim; d += 2)
+                v2 = _mm_max_pd(_mm_div_pd(_mm_loadu_pd(ej + d), _mm_loadu_pd(w->fv + d)), v2);
+            double vl[2];
+            _mm_storeu_pd(vl, v2);
+            v = vl[0] > vl[1] ? vl[0] : vl[1];
+#endif
+            for (; d < fdim; d++) {
+                double x = ej[d] / w->fv[d];
+                v = x > v ? x : v;
+            }
             if (v > wv) {
                 wv = v;
                 worst = j;

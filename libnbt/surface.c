@@ -9,6 +9,9 @@
 #include "internal.h"
 #include "tablefill.h"
 #include "gslice_j.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #define SEG_MAX_INTERVALS 2000
 
@@ -199,14 +202,14 @@ static nbt_status j_eval(const nbt__weights *w, int n, double T, double theta, d
 
 nbt_status nbt_jk(size_t kmax, int n, double T, double theta, double tol, double *J, double *abserr)
 {
-    nbt__weights w = {kmax, NULL, NULL, NULL, 0};
+    nbt__weights w = {kmax, NULL, NULL, NULL, 0, NULL};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
 nbt_status nbt_j_phase(const nbt_phase *p, int n, double T, double theta, double tol,
                        double *J, double *abserr)
 {
-    nbt__weights w = {0, p, NULL, NULL, 0};
+    nbt__weights w = {0, p, NULL, NULL, 0, NULL};
     return j_eval(&w, n, T, theta, tol, J, abserr);
 }
 
@@ -345,7 +348,7 @@ nbt_status nbt_surface_series(const double *b, size_t nterms, const nbt_surface_
     if (nterms == 0)
         NBT_FAIL(NBT_EINVAL, "surface: need at least one Legendre term");
     /* one channel: J of the truncated series sum_k (2k+1) b_k P_k */
-    nbt__weights w = {nterms - 1, NULL, b, NULL, 0};
+    nbt__weights w = {nterms - 1, NULL, b, NULL, 0, NULL};
     double T = g->kappa_t * g->dsp, s = 0, e = 0;
     for (int lobe = 0; lobe < 2 && st == NBT_OK; lobe++) {
         double coef = lobe == 0 ? g->kd : g->ks, J, Je;
@@ -435,6 +438,9 @@ typedef struct {
     const double *xs, *ys;
     size_t nx, ny;
     double *G, *M, *F;
+    size_t *mq;                 /* per theta row of M: its non-zero q in [mq[2j], mq[2j + 1]) */
+    double *Mk, *yk;            /* the coarse panels' M, mq and theta nodes of the last pass (the */
+    size_t *mqk, nyk;           /* measured rows' pass has the node rows' thetas: M once), or NULL */
     double *rowerr;
     nbt_quad_ws **ws;
     double **buf;
@@ -586,62 +592,89 @@ static nbt_status j_mrow(size_t j, unsigned thread, void *vp)
             }
         }
     }
+    size_t qa = 0, qb = P->Q;
+    while (qa < qb && M[qa] == 0)
+        qa++;
+    while (qb > qa && M[qb - 1] == 0)
+        qb--;
+    c->mq[2 * j] = qa;
+    c->mq[2 * j + 1] = qb;
     return NBT_OK;
 }
 
-/* row i of F = G_i M^T, all orders of a G node in one pass (the inner loop
- * runs over the fdim contiguous orders) */
+/* a0[k] = sum_q G[q fd + k] M0[q], a1 the same with M1, q from qa to
+ * qb - 1 in order. Where SSE2 is there, eight and then two orders at a
+ * time; each sum's additions are a scalar loop's, in its order (the same
+ * values to the bit). */
+static void j_dot2(const double *G, size_t fd, const double *M0, const double *M1, size_t qa, size_t qb,
+                   double *a0, double *a1)
+{
+    size_t k = 0;
+#ifdef __SSE2__
+    for (; k + 8 <= fd; k += 8) {
+        __m128d x0 = _mm_setzero_pd(), x1 = x0, x2 = x0, x3 = x0, y0 = x0, y1 = x0, y2 = x0, y3 = x0;
+        for (size_t q = qa; q < qb; q++) {
+            const double *g = G + q * fd + k;
+            __m128d m0 = _mm_set1_pd(M0[q]), m1 = _mm_set1_pd(M1[q]);
+            __m128d g0 = _mm_loadu_pd(g), g1 = _mm_loadu_pd(g + 2), g2 = _mm_loadu_pd(g + 4), g3 = _mm_loadu_pd(g + 6);
+            x0 = _mm_add_pd(x0, _mm_mul_pd(g0, m0));
+            x1 = _mm_add_pd(x1, _mm_mul_pd(g1, m0));
+            x2 = _mm_add_pd(x2, _mm_mul_pd(g2, m0));
+            x3 = _mm_add_pd(x3, _mm_mul_pd(g3, m0));
+            y0 = _mm_add_pd(y0, _mm_mul_pd(g0, m1));
+            y1 = _mm_add_pd(y1, _mm_mul_pd(g1, m1));
+            y2 = _mm_add_pd(y2, _mm_mul_pd(g2, m1));
+            y3 = _mm_add_pd(y3, _mm_mul_pd(g3, m1));
+        }
+        _mm_storeu_pd(a0 + k, x0);
+        _mm_storeu_pd(a0 + k + 2, x1);
+        _mm_storeu_pd(a0 + k + 4, x2);
+        _mm_storeu_pd(a0 + k + 6, x3);
+        _mm_storeu_pd(a1 + k, y0);
+        _mm_storeu_pd(a1 + k + 2, y1);
+        _mm_storeu_pd(a1 + k + 4, y2);
+        _mm_storeu_pd(a1 + k + 6, y3);
+    }
+    for (; k + 2 <= fd; k += 2) {
+        __m128d x0 = _mm_setzero_pd(), y0 = x0;
+        for (size_t q = qa; q < qb; q++) {
+            __m128d g0 = _mm_loadu_pd(G + q * fd + k);
+            x0 = _mm_add_pd(x0, _mm_mul_pd(g0, _mm_set1_pd(M0[q])));
+            y0 = _mm_add_pd(y0, _mm_mul_pd(g0, _mm_set1_pd(M1[q])));
+        }
+        _mm_storeu_pd(a0 + k, x0);
+        _mm_storeu_pd(a1 + k, y0);
+    }
+#endif
+    for (; k < fd; k++) {
+        double x = 0, y = 0;
+        for (size_t q = qa; q < qb; q++) {
+            x += G[q * fd + k] * M0[q];
+            y += G[q * fd + k] * M1[q];
+        }
+        a0[k] = x;
+        a1[k] = y;
+    }
+}
+
+/* row i of F = G_i M^T, two theta rows at a time, over the q where either
+ * of their kernel rows is non-zero (K_n vanishes beyond theta +- pi/2: the
+ * terms left out are zeros, and adding G * 0 changes no sum) */
 static nbt_status j_product(size_t i, unsigned thread, void *vp)
 {
     jfill_ctx *c = vp;
-    size_t nch = c->nch, Q = c->P->Q, fd = c->fdim;
+    size_t nch = c->nch, Q = c->P->Q, fd = c->fdim, ny = c->ny;
     double *acc = c->buf[thread];
     const double *G = c->G + i * Q * fd;
-    size_t j0 = 0;
-    if (fd % 4 == 0) /* whole packs: two theta rows and four orders at a time, in registers */
-        for (; j0 + 2 <= c->ny; j0 += 2) {
-            const double *M0 = c->M + j0 * Q, *M1 = M0 + Q;
-            for (size_t kb = 0; kb < fd; kb += 4) {
-                double a0 = 0, a1 = 0, a2 = 0, a3 = 0, b0 = 0, b1 = 0, b2 = 0, b3 = 0;
-                for (size_t q = 0; q < Q; q++) {
-                    const double *Gq = G + q * fd + kb;
-                    double m0 = M0[q], m1 = M1[q];
-                    a0 += Gq[0] * m0;
-                    a1 += Gq[1] * m0;
-                    a2 += Gq[2] * m0;
-                    a3 += Gq[3] * m0;
-                    b0 += Gq[0] * m1;
-                    b1 += Gq[1] * m1;
-                    b2 += Gq[2] * m1;
-                    b3 += Gq[3] * m1;
-                }
-                acc[kb] = a0;
-                acc[kb + 1] = a1;
-                acc[kb + 2] = a2;
-                acc[kb + 3] = a3;
-                acc[fd + kb] = b0;
-                acc[fd + kb + 1] = b1;
-                acc[fd + kb + 2] = b2;
-                acc[fd + kb + 3] = b3;
-            }
-            for (size_t jj = 0; jj < 2; jj++)
-                for (size_t ch = 0; ch < nch; ch++)
-                    c->F[(i * c->ny + j0 + jj) * nch + ch] = acc[jj * fd + (unsigned)c->kmap[ch]];
-        }
-    for (size_t j = j0; j < c->ny; j++) {
-        const double *M = c->M + j * Q;
-        for (size_t k = 0; k < fd; k++)
-            acc[k] = 0;
-        for (size_t q = 0; q < Q; q++) {
-            double m = M[q];
-            if (m == 0)
-                continue;
-            const double *Gq = G + q * fd;
-            for (size_t k = 0; k < fd; k++)
-                acc[k] += Gq[k] * m;
-        }
-        for (size_t ch = 0; ch < nch; ch++)
-            c->F[(i * c->ny + j) * nch + ch] = acc[c->w.phase ? 0u : (unsigned)c->kmap[ch]];
+    for (size_t j0 = 0; j0 < ny; j0 += 2) {
+        size_t nr = j0 + 1 < ny ? 2 : 1, j1 = j0 + nr - 1;
+        size_t qa = c->mq[2 * j0], qb = c->mq[2 * j0 + 1];
+        qa = c->mq[2 * j1] < qa ? c->mq[2 * j1] : qa;
+        qb = c->mq[2 * j1 + 1] > qb ? c->mq[2 * j1 + 1] : qb;
+        j_dot2(G, fd, c->M + j0 * Q, c->M + j1 * Q, qa, qb, acc, acc + fd);
+        for (size_t jj = 0; jj < nr; jj++)
+            for (size_t ch = 0; ch < nch; ch++)
+                c->F[(i * ny + j0 + jj) * nch + ch] = acc[jj * fd + (c->w.phase ? 0u : (unsigned)c->kmap[ch])];
     }
     return NBT_OK;
 }
@@ -658,13 +691,16 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->ny = ny;
     c->F = F;
     c->G = malloc(nx * P->Q * c->fdim * sizeof(double));
-    c->M = malloc(ny * P->Q * sizeof(double));
+    /* M depends on the panels and theta only: the coarse one is kept */
+    int keep = P == &c->coarse, reuse = keep && c->Mk && ny == c->nyk && !memcmp(ys, c->yk, ny * sizeof *ys);
+    c->M = reuse ? c->Mk : malloc(ny * P->Q * sizeof(double));
+    c->mq = reuse ? c->mqk : malloc(2 * ny * sizeof(size_t));
     c->rowerr = calloc(nx * c->fdim, sizeof(double));
     int share = c->gc && (c->sf || c->w.hg);
     c->have = share ? calloc(nx, 1) : NULL;
     nbt_status st = NBT_ENOMEM;
     double e = 0;
-    if (c->G && c->M && c->rowerr && (!share || c->have)) {
+    if (c->G && c->M && c->mq && c->rowerr && (!share || c->have)) {
         /* rows another build of the plan computed are copied, the others
          * computed and offered to the later builds (fixed rules: one
          * a-priori bound for every component of a row; HG slices: each
@@ -687,7 +723,7 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
                 key.T = xs[i];
                 nbt__jcache_put(c->gc, &key, c->G + i * len, c->w.hg ? c->rowerr + i * c->fdim : &re);
             }
-        if (st == NBT_OK)
+        if (st == NBT_OK && !reuse)
             st = nbt__parallel_for(ny, c->nt, j_mrow, c);
         if (st == NBT_OK)
             st = nbt__parallel_for(nx, c->nt, j_product, c);
@@ -714,7 +750,21 @@ static nbt_status j_compute(jfill_ctx *c, const jpanels *P, const double *xs, si
     c->have = NULL;
     *gerr = 2.0 * NBT_PI * e;
     free(c->G);
-    free(c->M);
+    double *yk = keep && !reuse && st == NBT_OK ? malloc(ny * sizeof *yk) : NULL;
+    if (yk) { /* the new coarse M replaces the kept one */
+        free(c->Mk);
+        free(c->mqk);
+        free(c->yk);
+        c->Mk = c->M;
+        c->mqk = c->mq;
+        c->yk = memcpy(yk, ys, ny * sizeof *ys);
+        c->nyk = ny;
+    } else if (!reuse) {
+        free(c->M);
+        free(c->mq);
+    }
+    c->M = NULL;
+    c->mq = NULL;
     free(c->rowerr);
     return st;
 }
@@ -780,10 +830,16 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
             st = nbt__fail(NBT_EINVAL, "J table: HG slices are one-channel tables");
         kmap[i] = (int)i; /* slice i is component i */
     }
+    double *hgk = hg ? malloc(3 * ntab * sizeof *hgk) : NULL;
     if (hg) {
         c.w.hg = hg;
         c.w.nhg = ntab;
         c.w.kmax = 0;
+        if (hgk) /* the HG constants once per build, not per node */
+            nbt__hg_consts(hg, ntab, hgk);
+        else
+            st = NBT_ENOMEM;
+        c.w.hgk = hgk;
     }
     c.kmap = kmap;
     nbt_table *t = ts[0];
@@ -804,7 +860,8 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     c.logform = t->form == NBT_FORM_LOG_ET;
     if (st != NBT_OK) {
         free(kmap);
-        return st;
+        free(hgk);
+        return st == NBT_ENOMEM ? nbt__fail(st, "J table: out of memory") : st;
     }
     c.fdim = nbt__fdim(&c.w);
     for (size_t i = 0; i < ntab; i++)
@@ -869,9 +926,13 @@ static nbt_status j_build(nbt_table *const *ts, size_t ntab, const nbt_phase *fi
     }
     jpanels_free(&c.coarse);
     jpanels_free(&c.fine);
+    free(c.Mk);
+    free(c.mqk);
+    free(c.yk);
     nbt_gl_rule_free(rp);
     nbt_gl_rule_free(c.rm);
     free(kmap);
+    free(hgk);
     if (st == NBT_ENOMEM)
         NBT_FAIL(st, "J table: out of memory");
     return st;

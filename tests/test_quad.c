@@ -1,4 +1,5 @@
 /* tests/test_quad.c: Gauss-Legendre rules and adaptive Gauss-Kronrod. */
+#include <float.h>
 #include <math.h>
 #include <nbt/nbt.h>
 #include "testutil.h"
@@ -46,8 +47,80 @@ static int f_peak(double x, void *p, unsigned fdim, double *f)
     return 0;
 }
 
+/* seven components (odd: the vector code's pairs and its scalar last one):
+ * c_d x^14, component 2 the constant -1.5 */
+static const double C14[7] = {3.0, -2.0, 0.0, 0.5, 7.0, -4.0, 1.25};
+static int f_mix14(double x, void *p, unsigned fdim, double *f)
+{
+    (void)p;
+    for (unsigned d = 0; d < fdim; d++)
+        f[d] = d == 2 ? -1.5 : C14[d] * pow(x, 14);
+    return 0;
+}
+/* cos((d + 1) x), component *p the narrow Lorentzian of f_peak (w = 1e-5) */
+static int f_vpeak(double x, void *p, unsigned fdim, double *f)
+{
+    unsigned k = *(unsigned *)p;
+    for (unsigned d = 0; d < fdim; d++)
+        f[d] = d == k ? 1e-5 / (M_PI * ((x - 0.3) * (x - 0.3) + 1e-10)) : cos((double)(d + 1) * x);
+    return 0;
+}
+/* cos((d + 1) x) with component *p (x > 0.5) NaN, or infinite when *p >= 100 */
+static int f_vnan(double x, void *p, unsigned fdim, double *f)
+{
+    unsigned k = *(unsigned *)p;
+    for (unsigned d = 0; d < fdim; d++)
+        f[d] = d == k % 100 && x > 0.5 ? (k >= 100 ? INFINITY : NAN) : cos((double)(d + 1) * x);
+    return 0;
+}
+
+/* The vector sums per component (gk15 and the totals take two components
+ * at a time where SSE2 is there, the last of an odd count alone): seven
+ * components against closed forms, each where a lane of its own matters. */
+static void test_vector7(void)
+{
+    nbt_quad_ws *ws = nbt_quad_ws_alloc(7, 200);
+    double r[7], e[7];
+    /* one interval (epsabs = 1 keeps it): |K - G| = |c_d| C h^15 exactly as
+     * in main's x^14 check, per component (both lanes and the last one);
+     * the constant's K and G agree to rounding, so its estimate is the
+     * floor 50 eps int |f| = 50 eps 1.5 (2 h) */
+    const double C = 1.854659197316540e-4, h = 0.6;
+    nbt_quad_gk(ws, f_mix14, NULL, 7, -h, h, 1.0, 0.0, r, e);
+    for (int d = 0; d < 7; d++)
+        if (d == 2) {
+            t_rel(r[d], -1.5 * 2 * h, 1e-15, "vector: constant component");
+            t_rel(e[d], 50 * DBL_EPSILON * 1.5 * 2 * h, 1e-12, "vector: the constant's estimate is the rounding floor");
+        } else {
+            t_rel(e[d], fabs(C14[d]) * C * pow(h, 15), 1e-9, "vector: component %d's estimate |c| C h^15", d);
+            t_rel(r[d], C14[d] * 2 * pow(h, 15) / 15, 1e-13, "vector: component %d = c 2 h^15 / 15", d);
+        }
+    /* two intervals: each component's total estimate is the sum of both */
+    double zero = 0.0;
+    nbt_quad_gk_pts(ws, f_mix14, NULL, 7, -2 * h, 2 * h, &zero, 1, 1.0, 0.0, r, e);
+    for (int d = 0; d < 7; d++)
+        if (d != 2)
+            t_rel(e[d], 2 * fabs(C14[d]) * C * pow(h, 15), 1e-6, "vector: two intervals' estimates summed (%d)", d);
+    /* a narrow peak in one component must drive the subdivision: in the
+     * second lane of a pair (5) and in the last, odd one (6) */
+    for (unsigned k = 5; k <= 6; k++) {
+        nbt_status st = nbt_quad_gk(ws, f_vpeak, &k, 7, 0.0, 1.0, 0.0, 1e-10, r, e);
+        double want = (atan(0.7 / 1e-5) + atan(0.3 / 1e-5)) / M_PI;
+        t_true(st == NBT_OK, "vector: peak in component %u converges", k);
+        t_rel(r[k], want, 1e-9, "vector: the peak in component %u found adaptively", k);
+        t_abs(r[k == 5 ? 6 : 5], sin((k == 5 ? 7 : 6) * 1.0) / (k == 5 ? 7 : 6), 1e-12, "vector: its neighbour");
+    }
+    /* a non-finite value in a pair's second lane or in the last component */
+    unsigned bad[4] = {3, 6, 103, 106};
+    for (int i = 0; i < 4; i++)
+        t_true(nbt_quad_gk(ws, f_vnan, &bad[i], 7, 0.0, 1.0, 0.0, 1e-10, r, e) == NBT_EDOM,
+               "vector: %s in component %u -> NBT_EDOM", bad[i] >= 100 ? "inf" : "NaN", bad[i] % 100);
+    nbt_quad_ws_free(ws);
+}
+
 int main(void)
 {
+    test_vector7();
     /* Gauss-Legendre: exact for polynomials up to degree 2n - 1 */
     for (size_t n = 1; n <= 40; n += 3) {
         nbt_gl_rule *r = nbt_gl_rule_alloc(n);

@@ -31,8 +31,62 @@ static int ksin_f(double g, void *vp, unsigned fdim, double *f)
     return 0;
 }
 
+/* J tables built without the error measurement, so that both theta rows
+ * of each pair the product J = G M^T takes together are node rows (with
+ * it, every second row is a midpoint): every node against nbt_jk /
+ * nbt_j_phase at 1e-12 (their estimates added), within float rounding
+ * (6e-8) plus the recorded quadrature error, itself <= 1e-9 (Legendre) or
+ * 1e-6 (HG) as in test_table. Orders 0..11 (12 channels:
+ * the product's blocks of eight and two) and a fixed HG phase (one
+ * channel: its scalar loop); 7 theta nodes on [0.15, 3] (three pairs and
+ * a last row alone), whose kernels' supports [theta - pi/2, theta + pi/2]
+ * end at different g within a pair. */
+static void test_j_nodes_unmeasured(void)
+{
+    nbt_axis ax = {0, 8, NBT_AXIS_LINEAR, 0, 4}, ay = {0.15, 3.0, NBT_AXIS_LINEAR, 0, 7};
+    for (int n = 1; n <= 20; n += 19)
+        for (int ph = 0; ph < 2; ph++) {
+            nbt_phase *p = ph ? nbt_phase_hg(0.6) : NULL;
+            size_t np = ph ? 1 : 3;
+            nbt_table *js[3];
+            for (size_t q = 0; q < np; q++) {
+                js[q] = nbt_table_alloc(NBT_TABLE_J, &ax, &ay, ph ? 1 : 4);
+                js[q]->n = n;
+                for (size_t c = 0; c < js[q]->nch; c++)
+                    js[q]->k[c] = ph ? -1 : (int)(4 * q + c);
+            }
+            nbt_build_opts o = {1e-10, 0, 2};
+            t_true(nbt_j_table_build_set(js, np, p, &o) == NBT_OK, "unmeasured J^%d %s builds", n,
+                   ph ? "HG 0.6" : "orders 0..11");
+            double worst = 0;
+            for (size_t i = 0; i < ax.n; i++)
+                for (size_t j = 0; j < ay.n; j++) {
+                    double T = nbt_axis_node(&ax, i), th = nbt_axis_node(&ay, j), ex[12], ee[12];
+                    if (ph)
+                        nbt_j_phase(p, n, T, th, 1e-12, ex, ee);
+                    else
+                        nbt_jk(11, n, T, th, 1e-12, ex, ee);
+                    for (size_t q = 0; q < np; q++)
+                        for (size_t c = 0; c < js[q]->nch; c++) {
+                            size_t k = 4 * q + c;
+                            double d = fabs(js[q]->data[(j * ax.n + i) * js[q]->nch + c] - ex[k]);
+                            worst = fmax(worst, d / (ee[k] + 6e-8 * fabs(ex[k]) + js[q]->quad_err));
+                        }
+                }
+            /* and that error small (test_table's limits at quad_tol 1e-10): a
+             * wrong product inflates it too, through the halved-panel check */
+            t_true(worst <= 1.0 && js[0]->quad_err <= (ph ? 1e-6 : 1e-9),
+                   "unmeasured J^%d %s: every node within float rounding + quad_err %.1e (worst %.2g of it)", n,
+                   ph ? "HG 0.6" : "orders 0..11", js[0]->quad_err, worst);
+            for (size_t q = 0; q < np; q++)
+                nbt_table_free(js[q]);
+            nbt_phase_free(p);
+        }
+}
+
 int main(void)
 {
+    test_j_nodes_unmeasured();
     double J[16], E[16];
     /* ---- mpmath references ---- */
     const char *refdir = getenv("NBT_REF") ? getenv("NBT_REF") : "tests/ref";
