@@ -133,6 +133,7 @@ static nbt_status choose_terms(double gmax, double umax, double tol, size_t *N, 
     nbt_quad_ws *ws = nbt_quad_ws_alloc((unsigned)(K + 1), 2000);
     nbt__weights w = {K, NULL, NULL, NULL, 0, NULL};
     nbt_status st = NBT_OK;
+    int too_many = 0;
     if (!d || !worst || !ws)
         st = NBT_ENOMEM;
     for (int iu = 0; iu < 6 && st == NBT_OK; iu++) {
@@ -157,17 +158,16 @@ static nbt_status choose_terms(double gmax, double umax, double tol, size_t *N, 
             /* one geometry already needs more than the 512 orders anyone takes:
              * the other 35 cannot lower that (6 s at gmax 0.99 before) */
             if (K == 512 && worst[512] > tol) {
-                *N = 513;
-                *achieved = worst[512];
+                too_many = 1;
                 iu = 6;
-                st = NBT_ETOL;
                 break;
             }
         }
     }
-    if (st == NBT_ETOL)
-        st = NBT_OK; /* *N > 512 says it */
-    else if (st == NBT_OK) {
+    if (st == NBT_OK && too_many) {
+        *N = 513; /* more than 512 */
+        *achieved = worst[512];
+    } else if (st == NBT_OK) {
         size_t n = 1;
         while (n <= K && worst[n] > tol)
             n++;
