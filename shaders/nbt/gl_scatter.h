@@ -137,7 +137,7 @@ void nbt_gls_near_table(float *lut);
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.3 s; thread-safe): tab[i * NB + b]. */
+ * 0.4 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
  * below the table, scaled by 2^(HI - lb) above it: a kernel far wider than
