@@ -159,9 +159,14 @@ static pthread_once_t nbt_fit_once = PTHREAD_ONCE_INIT;
 
 void nbt_gls_nbt_wide_taps(int m, double t[NBT_GLS_NBT_WT + 1])
 {
-    double s = m ? 3.0 : 1.5, sum = 0;
+    /* sigma 1.5 and 3 texels cut at 9, 6 cut at 18 (3 sigma); taps beyond
+     * a kernel's cut are 0 (the wide pass walks only the cut of the
+     * widest kernel in use) */
+    static const double sig[NBT_GLS_NBT_NW] = {1.5, 3.0, 6.0};
+    static const int cut[NBT_GLS_NBT_NW] = {9, 9, 18};
+    double s = sig[m], sum = 0;
     for (int d = 0; d <= NBT_GLS_NBT_WT; d++) {
-        t[d] = exp(-0.5 * d * d / (s * s));
+        t[d] = d <= cut[m] ? exp(-0.5 * d * d / (s * s)) : 0.0;
         sum += d ? 2 * t[d] : t[d];
     }
     for (int d = 0; d <= NBT_GLS_NBT_WT; d++)
@@ -238,31 +243,46 @@ static double nbt_far(double b, double r)
     return (G / r + lap / 24.0) / (2.50662827463100050 * b);
 }
 
-/* the fit window's largest half-width: the wide kernels reach about 640 px */
-#define NBT_FIT_RMAX 640
+/* the fit window's largest half-width: the widest wide kernel reaches
+ * about 1300 px (18 texels of 64 px plus the pyramid's up-steps) */
+#define NBT_FIT_RMAX 1344
+/* windows 5 beta wider than this take the whole RMAX window and share its
+ * normal matrix (their atom is < 3e-7 of G(0) beyond 5 beta): each one
+ * pixel by pixel up to 1344 px made the fit 15 s instead of 0.3 */
+#define NBT_FIT_RRING 640
 
 /* non-negative least squares over the pixels outside the 3x3 centre,
- * |dx|, |dy| <= R (5 beta, 12 .. NBT_FIT_RMAX), through the normal equations */
+ * |dx|, |dy| <= R (5 beta, 12 .. NBT_FIT_RRING, else NBT_FIT_RMAX), through the normal equations */
 static void nbt_fit_one(double beta, double *w)
 {
     enum { NB = NBT_GLS_NBT_NB };
     long R = (long)ceil(5 * beta);
-    /* kernels wider than the window (R capped) share it: their normal
-     * matrix is accumulated once (nbt_fit_all runs once, serially). A 1/r
+    /* kernels wider than NBT_FIT_RRING share the RMAX window (nbt_fit_all
+     * runs once, serially). A 1/r
      * weight (relative error per ring) was tried: 64x48 +4.4% -> +3.6%, but
      * 160x120 -0.4% -> -3.0% against operator A at beta_px 800 */
-    int ring = R > NBT_FIT_RMAX;
-    R = R < 12 ? 12 : R > NBT_FIT_RMAX ? NBT_FIT_RMAX : R;
+    int ring = R > NBT_FIT_RRING;
+    R = R < 12 ? 12 : ring ? NBT_FIT_RMAX : R;
     /* and, beyond r = FB px, their projections f_i t in radial bins of FD
      * px with a first-order term (t is smooth there: relative error ~1e-6),
      * so each later one costs bins, not pixels */
     enum { FB = 16, NBIN = (int)(NBT_FIT_RMAX * 1.4143 - FB) * 2 + 2 };
     const double FD = 0.5;
-    static double Gring[NB][NB], Fb[NB][NBIN], Fb1[NB][NBIN];
+    static double Fb[NB][NBIN], Fb1[NB][NBIN];
     static int have_ring;
     double G[NB][NB], r[NB], f[NB];
-    int need_G = !ring || !have_ring, binned = ring && have_ring;
-    memset(G, 0, sizeof G);
+    int binned = ring && have_ring;
+    /* the basis is separable, f_i(x, y) = k_i(x) k_i(y), and the window a
+     * square less the 3x3 centre: G_ij = S_ij(R)^2 - S_ij(1)^2 with S_ij(R)
+     * = sum over |x| <= R of k_i(x) k_j(x) (k even), R NB^2 work, not R^2 */
+    for (int i = 0; i < NB; i++)
+        for (int j = 0; j <= i; j++) {
+            const double *ki = nbt_kbar_tab[i] + KB_C, *kj = nbt_kbar_tab[j] + KB_C;
+            double s1 = ki[0] * kj[0] + 2 * ki[1] * kj[1], sR = s1;
+            for (long x = 2; x <= R; x++)
+                sR += 2 * ki[x] * kj[x];
+            G[i][j] = sR * sR - s1 * s1;
+        }
     memset(r, 0, sizeof r);
     /* one octant 0 <= y <= x, each pixel counted with its mirror images:
      * the level kernels are even (to 1e-17) and the atom radial */
@@ -278,11 +298,8 @@ static void nbt_fit_one(double beta, double *w)
                 f[i] = nbt_kbar_tab[i][KB_C + x] * nbt_kbar_tab[i][KB_C + y];
             double mult = (y > 0 ? 2.0 : 1.0) * (x > y ? 2.0 : 1.0) * 2.0;
             double wt = mult;
-            for (int i = 0; i < NB; i++) {
+            for (int i = 0; i < NB; i++)
                 r[i] += wt * f[i] * t;
-                for (int j = 0; need_G && j <= i; j++)
-                    G[i][j] += wt * f[i] * f[j];
-            }
             if (ring && !have_ring && rr > FB) {
                 int k = (int)((rr - FB) / FD);
                 double dr = rr - (FB + (k + 0.5) * FD);
@@ -298,15 +315,10 @@ static void nbt_fit_one(double beta, double *w)
         for (int i = 0; i < NB; i++)
             r[i] += Fb[i][k] * t + Fb1[i][k] * dt;
     }
-    if (ring && have_ring)
-        memcpy(G, Gring, sizeof G);
     for (int i = 0; i < NB; i++)
         for (int j = i + 1; j < NB; j++)
             G[i][j] = G[j][i];
-    if (ring && !have_ring) {
-        memcpy(Gring, G, sizeof G);
-        have_ring = 1;
-    }
+    have_ring |= ring;
     /* |f w - t|^2 = |L^T w - L^-1 r|^2 + const with G = L L^T: an exact
      * active-set NNLS on the NB x NB factor (cyclic coordinate descent,
      * used before, was far from converged after 3000 sweeps once the wide
@@ -777,19 +789,23 @@ static int run_nbt_wide(const nbt_gls *g, const nbt_gls_nbt_plan *pl, double a[]
 {
     enum { NW = NBT_GLS_NBT_NW, MS = NBT_GLS_NBT_MAXSLABS, WT = NBT_GLS_NBT_WT, K = NBT_GLS_K };
     float wc[NW * MS] = {0}, wdc[NW * MS] = {0}, wg[NW * (WT + 1)];
-    int any = 0;
+    int T = 0; /* the walk: the cut of the widest kernel with a weight, 0: none */
     for (int m = 0; m < NW; m++) {
         double tap[WT + 1];
+        int any = 0, cut = 0;
         nbt_gls_nbt_wide_taps(m, tap);
-        for (int d = 0; d <= WT; d++)
+        for (int d = 0; d <= WT; d++) {
             wg[m * (WT + 1) + d] = (float)tap[d];
+            cut = tap[d] != 0 ? d : cut;
+        }
         for (unsigned j = 0; j < pl->n; j++) {
             wc[m * MS + j] = (float)a[j][2 * K + m];
             wdc[m * MS + j] = (float)da[j][2 * K + m];
             any |= wc[m * MS + j] != 0 || wdc[m * MS + j] != 0;
         }
+        T = any && cut > T ? cut : T;
     }
-    if (!any)
+    if (T == 0)
         return 0;
     use(g, P_NBTWIDE);
     set_plan(g, P_NBTWIDE, pl);
@@ -797,6 +813,7 @@ static int run_nbt_wide(const nbt_gls *g, const nbt_gls_nbt_plan *pl, double a[]
     glUniform1fv(glGetUniformLocation(p, "nbt_sc_wg"), NW * (WT + 1), wg);
     glUniform1fv(glGetUniformLocation(p, "nbt_sc_wc"), NW * MS, wc);
     glUniform1fv(glGetUniformLocation(p, "nbt_sc_wdc"), NW * MS, wdc);
+    glUniform1i(glGetUniformLocation(p, "nbt_sc_wt"), T);
     glUniform2i(glGetUniformLocation(p, "nbt_sc_lsize"), (GLint)((g->pw >> K) + 2), (GLint)((g->ph >> K) + 2));
     glBindImageTexture(0, g->tsrc, K - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
     glBindImageTexture(1, g->tcol, K - 1, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);

@@ -16,13 +16,14 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform readonly image2DArray nbt_sc_src; // level K of the source pyramid
 layout(rgba32f, binding = 1) uniform image2DArray nbt_sc_col;          // level K of the collapse
 uniform ivec2 nbt_sc_lsize; // physical extent n_K + 2
-uniform float nbt_sc_wg[NBT_SC_NBT_NW * (NBT_SC_NBT_WT + 1)];
+uniform float nbt_sc_wg[NBT_SC_NBT_NW * (NBT_SC_NBT_WT + 1)]; // 0 beyond each kernel's cut
+uniform int nbt_sc_wt; // the widest cut among the kernels with a weight: an unused wide one costs nothing
 uniform float nbt_sc_wc[NBT_SC_NBT_NW * NBT_SC_NBT_MAXSLABS], nbt_sc_wdc[NBT_SC_NBT_NW * NBT_SC_NBT_MAXSLABS];
 
 // layer z's wide blurs at p, all kernels in one pass over the window
 void nbt_sc_wblur(ivec2 p, int z, out vec3 bl[NBT_SC_NBT_NW])
 {
-    const int T = NBT_SC_NBT_WT;
+    const int T = nbt_sc_wt, S = NBT_SC_NBT_WT + 1; // the walk, the taps' stride
     for (int m = 0; m < NBT_SC_NBT_NW; m++)
         bl[m] = vec3(0.0);
     for (int dy = -T; dy <= T; dy++) {
@@ -38,10 +39,10 @@ void nbt_sc_wblur(ivec2 p, int z, out vec3 bl[NBT_SC_NBT_NW])
                 continue;
             vec3 t = imageLoad(nbt_sc_src, ivec3(x, y, z)).rgb;
             for (int m = 0; m < NBT_SC_NBT_NW; m++)
-                row[m] += nbt_sc_wg[m * (T + 1) + abs(dx)] * t;
+                row[m] += nbt_sc_wg[m * S + abs(dx)] * t;
         }
         for (int m = 0; m < NBT_SC_NBT_NW; m++)
-            bl[m] += nbt_sc_wg[m * (T + 1) + abs(dy)] * row[m];
+            bl[m] += nbt_sc_wg[m * S + abs(dy)] * row[m];
     }
 }
 

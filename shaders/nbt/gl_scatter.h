@@ -39,9 +39,9 @@
  *       NBT_GLS_NBT_NB pyramid kernels U^l [B] D^l, l = 1..K (D: the 4-tap
  *       decimation, U: one bilinear octave up-step, B: an optional 3x3 blur
  *       [b, 1-2b, b]^2 at level l, b = NBT_GLS_NBT_BLUR, which puts a kernel
- *       half-way between two octaves) and NBT_GLS_NBT_NW wide kernels (two
+ *       half-way between two octaves) and NBT_GLS_NBT_NW wide kernels (three
  *       Gaussian blurs at level K, nbt_scatter_nbtwide.glsl: they reach
- *       about 600 px, the pyramid's own about 150), plus exact 3x3 centre taps (the
+ *       about 1300 px, the pyramid's own about 150), plus exact 3x3 centre taps (the
  *       kernel's pixel integrals minus the pyramid's phase-averaged spill
  *       there). Depth slabs (NBT_GLS_NBT_SLABS, log-spaced over the finite
  *       depths; sky is one more): a receiver in slab i takes the centre taps
@@ -125,19 +125,19 @@ void nbt_gls_near_table(float *lut);
  * px, where an erfc kernel of beta = 100 px still has 7% of its mass, so
  * without them wide kernels lost light on screen (-0.9% on 320x240 scenes).
  * Weights tabulated at log2 beta_px = LO + i / PER, i < N, linear in between. */
-#define NBT_GLS_NBT_NW 2
+#define NBT_GLS_NBT_NW 3
 #define NBT_GLS_NBT_NB (2 * NBT_GLS_K + NBT_GLS_NBT_NW)
-#define NBT_GLS_NBT_WT 9
+#define NBT_GLS_NBT_WT 18
 #define NBT_GLS_NBT_BLUR 0.16
 #define NBT_GLS_NBT_LO (-1)
-#define NBT_GLS_NBT_HI 13 /* 8192 px: the fit window (r <= 640 px) is in the 1/r regime (G 6% below G(0) at its edge) */
+#define NBT_GLS_NBT_HI 14 /* 16384 px: the fit window (r <= 1344 px) is in the 1/r regime (G 6.5% below G(0) at its edge) */
 #define NBT_GLS_NBT_PER 4
 #define NBT_GLS_NBT_N ((NBT_GLS_NBT_HI - NBT_GLS_NBT_LO) * NBT_GLS_NBT_PER + 1)
 #define NBT_GLS_NBT_SLABS 4    /* default depth slabs */
 #define NBT_GLS_NBT_MAXSLABS 6
 
 /* The fitted weights (NNLS, computed once per process on first use, about
- * 0.3 s; thread-safe): tab[i * NB + b]. */
+ * 0.4 s; thread-safe): tab[i * NB + b]. */
 const double *nbt_gls_nbt_table(void);
 /* Weights a[NB] at log2 beta_px = lb (linear between table entries, held
  * below the table, scaled by 2^(HI - lb) above it: a kernel far wider than
@@ -148,7 +148,8 @@ void nbt_gls_nbt_weights(double lb, double *a, double *da);
  * the 2-D one being the product of two. */
 double nbt_gls_nbt_kbar(int b, long d);
 /* The wide blur m < NBT_GLS_NBT_NW: 1-D taps t[|d|], d = -WT .. WT, a
- * Gaussian of 1.5 (m = 0) or 3 (m = 1) texels normalised to sum 1. */
+ * Gaussian of 1.5 (m = 0) or 3 (m = 1) texels cut at 9, or of 6 texels
+ * (m = 2) cut at 18, normalised to sum 1 (0 beyond the cut). */
 void nbt_gls_nbt_wide_taps(int m, double t[NBT_GLS_NBT_WT + 1]);
 /* The centre-tap table of NBT_GLS_NBT, laid out as nbt_gls_near_table
  * (entries a00, a10, a11 used; the others 0): the atom's pixel integral
