@@ -359,6 +359,8 @@ else
   "$NBT_FIT" phase --target hg:g=0.8 --terms 2 --tol 0.1 >"$tmp/p4" 2>"$tmp/p4err" && grep -q '^K 1 .* status misfit$' "$tmp/p4" &&
     grep -q '^K 2 .* status ok$' "$tmp/p4" && ok || bad "phase --tol 0.1: K = 2 (error 0.073) ok: $(cat "$tmp/p4" "$tmp/p4err")"
   expect_usage "phase --tol 0" "--tol" "$NBT_FIT" phase --target iso --terms 1 --tol 0
+  # the upper end: a relative L2 error of 1 is what no lobes at all give, so --tol 1 would pass any fit (man: (0, 1))
+  expect_usage "phase --tol 1" "--tol: '1' is not accepted: expected a number in (0, 1)" "$NBT_FIT" phase --target iso --terms 1 --tol 1
   "$NBT_FIT" phase --target gauss:B=0.05 --terms 3 >"$tmp/p5" 2>"$tmp/p5err"
   grep -q "^K 1 .* status ok" "$tmp/p5" && ! grep -q "^K [23] .* status ok" "$tmp/p5" &&
     [ "$(grep -c '^nbt-fit: phase K = [23]: \(illcond\|bound\|worse\): ' "$tmp/p5err")" -eq 2 ] && ok ||
