@@ -326,9 +326,7 @@ static nbt_status ray_integral(ray_ctx *c, double dvp, double tol, double *val, 
         double v2, e2;
         c->x0 = end;
         c->L = c->dsv;
-        nbt_status s2 = nbt_quad_gk(ws, ray_tail_f, c, 1, 0.0, 1.0, 0.0, tol, &v2, &e2);
-        if (st == NBT_OK || s2 != NBT_ETOL)
-            st = s2;
+        st = nbt__status_join(st, nbt_quad_gk(ws, ray_tail_f, c, 1, 0.0, 1.0, 0.0, tol, &v2, &e2));
         *val += v2;
         *err += e2;
     }

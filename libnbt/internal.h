@@ -22,6 +22,18 @@ static inline nbt_status nbt__io_status(int e)
     return e == ENOMEM ? NBT_ENOMEM : NBT_EIO;
 }
 
+/* The status of a result made of two parts, each with a value: a hard
+ * error (neither NBT_OK nor NBT_ETOL) of either, else NBT_ETOL if either
+ * part missed its tolerance, else NBT_OK. */
+static inline nbt_status nbt__status_join(nbt_status a, nbt_status b)
+{
+    if (a != NBT_OK && a != NBT_ETOL)
+        return a;
+    if (b != NBT_OK && b != NBT_ETOL)
+        return b;
+    return a == NBT_ETOL || b == NBT_ETOL ? NBT_ETOL : NBT_OK;
+}
+
 /* Report a failure to the error handler (if any) and return the status. */
 nbt_status nbt__fail(nbt_status s, const char *reason);
 #define NBT_FAIL(s, reason) return nbt__fail((s), (reason))

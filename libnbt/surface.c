@@ -283,9 +283,7 @@ static int sdir_f(double g, void *vp, unsigned fdim, double *f)
     /* a missed inner tolerance (NBT_ETOL) still gives a value and its error */
     if ((st == NBT_OK || st == NBT_ETOL) && lob > 0) {
         c->ray.gamma = g;
-        nbt_status sa = nbt__airlight_ray(c->p, NULL, 0, &c->ray, 0.1 * c->tol, &La, &Le);
-        if (st == NBT_OK)
-            st = sa;
+        st = nbt__status_join(st, nbt__airlight_ray(c->p, NULL, 0, &c->ray, 0.1 * c->tol, &La, &Le));
         if (La > 0)
             c->rel = fmax(c->rel, le / lob + Le / La);
     } else
@@ -329,11 +327,8 @@ nbt_status nbt_surface_direct(const nbt_phase *p, const nbt_surface_geom *g, dou
     if (g->kd > 0)
         st = lobe_direct(p, g, 1, g->theta_s, tol, &vd, &ed);
     /* a missed tolerance in the diffuse lobe must not drop the specular one */
-    if ((st == NBT_OK || st == NBT_ETOL) && g->ks > 0) {
-        nbt_status s2 = lobe_direct(p, g, g->n, g->theta_r, tol, &vs, &es);
-        if (st == NBT_OK || s2 != NBT_ETOL)
-            st = s2;
-    }
+    if ((st == NBT_OK || st == NBT_ETOL) && g->ks > 0)
+        st = nbt__status_join(st, lobe_direct(p, g, g->n, g->theta_r, tol, &vs, &es));
     *Lp = direct_term(g) + g->kd * vd + g->ks * vs;
     *abserr = g->kd * ed + g->ks * es;
     return st;
