@@ -843,9 +843,7 @@ static void test_sub(void)
 
         "  else\n"
         "    color = vec4(nbt_surface(0.15, 0.2, 2.385, p.x, p.y, p.z, 0.7, 0.3, p.w), 0.0, 0.0, 1.0);\n}\n";
-    nbt_plan_request rq[3] = {{NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},
-                              {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},
-                              {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1}};
+    nbt_plan_request rq[3] = NBT_TEST_DEFAULT_SUB_REQUESTS;
     nbt_plan *plan = NULL;
     char err[512];
     nbt_status st = nbt_plan_tables(rq, 3, 0, &plan, err, sizeof err);

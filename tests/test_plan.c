@@ -299,9 +299,7 @@ static void test_plan_phong(void)
  * request's sub must be 0 or 1. */
 static void test_plan_sub(void)
 {
-    nbt_plan_request rq[3] = {{NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},
-                              {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},
-                              {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1}};
+    nbt_plan_request rq[3] = NBT_TEST_DEFAULT_SUB_REQUESTS;
     nbt_plan *p = NULL;
     char err[512];
     nbt_status st = nbt_plan_tables(rq, 3, 2, &p, err, sizeof err);

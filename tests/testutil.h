@@ -85,4 +85,11 @@ __attribute__((unused)) static double t_uniform(void)
     return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
 }
 
+/* nbt-gen's built-in default scene (gen/cmd_tables.c) as nbt_plan_request's (kind, n, orders, phase,
+ * xmax, tol, g, half, sub): H, J^1 and J^20 in form sub, 4 orders, x to 10, tol 1e-3 */
+#define NBT_TEST_DEFAULT_SUB_REQUESTS                                                                              \
+    {{NBT_TABLE_H, 0, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},                                                          \
+     {NBT_TABLE_J, 1, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1},                                                          \
+     {NBT_TABLE_J, 20, 4, NULL, 10.0, 1e-3, {0, 0}, 0, 1}}
+
 #endif
